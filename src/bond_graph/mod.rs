@@ -1,0 +1,1 @@
+//! Bond-graph core. (Being written: issue "Bond-graph core".)

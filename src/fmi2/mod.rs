@@ -1,0 +1,1 @@
+//! The FMI 2.0 co-simulation C ABI.

@@ -1,0 +1,1 @@
+//! The paper's physical parts as bond-graph fragments.

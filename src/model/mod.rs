@@ -1,0 +1,1 @@
+//! The assembled model behind the FMU.

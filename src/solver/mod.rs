@@ -1,0 +1,1 @@
+//! Stiff one-step integrators. (Being written: issue "Stiff integrator".)
