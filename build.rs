@@ -1,1 +1,313 @@
-fn main() {}
+//! Reads `modelDescription/modelDescription.xml`, the one source of truth for the FMU's variables,
+//! checks the rules of FMI 2.0 that a typo would break, and writes the Rust variable table
+//! (`$OUT_DIR/variables.rs`, included by `src/model/variables.rs`). Code and XML cannot drift: a
+//! variable exists in Rust only because it exists in the XML.
+//!
+//! The GUID is derived from the XML itself (a hash of the file with the GUID left out), so that it
+//! changes whenever the interface does; the build fails and names the new GUID when it is stale.
+
+use std::collections::{BTreeSet, HashMap};
+use std::fmt::Write as _;
+use std::path::Path;
+
+const XML: &str = "modelDescription/modelDescription.xml";
+
+fn main() {
+    println!("cargo:rerun-if-changed={XML}");
+    println!("cargo:rerun-if-changed=build.rs");
+    let text =
+        std::fs::read_to_string(XML).unwrap_or_else(|e| fail(&format!("cannot read {XML}: {e}")));
+    let code = generate(&text).unwrap_or_else(|e| fail(&e));
+    let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("variables.rs");
+    std::fs::write(&out, code)
+        .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display())));
+}
+
+fn fail(message: &str) -> ! {
+    eprintln!("error in {XML}: {message}");
+    panic!("{XML}: {message}");
+}
+
+/// FNV-1a, 64 bits, with a chosen offset basis.
+fn fnv1a(bytes: &[u8], basis: u64) -> u64 {
+    let mut hash = basis;
+    for b in bytes {
+        hash ^= u64::from(*b);
+        hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    hash
+}
+
+/// The GUID the XML must carry: two FNV-1a hashes of the text with the guid value blanked,
+/// written in the 8-4-4-4-12 form.
+fn expected_guid(text: &str, current: &str) -> String {
+    let blanked = text.replacen(&format!("guid=\"{current}\""), "guid=\"\"", 1);
+    let a = fnv1a(blanked.as_bytes(), 0xcbf2_9ce4_8422_2325);
+    let b = fnv1a(blanked.as_bytes(), 0x8422_2325_cbf2_9ce4);
+    format!(
+        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+        a >> 32,
+        (a >> 16) & 0xffff,
+        a & 0xffff,
+        b >> 48,
+        b & 0xffff_ffff_ffff
+    )
+}
+
+/// A Rust identifier for a variable name: `plate.f[1]` -> `PLATE_F_1`.
+fn ident(name: &str) -> String {
+    let mut s = String::new();
+    for c in name.chars() {
+        if c.is_ascii_alphanumeric() {
+            s.push(c.to_ascii_uppercase());
+        } else if !s.ends_with('_') {
+            s.push('_');
+        }
+    }
+    s.trim_end_matches('_').to_string()
+}
+
+fn opt_f64(v: Option<&str>, what: &str) -> Result<String, String> {
+    match v {
+        None => Ok("None".into()),
+        Some(s) => s
+            .parse::<f64>()
+            .map(|x| format!("Some({x:?})"))
+            .map_err(|_| format!("{what}: '{s}' is not a number")),
+    }
+}
+
+fn opt_i32(v: Option<&str>, what: &str) -> Result<String, String> {
+    match v {
+        None => Ok("None".into()),
+        Some(s) => s
+            .parse::<i32>()
+            .map(|x| format!("Some({x})"))
+            .map_err(|_| format!("{what}: '{s}' is not an integer")),
+    }
+}
+
+fn generate(text: &str) -> Result<String, String> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| format!("not well-formed XML: {e}"))?;
+    let root = doc.root_element();
+    if root.attribute("fmiVersion") != Some("2.0") {
+        return Err("fmiVersion must be \"2.0\"".into());
+    }
+    let guid = root.attribute("guid").ok_or("the root has no guid")?;
+    let expected = expected_guid(text, guid);
+    if guid != expected {
+        return Err(format!(
+            "the file changed, so its GUID must too: set guid=\"{expected}\" (it is \"{guid}\")"
+        ));
+    }
+    let cs = root
+        .children()
+        .find(|n| n.has_tag_name("CoSimulation"))
+        .ok_or("no <CoSimulation> element")?;
+    let model_identifier = cs
+        .attribute("modelIdentifier")
+        .ok_or("CoSimulation has no modelIdentifier")?;
+
+    // Units and their display units.
+    let mut units: HashMap<String, BTreeSet<String>> = HashMap::new();
+    if let Some(defs) = root.children().find(|n| n.has_tag_name("UnitDefinitions")) {
+        for u in defs.children().filter(|n| n.has_tag_name("Unit")) {
+            let name = u.attribute("name").ok_or("a Unit has no name")?;
+            let displays = u
+                .children()
+                .filter(|n| n.has_tag_name("DisplayUnit"))
+                .filter_map(|d| d.attribute("name").map(String::from))
+                .collect();
+            units.insert(name.to_string(), displays);
+        }
+    }
+
+    let vars_node = root
+        .children()
+        .find(|n| n.has_tag_name("ModelVariables"))
+        .ok_or("no <ModelVariables>")?;
+    let mut names = BTreeSet::new();
+    let mut vrs = BTreeSet::new();
+    let mut table = String::new();
+    let mut idx_consts = String::new();
+    let mut vr_consts = String::new();
+    let mut index_arms = String::new();
+    let mut outputs = Vec::new();
+    let mut initial_unknowns = Vec::new();
+    for (i, sv) in vars_node
+        .children()
+        .filter(|n| n.has_tag_name("ScalarVariable"))
+        .enumerate()
+    {
+        let position = i + 1;
+        let name = sv
+            .attribute("name")
+            .ok_or(format!("variable {position} has no name"))?;
+        let at = |what: &str| format!("variable '{name}': {what}");
+        if !names.insert(name.to_string()) {
+            return Err(at("duplicate name"));
+        }
+        let vr: u32 = sv
+            .attribute("valueReference")
+            .and_then(|v| v.parse().ok())
+            .ok_or(at("missing or bad valueReference"))?;
+        if !vrs.insert(vr) {
+            return Err(at(&format!("valueReference {vr} is used twice")));
+        }
+        let description = sv
+            .attribute("description")
+            .ok_or(at("every variable needs a description"))?;
+        let causality = sv.attribute("causality").unwrap_or("local");
+        let variability = sv.attribute("variability").unwrap_or("continuous");
+        let initial = sv.attribute("initial");
+        let ty = sv
+            .children()
+            .find(|n| n.is_element())
+            .ok_or(at("no type element"))?;
+        let start = ty.attribute("start");
+        let needs_start = matches!(causality, "input" | "parameter")
+            || matches!(initial, Some("exact") | Some("approx"))
+            || variability == "constant";
+        if needs_start && start.is_none() {
+            return Err(at(
+                "an input, parameter or exact/approx variable needs a start value",
+            ));
+        }
+        if initial == Some("calculated") && start.is_some() {
+            return Err(at("a calculated variable must not have a start value"));
+        }
+        match (causality, variability) {
+            ("parameter", "fixed" | "tunable")
+            | ("calculatedParameter", "fixed" | "tunable")
+            | ("input", "discrete" | "continuous")
+            | ("output", _)
+            | ("local", _)
+            | ("independent", "continuous") => {}
+            _ => {
+                return Err(at(&format!(
+                    "causality {causality} with variability {variability} is not legal"
+                )))
+            }
+        }
+        if variability == "continuous" && ty.tag_name().name() != "Real" {
+            return Err(at("only Real variables can be continuous"));
+        }
+        if let Some(unit) = ty.attribute("unit") {
+            let Some(displays) = units.get(unit) else {
+                return Err(at(&format!("unit '{unit}' is not in <UnitDefinitions>")));
+            };
+            if let Some(d) = ty.attribute("displayUnit") {
+                if !displays.contains(d) {
+                    return Err(at(&format!(
+                        "displayUnit '{d}' is not defined for unit '{unit}'"
+                    )));
+                }
+            }
+        }
+        if causality == "output" {
+            outputs.push(position);
+        }
+        if (causality == "output" && initial != Some("exact")) || causality == "calculatedParameter"
+        {
+            initial_unknowns.push(position);
+        }
+        let kind = match ty.tag_name().name() {
+            "Real" => format!(
+                "Kind::Real {{ start: {}, min: {}, max: {} }}",
+                opt_f64(start, &at("start"))?,
+                opt_f64(ty.attribute("min"), &at("min"))?,
+                opt_f64(ty.attribute("max"), &at("max"))?
+            ),
+            "Integer" => format!(
+                "Kind::Integer {{ start: {}, min: {}, max: {} }}",
+                opt_i32(start, &at("start"))?,
+                opt_i32(ty.attribute("min"), &at("min"))?,
+                opt_i32(ty.attribute("max"), &at("max"))?
+            ),
+            "Boolean" => format!(
+                "Kind::Boolean {{ start: {} }}",
+                match start {
+                    None => "None".to_string(),
+                    Some("true") | Some("1") => "Some(true)".into(),
+                    Some("false") | Some("0") => "Some(false)".into(),
+                    Some(s) => return Err(at(&format!("'{s}' is not a Boolean"))),
+                }
+            ),
+            "String" => format!("Kind::String {{ start: {:?} }}", start),
+            other => return Err(at(&format!("unknown type element <{other}>"))),
+        };
+        let rust_enum = |s: &str| {
+            let mut c = s.chars();
+            c.next()
+                .map(|f| f.to_ascii_uppercase().to_string() + c.as_str())
+                .unwrap_or_default()
+        };
+        writeln!(
+            table,
+            "    Variable {{ name: {name:?}, value_reference: {vr}, causality: Causality::{}, variability: Variability::{}, kind: {kind}, unit: {:?}, description: {description:?} }},",
+            rust_enum(causality),
+            rust_enum(variability),
+            ty.attribute("unit"),
+        )
+        .unwrap();
+        let id = ident(name);
+        writeln!(
+            idx_consts,
+            "    /// `{name}`: {description}\n    pub const {id}: usize = {i};"
+        )
+        .unwrap();
+        writeln!(
+            vr_consts,
+            "    /// `{name}`\n    pub const {id}: u32 = {vr};"
+        )
+        .unwrap();
+        writeln!(index_arms, "        {vr} => Some({i}),").unwrap();
+    }
+
+    // ModelStructure must list exactly the outputs and the initial unknowns, by 1-based position.
+    let structure = root
+        .children()
+        .find(|n| n.has_tag_name("ModelStructure"))
+        .ok_or("no <ModelStructure>")?;
+    let listed = |tag: &str| -> Vec<usize> {
+        structure
+            .children()
+            .find(|n| n.has_tag_name(tag))
+            .map(|n| {
+                n.children()
+                    .filter(|u| u.has_tag_name("Unknown"))
+                    .filter_map(|u| u.attribute("index").and_then(|i| i.parse().ok()))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    if listed("Outputs") != outputs {
+        return Err(format!(
+            "<ModelStructure><Outputs> lists {:?}, but the outputs are at positions {outputs:?}",
+            listed("Outputs")
+        ));
+    }
+    if listed("InitialUnknowns") != initial_unknowns {
+        return Err(format!(
+            "<ModelStructure><InitialUnknowns> lists {:?}, but they are at positions {initial_unknowns:?}",
+            listed("InitialUnknowns")
+        ));
+    }
+
+    let n = names.len();
+    Ok(format!(
+        "// Generated by build.rs from {XML}. Do not edit.\n\
+         /// The `modelIdentifier` of the co-simulation interface.\n\
+         pub const MODEL_IDENTIFIER: &str = {model_identifier:?};\n\
+         /// The GUID, derived from the XML's content.\n\
+         pub const GUID: &str = {guid:?};\n\
+         /// Every ScalarVariable, in XML order.\n\
+         pub static VARIABLES: [Variable; {n}] = [\n{table}];\n\
+         /// The position in [`VARIABLES`] of a value reference.\n\
+         pub fn index_of(vr: u32) -> Option<usize> {{\n    match vr {{\n{index_arms}        _ => None,\n    }}\n}}\n\
+         /// Positions in [`VARIABLES`], by variable name.\n\
+         pub mod idx {{\n{idx_consts}}}\n\
+         /// Value references, by variable name.\n\
+         pub mod vr {{\n{vr_consts}}}\n"
+    ))
+}

@@ -1,1 +1,146 @@
-//! The FMI 2.0 co-simulation C ABI.
+//! The FMI 2.0 co-simulation C ABI, generic over a model.
+//!
+//! This layer knows FMI and nothing of physics: the state machine of the standard (section 4.2.4
+//! of FMI 2.0.4), argument checks, logging with categories, value-reference dispatch, FMU states
+//! and their serialisation, and `catch_unwind` around every entry point so that no panic crosses
+//! the C boundary. A model plugs in by implementing [`FmuModel`]; [`export_fmi2_cosimulation!`]
+//! then emits the `fmi2*` symbols for it. The same shape as the Modelica Reference FMUs: a generic
+//! FMI layer over a small per-model file.
+//!
+//! - [`ffi`]: the C types, written by hand.
+//! - [`variables`]: variable metadata (generated from `modelDescription.xml` by `build.rs`) and the
+//!   value store.
+//! - [`instance`]: one FMU instance: state machine, get/set, step, FMU states.
+//! - [`exports`]: the `extern "C"` functions.
+
+pub mod exports;
+pub mod ffi;
+pub mod instance;
+pub mod variables;
+
+use serde::{de::DeserializeOwned, Serialize};
+pub use variables::{Causality, Kind, Value, Values, Variability, Variable};
+
+/// The experiment set up by `fmi2SetupExperiment`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Experiment {
+    pub tolerance: Option<f64>,
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+}
+
+impl Default for Experiment {
+    fn default() -> Self {
+        Experiment {
+            tolerance: None,
+            start_time: 0.0,
+            stop_time: None,
+        }
+    }
+}
+
+/// The log categories every FMU of this crate declares, in `modelDescription.xml` order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LogCategory {
+    StatusWarning,
+    StatusDiscard,
+    StatusError,
+    StatusFatal,
+    All,
+    Calls,
+    Solver,
+}
+
+impl LogCategory {
+    pub const ALL: [LogCategory; 7] = [
+        LogCategory::StatusWarning,
+        LogCategory::StatusDiscard,
+        LogCategory::StatusError,
+        LogCategory::StatusFatal,
+        LogCategory::All,
+        LogCategory::Calls,
+        LogCategory::Solver,
+    ];
+
+    /// The name in `<LogCategories>`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LogCategory::StatusWarning => "logStatusWarning",
+            LogCategory::StatusDiscard => "logStatusDiscard",
+            LogCategory::StatusError => "logStatusError",
+            LogCategory::StatusFatal => "logStatusFatal",
+            LogCategory::All => "logAll",
+            LogCategory::Calls => "logCalls",
+            LogCategory::Solver => "logSolver",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<LogCategory> {
+        LogCategory::ALL.into_iter().find(|c| c.name() == name)
+    }
+}
+
+/// A communication step the model could not complete: the time it reached (its state stays there)
+/// and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepFailure {
+    pub last_successful_time: f64,
+    pub message: String,
+}
+
+/// What a model provides to be exported as an FMI 2.0 co-simulation FMU.
+///
+/// The generic layer owns the [`Values`] of all variables (checked against type, range and
+/// call-sequence rules before the model sees them); the model reads parameters and inputs from
+/// them and writes its outputs and calculated parameters into them.
+pub trait FmuModel: Sized + Send {
+    /// The model's part of an FMU state: everything besides the variable values that the model
+    /// needs to continue bit-identically (the integrator, say).
+    type State: Clone + Serialize + DeserializeOwned + Send;
+
+    const MODEL_IDENTIFIER: &'static str;
+    const GUID: &'static str;
+
+    /// The variable table, in `modelDescription.xml` order.
+    fn variables() -> &'static [Variable];
+
+    /// The position in [`FmuModel::variables`] of a value reference.
+    fn index_of(value_reference: u32) -> Option<usize>;
+
+    /// A model before initialisation.
+    fn new() -> Self;
+
+    /// Checks a value the environment sets, beyond its type and declared range (e.g. a strictly
+    /// positive capacitance). The message names the variable.
+    fn check(&self, _index: usize, _value: &Value) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Builds the model from the parameter values and computes the initial outputs and calculated
+    /// parameters into `values`. Called when initialisation mode ends, and before then when the
+    /// environment reads an initial unknown; it may be called several times.
+    fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String>;
+
+    /// Advances from `t_start` to exactly `t_end` with the inputs in `values` held constant, then
+    /// writes the outputs into `values`. On failure the model stays at the last time it reached,
+    /// with its outputs written for that time.
+    fn do_step(
+        &mut self,
+        values: &mut Values,
+        t_start: f64,
+        t_end: f64,
+        log: &mut dyn FnMut(LogCategory, &str),
+    ) -> Result<(), StepFailure>;
+
+    /// The model's part of an FMU state.
+    fn save_state(&self) -> Self::State;
+
+    /// Restores a state saved by [`FmuModel::save_state`], together with the `values` saved with it
+    /// (already restored). Fails if the state does not fit the model (wrong sizes, say).
+    fn restore_state(
+        &mut self,
+        state: &Self::State,
+        values: &Values,
+        experiment: &Experiment,
+    ) -> Result<(), String>;
+}

@@ -1,1 +1,2 @@
 //! The assembled model behind the FMU.
+pub mod variables;
