@@ -21,3 +21,6 @@ pub mod fmi2;
 pub mod fragments;
 pub mod model;
 pub mod solver;
+
+// The FMI 2.0 co-simulation C API of the shipped FMU.
+export_fmi2_cosimulation!(crate::model::HydraulicSlewingPlate);

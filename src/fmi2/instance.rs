@@ -94,16 +94,17 @@ impl Logger {
             return;
         };
         let category = CString::new(category.name()).unwrap_or_default();
-        let message = CString::new(message.replace('\0', " ")).unwrap_or_default();
-        // The logger's message is a printf format: pass ours as the argument of "%s" so that a
-        // '%' in it (a variable name, say) is never interpreted.
+        // The logger's message is a printf format. Importers that format it and importers that
+        // print it as it is both exist; passing the message itself, with '%' doubled, reads right
+        // in the first and nearly right in the second, and never lets a '%' in a message be taken
+        // for a conversion.
+        let message = CString::new(message.replace('\0', " ").replace('%', "%%")).unwrap_or_default();
         unsafe {
             logger(
                 self.callbacks.component_environment,
                 self.instance_name.as_ptr(),
                 status,
                 category.as_ptr(),
-                c"%s".as_ptr(),
                 message.as_ptr(),
             );
         }

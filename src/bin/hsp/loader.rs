@@ -1,0 +1,207 @@
+//! A minimal FMI 2.0 co-simulation importer for `hsp run`: unpacks the `.fmu`, `dlopen`s its
+//! shared object and calls it through the C ABI, exactly as an importing tool would.
+
+use std::ffi::{c_void, CStr, CString};
+use std::os::raw::{c_char, c_int, c_uint};
+use std::path::{Path, PathBuf};
+
+use hydraulic_slewing_plate::fmi2::ffi::{
+    Fmi2CallbackFunctions, Fmi2Component, Fmi2Status, FMI2_CO_SIMULATION, FMI2_FALSE, FMI2_TRUE,
+};
+use hydraulic_slewing_plate::model::variables::{GUID, MODEL_IDENTIFIER};
+
+type Instantiate = unsafe extern "C" fn(
+    *const c_char,
+    c_int,
+    *const c_char,
+    *const c_char,
+    *const Fmi2CallbackFunctions,
+    c_int,
+    c_int,
+) -> Fmi2Component;
+type Setup = unsafe extern "C" fn(Fmi2Component, c_int, f64, f64, c_int, f64) -> Fmi2Status;
+type Simple = unsafe extern "C" fn(Fmi2Component) -> Fmi2Status;
+type GetReal = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *mut f64) -> Fmi2Status;
+type SetReal = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const f64) -> Fmi2Status;
+type GetInteger = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *mut c_int) -> Fmi2Status;
+type SetInteger = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const c_int) -> Fmi2Status;
+type SetBoolean = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const c_int) -> Fmi2Status;
+type DoStep = unsafe extern "C" fn(Fmi2Component, f64, f64, c_int) -> Fmi2Status;
+type Free = unsafe extern "C" fn(Fmi2Component);
+
+/// The logger. FMI's logger is variadic, which stable Rust cannot define; this FMU passes its
+/// message as the format with '%' doubled and no further arguments, so a five-argument function
+/// receives all of it.
+unsafe extern "C" fn logger(
+    _env: *mut c_void,
+    name: *const c_char,
+    status: Fmi2Status,
+    category: *const c_char,
+    format: *const c_char,
+) {
+    let s = |p: *const c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            CStr::from_ptr(p).to_string_lossy().into_owned()
+        }
+    };
+    let message = s(format).replace("%%", "%");
+    eprintln!("[{}] {:?} {}: {}", s(name), status, s(category), message);
+}
+
+/// An unpacked FMU with its library loaded.
+pub struct Fmu {
+    handle: *mut c_void,
+    dir: PathBuf,
+    instantiate: Instantiate,
+    setup: Setup,
+    enter_init: Simple,
+    exit_init: Simple,
+    terminate: Simple,
+    get_real: GetReal,
+    set_real: SetReal,
+    get_integer: GetInteger,
+    set_integer: SetInteger,
+    set_boolean: SetBoolean,
+    do_step: DoStep,
+    free: Free,
+}
+
+fn check(status: Fmi2Status, what: &str) -> Result<(), String> {
+    if status <= Fmi2Status::Warning {
+        Ok(())
+    } else {
+        Err(format!("{what} returned {status:?}"))
+    }
+}
+
+impl Fmu {
+    /// Unpacks `fmu` into a fresh temporary folder and loads its shared object.
+    pub fn load(fmu: &Path) -> Result<Fmu, String> {
+        let dir = std::env::temp_dir().join(format!("hsp-run-{}", std::process::id()));
+        let file = std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?;
+        let mut archive = zip::ZipArchive::new(file).map_err(|e| format!("{}: {e}", fmu.display()))?;
+        archive.extract(&dir).map_err(|e| format!("unpacking {}: {e}", fmu.display()))?;
+        let so = dir.join(format!("binaries/linux64/{MODEL_IDENTIFIER}.so"));
+        let path = CString::new(so.to_string_lossy().as_bytes()).map_err(|e| e.to_string())?;
+        // SAFETY: dlopen of a path we just wrote; RTLD_LOCAL keeps its symbols apart from ours.
+        let handle = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
+        if handle.is_null() {
+            let err = unsafe { CStr::from_ptr(libc::dlerror()) }.to_string_lossy().into_owned();
+            return Err(format!("dlopen {}: {err}", so.display()));
+        }
+        unsafe fn sym<T: Copy>(handle: *mut c_void, name: &str) -> Result<T, String> {
+            let c = CString::new(name).map_err(|e| e.to_string())?;
+            let p = libc::dlsym(handle, c.as_ptr());
+            if p.is_null() {
+                return Err(format!("the FMU does not export {name}"));
+            }
+            Ok(std::mem::transmute_copy(&p))
+        }
+        // SAFETY: the symbols are the FMI 2.0 functions with the signatures above.
+        unsafe {
+            Ok(Fmu {
+                instantiate: sym(handle, "fmi2Instantiate")?,
+                setup: sym(handle, "fmi2SetupExperiment")?,
+                enter_init: sym(handle, "fmi2EnterInitializationMode")?,
+                exit_init: sym(handle, "fmi2ExitInitializationMode")?,
+                terminate: sym(handle, "fmi2Terminate")?,
+                get_real: sym(handle, "fmi2GetReal")?,
+                set_real: sym(handle, "fmi2SetReal")?,
+                get_integer: sym(handle, "fmi2GetInteger")?,
+                set_integer: sym(handle, "fmi2SetInteger")?,
+                set_boolean: sym(handle, "fmi2SetBoolean")?,
+                do_step: sym(handle, "fmi2DoStep")?,
+                free: sym(handle, "fmi2FreeInstance")?,
+                handle,
+                dir,
+            })
+        }
+    }
+
+    /// Instantiates a co-simulation slave.
+    pub fn instantiate(&self, name: &str) -> Result<Instance<'_>, String> {
+        let callbacks = Fmi2CallbackFunctions {
+            // SAFETY: see `logger`: the FMU passes no variadic arguments.
+            logger: Some(unsafe {
+                std::mem::transmute::<
+                    unsafe extern "C" fn(*mut c_void, *const c_char, Fmi2Status, *const c_char, *const c_char),
+                    unsafe extern "C" fn(*mut c_void, *const c_char, Fmi2Status, *const c_char, *const c_char, ...),
+                >(logger)
+            }),
+            allocate_memory: None,
+            free_memory: None,
+            step_finished: None,
+            component_environment: std::ptr::null_mut(),
+        };
+        let name = CString::new(name).map_err(|e| e.to_string())?;
+        let guid = CString::new(GUID).map_err(|e| e.to_string())?;
+        let resources = CString::new(format!("file://{}/resources", self.dir.display())).map_err(|e| e.to_string())?;
+        let c = unsafe {
+            (self.instantiate)(name.as_ptr(), FMI2_CO_SIMULATION, guid.as_ptr(), resources.as_ptr(), &callbacks, FMI2_FALSE, FMI2_FALSE)
+        };
+        if c.is_null() {
+            return Err("fmi2Instantiate returned NULL".into());
+        }
+        Ok(Instance { fmu: self, c })
+    }
+}
+
+impl Drop for Fmu {
+    fn drop(&mut self) {
+        unsafe { libc::dlclose(self.handle) };
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// One instance of a loaded FMU.
+pub struct Instance<'a> {
+    fmu: &'a Fmu,
+    c: Fmi2Component,
+}
+
+impl Instance<'_> {
+    pub fn setup(&self, tolerance: Option<f64>, start: f64, stop: f64) -> Result<(), String> {
+        let tol_def = if tolerance.is_some() { FMI2_TRUE } else { FMI2_FALSE };
+        check(unsafe { (self.fmu.setup)(self.c, tol_def, tolerance.unwrap_or(0.0), start, FMI2_TRUE, stop) }, "fmi2SetupExperiment")
+    }
+    pub fn enter_initialization(&self) -> Result<(), String> {
+        check(unsafe { (self.fmu.enter_init)(self.c) }, "fmi2EnterInitializationMode")
+    }
+    pub fn exit_initialization(&self) -> Result<(), String> {
+        check(unsafe { (self.fmu.exit_init)(self.c) }, "fmi2ExitInitializationMode")
+    }
+    pub fn terminate(&self) -> Result<(), String> {
+        check(unsafe { (self.fmu.terminate)(self.c) }, "fmi2Terminate")
+    }
+    pub fn get_reals(&self, vrs: &[u32]) -> Result<Vec<f64>, String> {
+        let mut out = vec![0.0; vrs.len()];
+        check(unsafe { (self.fmu.get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) }, "fmi2GetReal")?;
+        Ok(out)
+    }
+    pub fn set_real(&self, vr: u32, v: f64) -> Result<(), String> {
+        check(unsafe { (self.fmu.set_real)(self.c, &vr, 1, &v) }, "fmi2SetReal")
+    }
+    pub fn get_integers(&self, vrs: &[u32]) -> Result<Vec<i32>, String> {
+        let mut out = vec![0; vrs.len()];
+        check(unsafe { (self.fmu.get_integer)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) }, "fmi2GetInteger")?;
+        Ok(out)
+    }
+    pub fn set_integer(&self, vr: u32, v: i32) -> Result<(), String> {
+        check(unsafe { (self.fmu.set_integer)(self.c, &vr, 1, &v) }, "fmi2SetInteger")
+    }
+    pub fn set_boolean(&self, vr: u32, v: bool) -> Result<(), String> {
+        let v = if v { FMI2_TRUE } else { FMI2_FALSE };
+        check(unsafe { (self.fmu.set_boolean)(self.c, &vr, 1, &v) }, "fmi2SetBoolean")
+    }
+    pub fn do_step(&self, t: f64, h: f64) -> Result<(), String> {
+        check(unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) }, &format!("fmi2DoStep at t = {t}"))
+    }
+}
+
+impl Drop for Instance<'_> {
+    fn drop(&mut self) {
+        unsafe { (self.fmu.free)(self.c) };
+    }
+}

@@ -1,0 +1,151 @@
+//! The typed parameter set of the FMU, read from its variable values, and the checks that the
+//! XML's `min`/`max` cannot express (strictly positive physical constants).
+
+use crate::fmi2::variables::{check_value, Value, Values};
+use crate::fmi2::{Experiment, Kind};
+use crate::fragments::controller::ControllerParameters;
+use crate::fragments::loes::LoesParameters;
+use crate::solver::{Atol, Method, SolverOptions};
+
+use super::assembly::Assembled;
+use super::variables::{idx, VARIABLES};
+
+/// Which hydraulic model drives the rotor (`hydraulics.model`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HydraulicsModel {
+    /// The low-order equivalent system of Fig. 3 and eq. 1.
+    Loes,
+}
+
+/// Every parameter of the FMU, typed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameters {
+    pub hydraulics: HydraulicsModel,
+    /// Whether the motor drives the hub through the torsion bar (`hydraulics.motor_coupled`).
+    pub motor_coupled: bool,
+    pub loes: LoesParameters,
+    pub controller: ControllerParameters,
+    pub method: Method,
+    pub rtol: f64,
+    /// Absolute tolerance as a fraction of each state's nominal value.
+    pub atol: f64,
+    pub max_step: f64,
+    pub max_steps: u64,
+}
+
+/// Parameters that must be strictly positive (the XML says `min="0"`, which admits zero).
+const POSITIVE: &[usize] = &[
+    idx::LOES_C3,
+    idx::LOES_I_B,
+    idx::LOES_R7,
+    idx::LOES_D_M,
+    idx::LOES_K_SV,
+    idx::CONTROLLER_K_POT,
+    idx::SOLVER_RTOL,
+    idx::SOLVER_ATOL,
+    idx::SOLVER_MAX_STEP,
+];
+
+/// The model-specific check of a value being set (type and range are checked before).
+pub fn check(index: usize, value: &Value) -> Result<(), String> {
+    if POSITIVE.contains(&index) {
+        if let Value::Real(v) = value {
+            if *v <= 0.0 {
+                return Err(format!(
+                    "{}: must be positive, got {v}",
+                    VARIABLES[index].name
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Parameters {
+    /// Reads the parameters from the FMU's values; the tolerance of `fmi2SetupExperiment`, when
+    /// given, overrides `solver.rtol`.
+    pub fn from_values(values: &Values, experiment: &Experiment) -> Result<Self, String> {
+        for &i in POSITIVE {
+            check(i, values.get(i))?;
+        }
+        let hydraulics = match values.integer(idx::HYDRAULICS_MODEL) {
+            1 => HydraulicsModel::Loes,
+            other => return Err(format!("hydraulics.model: {other} is not a hydraulic model (1 = LOES)")),
+        };
+        let method = match values.integer(idx::SOLVER_METHOD) {
+            1 => Method::Rodas5P,
+            2 => Method::Radau5,
+            other => return Err(format!("solver.method: {other} is not a method (1 = Rodas5P, 2 = Radau5)")),
+        };
+        let max_steps = values.integer(idx::SOLVER_MAX_STEPS);
+        if max_steps < 1 {
+            return Err(format!("solver.max_steps: must be at least 1, got {max_steps}"));
+        }
+        Ok(Parameters {
+            hydraulics,
+            motor_coupled: values.boolean(idx::HYDRAULICS_MOTOR_COUPLED),
+            loes: LoesParameters {
+                c3: values.real(idx::LOES_C3),
+                i_b: values.real(idx::LOES_I_B),
+                r7: values.real(idx::LOES_R7),
+                d_m: values.real(idx::LOES_D_M),
+                k_sv: values.real(idx::LOES_K_SV),
+            },
+            controller: ControllerParameters {
+                a1: values.real(idx::CONTROLLER_A1),
+                a2: values.real(idx::CONTROLLER_A2),
+                k_pot: values.real(idx::CONTROLLER_K_POT),
+            },
+            method,
+            rtol: experiment.tolerance.unwrap_or(values.real(idx::SOLVER_RTOL)),
+            atol: values.real(idx::SOLVER_ATOL),
+            max_step: values.real(idx::SOLVER_MAX_STEP),
+            max_steps: max_steps as u64,
+        })
+    }
+
+    /// The integrator's options for the assembled model: the absolute tolerance scaled by each
+    /// state's nominal value, since the states span many decades (rad, kg m^2/s, m^3).
+    pub fn solver_options(&self, system: &Assembled) -> SolverOptions {
+        SolverOptions {
+            method: self.method,
+            rtol: self.rtol,
+            atol: Atol::Vector(system.nominal().iter().map(|n| n * self.atol).collect()),
+            max_step: self.max_step,
+            max_steps: self.max_steps,
+            ..SolverOptions::default()
+        }
+    }
+}
+
+/// Sets a variable by its name from text (`--set loes.C3=6e-11`), with the FMU's own checks.
+pub fn set_by_name(values: &mut Values, name: &str, text: &str) -> Result<(), String> {
+    let index = VARIABLES
+        .iter()
+        .position(|v| v.name == name)
+        .ok_or_else(|| format!("unknown variable '{name}'"))?;
+    let var = &VARIABLES[index];
+    if !var.settable_before_initialization() {
+        return Err(format!("'{name}' is not a parameter or input"));
+    }
+    let value = match var.kind {
+        Kind::Real { .. } => Value::Real(
+            text.parse()
+                .map_err(|_| format!("{name}: '{text}' is not a number"))?,
+        ),
+        Kind::Integer { .. } => Value::Integer(
+            text.parse()
+                .map_err(|_| format!("{name}: '{text}' is not an integer"))?,
+        ),
+        Kind::Boolean { .. } => Value::Boolean(match text {
+            "true" | "1" => true,
+            "false" | "0" => false,
+            _ => return Err(format!("{name}: '{text}' is not true or false")),
+        }),
+        Kind::String { .. } => Value::String(text.to_string()),
+    };
+    check_value(var, &value)?;
+    check(index, &value)?;
+    values.set(index, value);
+    Ok(())
+}

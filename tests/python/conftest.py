@@ -1,0 +1,120 @@
+"""Shared fixtures of the import-side tests: the packaged FMU, low-level instances with a logger
+that records every message, and the analytic closed-loop response of the LOES (eq. 1, eq. 2)."""
+
+import ctypes
+import math
+import os
+import pathlib
+import shutil
+import subprocess
+import tempfile
+
+import numpy as np
+import pytest
+import scipy.linalg
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+FMU = ROOT / "fmu" / "HydraulicSlewingPlate.fmu"
+
+
+@pytest.fixture(scope="session")
+def fmu_path():
+    """The packaged FMU (built by the test command before pytest runs; built here if missing)."""
+    if not FMU.exists():
+        subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", "package"],
+                       cwd=ROOT, check=True)
+    return str(FMU)
+
+
+@pytest.fixture(scope="session")
+def unzipped(fmu_path):
+    d = extract(fmu_path)
+    yield d
+    shutil.rmtree(d, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def md(fmu_path):
+    return read_model_description(fmu_path)
+
+
+@pytest.fixture(scope="session")
+def vr(md):
+    return {v.name: v.valueReference for v in md.modelVariables}
+
+
+class Recorder:
+    """Keeps every log message of an instance: (status, category, message)."""
+
+    def __init__(self):
+        self.messages = []
+
+    def text(self):
+        return "\n".join(m for _, _, m in self.messages)
+
+
+def make_slave(md, unzipped, name="test", logging_on=False, guid=None):
+    """An instantiated FMU2Slave whose log messages are recorded in slave.recorder."""
+    recorder = Recorder()
+
+    def log(env, instance, status, category, message):
+        recorder.messages.append((status, category.decode(), message.decode().replace("%%", "%")))
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(log)
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(lambda n, s: None)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(lambda p: None)
+    slave = FMU2Slave(guid=guid or md.guid, unzipDirectory=unzipped,
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    slave.recorder = recorder
+    slave._keep_callbacks = callbacks  # ctypes callbacks must outlive the instance
+    slave.instantiate(callbacks=callbacks, loggingOn=logging_on)
+    return slave
+
+
+@pytest.fixture
+def slave_factory(md, unzipped):
+    made = []
+
+    def factory(**kw):
+        s = make_slave(md, unzipped, **kw)
+        made.append(s)
+        return s
+
+    yield factory
+    for s in made:
+        try:
+            s.freeInstance()
+        except Exception:
+            pass
+
+
+# The LOES default parameters (MODEL_NOTES.md section 2 item 7): the printed C3 and I_b, the rest
+# fitted to G_est(s) = 2.25e6 / (s (s + 65) (s + 753)) of eq. 2.
+C3, I_B, A1, A2 = 5.28e-11, 0.0025, 2.0, 10.0
+R7 = 1 / (818 * C3)
+D_M = math.sqrt(48945 * C3 * I_B)
+K_POT = 10 / math.radians(150)
+K_SV = 2.25e6 * C3 * I_B / (A1 * A2 * D_M * K_POT)
+
+
+def closed_loop_step(times, r=1.0, c3=C3, i_b=I_B, r7=R7, d_m=D_M, k_sv=K_SV, a1=A1, a2=A2, k_pot=K_POT):
+    """y_pot(t) for a step r at t = 0 of the unity-feedback loop around
+    G(s) = K / (s (s^2 + s/(R7 C3) + D_m^2/(C3 I_b))), K = k_pot A1 A2 k_sv D_m / (C3 I_b):
+    the companion form of G/(1+G), evaluated exactly with a matrix exponential."""
+    K = k_pot * a1 * a2 * k_sv * d_m / (c3 * i_b)
+    a2c, a1c = 1 / (r7 * c3), d_m ** 2 / (c3 * i_b)
+    A = np.array([[0, 1, 0], [0, 0, 1], [-K, -a1c, -a2c]], dtype=float)
+    B = np.array([0, 0, K * r])
+    C = np.array([1.0, 0, 0])
+    M = np.zeros((4, 4))
+    M[:3, :3] = A
+    M[:3, 3] = B
+    out = []
+    for t in times:
+        E = scipy.linalg.expm(M * t)
+        out.append(C @ E[:3, 3])
+    return np.array(out)

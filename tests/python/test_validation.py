@@ -1,0 +1,42 @@
+"""The archive and its modelDescription.xml, checked by two independent tools."""
+
+import pathlib
+import subprocess
+import sys
+import zipfile
+
+from fmpy.validation import validate_fmu
+
+
+def test_fmpy_validate_reports_nothing(fmu_path):
+    problems = validate_fmu(fmu_path)
+    assert problems == [], problems
+
+
+def test_fmutool_check_passes(fmu_path):
+    fmutool = pathlib.Path(sys.executable).parent / "fmutool"
+    run = subprocess.run([str(fmutool), "-input", fmu_path, "-check"], capture_output=True, text=True)
+    out = run.stdout + run.stderr
+    assert run.returncode == 0, out
+    assert "ERROR" not in out.upper().replace("LOGSTATUSERROR", ""), out
+
+
+def test_archive_layout(fmu_path, md):
+    names = set(zipfile.ZipFile(fmu_path).namelist())
+    assert "modelDescription.xml" in names
+    assert f"binaries/linux64/{md.coSimulation.modelIdentifier}.so" in names
+    assert "documentation/index.html" in names
+
+
+def test_only_fmi2_symbols_exported_and_only_libc_needed(unzipped, md):
+    so = pathlib.Path(unzipped) / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    nm = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True)
+    symbols = [line.split()[-1] for line in nm.stdout.splitlines() if line.split()[-2] in ("T", "W")]
+    assert symbols, nm.stdout
+    assert all(s.startswith("fmi2") for s in symbols), [s for s in symbols if not s.startswith("fmi2")]
+    for f in ["fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate", "fmi2GetRealStatus", "fmi2CancelStep"]:
+        assert f in symbols
+    ldd = subprocess.run(["ldd", str(so)], capture_output=True, text=True, check=True).stdout
+    allowed = ("linux-vdso", "libc.so", "libm.so", "libgcc_s.so", "ld-linux", "libpthread", "libdl")
+    extra = [l for l in ldd.splitlines() if l.strip() and not any(a in l for a in allowed)]
+    assert extra == [], ldd

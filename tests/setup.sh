@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs what the tests need on a fresh Debian machine: libclang (for the `fmi` crate's
+# bindings, a dev-dependency) and a Python virtual environment in .venv (ignored by git) with
+# fmpy, libcosimpy, fmu_manipulation_toolbox, scipy and pytest. Safe to run again: it only
+# installs what is missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! ls /usr/lib/llvm-*/lib/libclang*.so* >/dev/null 2>&1 && ! ldconfig -p 2>/dev/null | grep -q libclang; then
+    echo "setup: installing libclang-dev (apt)"
+    SUDO=""
+    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libclang-dev >/dev/null
+fi
+
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest" 2>/dev/null; then
+    echo "setup: creating the Python virtual environment .venv"
+    python3 -m venv .venv
+    .venv/bin/pip install --quiet --upgrade pip
+    .venv/bin/pip install --quiet -r tests/requirements.txt
+fi
