@@ -1,1 +1,13 @@
 //! The paper's physical parts as bond-graph fragments.
+//!
+//! A fragment is a function that adds its elements and signal blocks to a shared
+//! [`BondGraph`](crate::bond_graph::BondGraph) under a name prefix ("loes", "controller", ...)
+//! and returns a small struct of handles (junctions to bond onto, signals to wire), so that
+//! fragments compose into one graph. Element names match the FMU parameter names where possible
+//! ("loes.C3", "controller.A1").
+//!
+//! * [`loes`]: the low-order equivalent system of the hydraulic loop (Fig. 3, eq. 1).
+//! * [`controller`]: the analog position controller (potentiometer, error and power amplifiers).
+
+pub mod controller;
+pub mod loes;

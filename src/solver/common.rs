@@ -1,0 +1,169 @@
+//! Pieces shared by both methods: scaling, norms, the starting step, the step-size floor,
+//! dense-output bookkeeping and non-finite checks.
+
+use super::{Atol, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
+
+/// Error weights `atol_i + rtol * max(|a_i|, |b_i|)`, floored at the smallest normal number so
+/// that a component with atol = 0 sitting at 0 cannot divide by zero.
+pub(crate) fn scale_into(atol: &Atol, rtol: f64, a: &[f64], b: &[f64], sc: &mut [f64]) {
+    for i in 0..sc.len() {
+        let s = atol.get(i) + rtol * a[i].abs().max(b[i].abs());
+        sc[i] = s.max(f64::MIN_POSITIVE);
+    }
+}
+
+/// Weighted RMS norm sqrt(mean((v_i / sc_i)^2)) (Hairer & Wanner II, eq. IV.8.20).
+pub(crate) fn rms(v: &[f64], sc: &[f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let s: f64 = v.iter().zip(sc).map(|(x, s)| (x / s) * (x / s)).sum();
+    (s / v.len() as f64).sqrt()
+}
+
+pub(crate) fn all_finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// Evaluate f, counting it.
+#[inline]
+pub(crate) fn eval<S: OdeSystem + ?Sized>(
+    sys: &S,
+    stats: &mut Stats,
+    t: f64,
+    x: &[f64],
+    out: &mut [f64],
+) {
+    stats.f_evals += 1;
+    sys.rhs(t, x, out);
+}
+
+/// Smallest admissible step at time t: the user's `min_step`, but never below 16 ulp of the
+/// time (a smaller step would not change t reliably).
+pub(crate) fn h_min(opts: &SolverOptions, t: f64) -> f64 {
+    opts.min_step.max(16.0 * f64::EPSILON * t.abs())
+}
+
+/// Starting step size, Hairer, Nørsett & Wanner I, Sec. II.4 ("Starting step size"), with the
+/// weights of the error norm: h0 from |x|/|f|, then one explicit Euler probe estimates the
+/// second derivative, and h = (0.01 / max(|f|, |f'|))^(1/(p+1)). The controller corrects it.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn initial_step<S: OdeSystem + ?Sized>(
+    sys: &S,
+    opts: &SolverOptions,
+    stats: &mut Stats,
+    t: f64,
+    x: &[f64],
+    f0: &[f64],
+    t_end: f64,
+    order: f64,
+) -> f64 {
+    let span = (t_end - t).abs();
+    let cap = span.min(opts.max_step);
+    if let Some(h0) = opts.initial_step {
+        return h0.min(cap);
+    }
+    let n = x.len();
+    let mut sc = vec![0.0; n];
+    scale_into(&opts.atol, opts.rtol, x, x, &mut sc);
+    let d0 = rms(x, &sc);
+    let d1 = rms(f0, &sc);
+    let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    h0 = h0.min(cap);
+    let x1: Vec<f64> = x.iter().zip(f0).map(|(xi, fi)| xi + h0 * fi).collect();
+    let mut f1 = vec![0.0; n];
+    eval(sys, stats, t + h0, &x1, &mut f1);
+    if !all_finite(&f1) {
+        return (h0 * 1e-3).max(h_min(opts, t));
+    }
+    let diff: Vec<f64> = f1.iter().zip(f0).map(|(a, b)| a - b).collect();
+    let d2 = rms(&diff, &sc) / h0;
+    let dm = d1.max(d2);
+    let h1 = if dm <= 1e-15 {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / dm).powf(1.0 / (order + 1.0))
+    };
+    let h = (100.0 * h0).min(h1).min(cap);
+    if h.is_finite() && h > 0.0 {
+        h
+    } else {
+        h0
+    }
+}
+
+/// Requested output times, validated: finite and non-decreasing. Times outside
+/// (t, t_end] are skipped by the caller.
+pub(crate) fn check_times(times: &[f64], t: f64) -> Result<(), SolverError> {
+    for (i, w) in times.iter().enumerate() {
+        if !w.is_finite() {
+            return Err(SolverError::new(
+                SolverErrorKind::InvalidInput,
+                t,
+                format!("output time times[{i}] is not finite: {w}"),
+            ));
+        }
+        if i > 0 && *w < times[i - 1] {
+            return Err(SolverError::new(
+                SolverErrorKind::InvalidInput,
+                t,
+                format!(
+                    "output times must be non-decreasing; times[{i}] = {w} < times[{}]",
+                    i - 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Cursor over the requested output times of one `advance_to` call.
+pub(crate) struct Outputs<'a> {
+    pub times: &'a [f64],
+    pub next: usize,
+    pub buf: Vec<f64>,
+}
+
+impl<'a> Outputs<'a> {
+    pub fn new(times: &'a [f64], t: f64, n: usize) -> Self {
+        let next = times.iter().position(|&w| w > t).unwrap_or(times.len());
+        Outputs {
+            times,
+            next,
+            buf: vec![0.0; n],
+        }
+    }
+
+    /// Is there an output time in (t0, t1]?
+    pub fn pending(&self, t1: f64) -> bool {
+        self.next < self.times.len() && self.times[self.next] <= t1
+    }
+
+    /// Emit every output time in (t0, t1] of the step just accepted. `interp(theta, buf)`
+    /// evaluates the dense output at t0 + theta * h; at t1 itself x1 is reported exactly.
+    pub fn emit(
+        &mut self,
+        t0: f64,
+        h: f64,
+        t1: f64,
+        x1: &[f64],
+        interp: &mut dyn FnMut(f64, &mut [f64]),
+        out: &mut dyn FnMut(f64, &[f64]),
+    ) {
+        while self.pending(t1) {
+            let w = self.times[self.next];
+            if w == t1 {
+                out(w, x1);
+            } else {
+                let theta = ((w - t0) / h).clamp(0.0, 1.0);
+                interp(theta, &mut self.buf);
+                out(w, &self.buf);
+            }
+            self.next += 1;
+        }
+    }
+}

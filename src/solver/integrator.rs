@@ -1,0 +1,214 @@
+//! The [`Integrator`]: the whole, serialisable solver state and the public driver API.
+
+use serde::{Deserialize, Serialize};
+
+use super::common::check_times;
+use super::{Method, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
+
+/// History that makes later steps depend on earlier ones. Everything here is saved with the
+/// integrator; [`Integrator::notify_discontinuity`] resets it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub(crate) struct History {
+    /// No step accepted since the start or the last discontinuity.
+    pub first: bool,
+    /// The last step attempt was rejected (limits the next step's growth).
+    pub last_rejected: bool,
+    /// Error norm of the previous accepted step (PI controller); 0 = none yet.
+    pub err_prev: f64,
+    /// Gustafsson's predictive controller (Radau5): previous accepted step and its error.
+    pub h_acc: f64,
+    pub err_acc: f64,
+    /// Radau5: size of the last accepted step and its collocation polynomial (3 n numbers,
+    /// RADAU5's CONT(N+1..4N)), used to extrapolate Newton start values. Empty = none.
+    pub h_old: f64,
+    pub cont: Vec<f64>,
+    /// Radau5: Newton convergence-rate estimate carried between steps (RADAU5's FACCON).
+    pub faccon: f64,
+}
+
+impl History {
+    pub fn fresh() -> Self {
+        History {
+            first: true,
+            last_rejected: false,
+            err_prev: 0.0,
+            h_acc: 0.0,
+            err_acc: 0.0,
+            h_old: 0.0,
+            cont: Vec::new(),
+            faccon: 1.0,
+        }
+    }
+}
+
+/// A stiff integrator: options, current point, next step size, history and statistics.
+///
+/// It is `Clone` and serde-serialisable; a restored copy continues bit-identically (see the
+/// module documentation). No non-finite number is ever stored in it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Integrator {
+    pub(crate) options: SolverOptions,
+    pub(crate) t: f64,
+    pub(crate) x: Vec<f64>,
+    /// Next step size to try; 0 = estimate one at the next `advance_to`.
+    pub(crate) h: f64,
+    pub(crate) stats: Stats,
+    pub(crate) hist: History,
+}
+
+impl Integrator {
+    /// A new integrator at (t0, x0). Fails if the options or the initial point are invalid.
+    pub fn new(options: SolverOptions, t0: f64, x0: Vec<f64>) -> Result<Self, SolverError> {
+        options.validate(x0.len()).map_err(|mut e| {
+            e.t = t0;
+            e
+        })?;
+        check_point(t0, &x0)?;
+        Ok(Integrator {
+            options,
+            t: t0,
+            x: x0,
+            h: 0.0,
+            stats: Stats::default(),
+            hist: History::fresh(),
+        })
+    }
+
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+    pub fn x(&self) -> &[f64] {
+        &self.x
+    }
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+    pub fn options(&self) -> &SolverOptions {
+        &self.options
+    }
+    /// Step size the next step will try (0 before the first step).
+    pub fn step_size(&self) -> f64 {
+        self.h
+    }
+
+    /// Replace the options (e.g. tolerances) keeping the state. Resets history like
+    /// [`Integrator::notify_discontinuity`] since the controller history refers to the old
+    /// tolerances.
+    pub fn set_options(&mut self, options: SolverOptions) -> Result<(), SolverError> {
+        options.validate(self.x.len()).map_err(|mut e| {
+            e.t = self.t;
+            e
+        })?;
+        if options.method != self.options.method {
+            self.h = 0.0;
+        }
+        self.options = options;
+        self.notify_discontinuity();
+        Ok(())
+    }
+
+    /// Advance to exactly t_end (t() == t_end bit-exactly afterwards on success). On error the
+    /// integrator stays at the last accepted point (t() < t_end) and remains usable.
+    pub fn advance_to<S: OdeSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+    ) -> Result<(), SolverError> {
+        self.advance_to_with_output(sys, t_end, &[], &mut |_, _| {})
+    }
+
+    /// Same, calling `out(t, x)` at each requested output time in (t(), t_end] via dense
+    /// output. `times` must be finite and non-decreasing; times outside (t(), t_end] are
+    /// ignored.
+    pub fn advance_to_with_output<S: OdeSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+        times: &[f64],
+        out: &mut dyn FnMut(f64, &[f64]),
+    ) -> Result<(), SolverError> {
+        if sys.dim() != self.x.len() {
+            return Err(SolverError::new(
+                SolverErrorKind::InvalidInput,
+                self.t,
+                format!(
+                    "system has {} states but the integrator holds {}",
+                    sys.dim(),
+                    self.x.len()
+                ),
+            ));
+        }
+        if !t_end.is_finite() || t_end < self.t {
+            return Err(SolverError::new(
+                SolverErrorKind::InvalidInput,
+                self.t,
+                format!(
+                    "t_end must be finite and not before t = {}, got {}",
+                    self.t, t_end
+                ),
+            ));
+        }
+        check_point(self.t, &self.x)?;
+        check_times(times, self.t)?;
+        if t_end == self.t {
+            return Ok(());
+        }
+        match self.options.method {
+            Method::Rodas5P => super::rodas5p::advance(self, sys, t_end, times, out),
+            Method::Radau5 => super::radau5::advance(self, sys, t_end, times, out),
+        }
+    }
+
+    /// The inputs of the system jumped (zero-order hold at a communication point): forget
+    /// whatever history assumes smoothness across this point (controller history, Newton
+    /// start polynomial; Jacobian and LU are never kept between calls). Keeps h as a guess.
+    pub fn notify_discontinuity(&mut self) {
+        self.hist = History::fresh();
+    }
+
+    /// Replace the state (e.g. re-initialisation); resets history like notify_discontinuity.
+    /// A non-finite t or x, or a length change, is reported by the next `advance_to`.
+    pub fn reset(&mut self, t: f64, x: Vec<f64>) {
+        self.t = t;
+        self.x = x;
+        self.notify_discontinuity();
+    }
+
+    /// Like [`Integrator::reset`] but validates the new point.
+    pub fn try_reset(&mut self, t: f64, x: Vec<f64>) -> Result<(), SolverError> {
+        check_point(t, &x)?;
+        if x.len() != self.x.len() {
+            if let super::Atol::Vector(_) = self.options.atol {
+                return Err(SolverError::new(
+                    SolverErrorKind::InvalidInput,
+                    t,
+                    format!(
+                        "new state has {} components, atol vector has {}",
+                        x.len(),
+                        self.x.len()
+                    ),
+                ));
+            }
+        }
+        self.reset(t, x);
+        Ok(())
+    }
+}
+
+fn check_point(t: f64, x: &[f64]) -> Result<(), SolverError> {
+    if !t.is_finite() {
+        return Err(SolverError::new(
+            SolverErrorKind::InvalidInput,
+            0.0,
+            format!("t must be finite, got {t}"),
+        ));
+    }
+    if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(SolverError::new(
+            SolverErrorKind::InvalidInput,
+            t,
+            format!("state x[{i}] is not finite: {v}"),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,563 @@
+//! Rodas5P: an 8-stage, order-5 (embedded order 4), A-stable, stiffly accurate Rosenbrock
+//! method with an order-4 dense output.
+//!
+//! Source of the coefficients: G. Steinebach, "Construction of Rosenbrock–Wanner method Rodas5P
+//! and numerical benchmarks within the Julia Differential Equations package", BIT Numer. Math.
+//! 63:27 (2023), as tabulated (same numbers, same transformed form) in SciML
+//! OrdinaryDiffEq.jl, `Rodas5PTableau` (file `rosenbrock_tableaus.jl`). The tableau's order
+//! conditions are checked in `tests/solver_rodas5p_tableau.rs`.
+//!
+//! # Form of the method
+//!
+//! The transformed form of Hairer & Wanner II, Sec. IV.7 (eq. 7.4'), which needs only one
+//! LU of W = I/(h γ) - J per step and no matrix-vector products:
+//!
+//! ```text
+//! (I/(h γ) - J) U_i = f(t0 + c_i h, y0 + Σ_{j<i} a_ij U_j) + Σ_{j<i} (C_ij / h) U_j + h d_i ∂f/∂t
+//! y1 = y0 + Σ m_j U_j,    error estimate = U_8   (y1 - ŷ1, ŷ1 of order 4)
+//! ```
+//!
+//! Relation to the classical form k_i = h f(y0 + Σ α_ij k_j) + h J Σ γ_ij k_j, y1 = y0 + Σ b_j k_j
+//! (Γ = (γ_ij) lower triangular, diagonal γ): Γ⁻¹ = I/γ - C, α = A Γ, bᵀ = mᵀ Γ, and
+//! d_i = Σ_j γ_ij. Stages 6–8 evaluate f at t0 + h and are "stiffly accurate" stages:
+//! Y_7 = Y_6 + U_6, Y_8 = Y_7 + U_7, y1 = Y_8 + U_8, so m = row 8 of A plus e_8.
+//!
+//! Dense output (same source): with K_r = Σ_j H_rj U_j (r = 1, 2, 3) and θ = (t - t0)/h,
+//! y(θ) = (1-θ) y0 + θ (y1 + (1-θ) (K_1 + θ (K_2 + θ K_3))).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::common::{all_finite, eval, h_min, initial_step, rms, scale_into, Outputs};
+use super::integrator::Integrator;
+use super::jacobian;
+use super::{OdeSystem, SolverError, SolverErrorKind};
+
+/// Number of stages.
+pub const STAGES: usize = 8;
+
+/// Diagonal coefficient γ of the method.
+pub const GAMMA: f64 = 0.21193756319429014;
+
+/// a_ij of the transformed form (row i = stage i+1, columns j < i). Rows 7 and 8 are the
+/// stiffly accurate continuation: Y_7 = Y_6 + U_6, Y_8 = Y_7 + U_7.
+pub const A: [[f64; STAGES]; STAGES] = {
+    const R6: [f64; 5] = [
+        -7.502846399306121,
+        2.561846144803919,
+        -11.627539656261098,
+        -0.18268767659942256,
+        0.030198172008377946,
+    ];
+    [
+        [0.0; 8],
+        [3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            2.849394379747939,
+            0.45842242204463923,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            -6.954028509809101,
+            2.489845061869568,
+            -10.358996098473584,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            2.8029986275628964,
+            0.5072464736228206,
+            -0.3988312541770524,
+            -0.04721187230404641,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [R6[0], R6[1], R6[2], R6[3], R6[4], 0.0, 0.0, 0.0],
+        [R6[0], R6[1], R6[2], R6[3], R6[4], 1.0, 0.0, 0.0],
+        [R6[0], R6[1], R6[2], R6[3], R6[4], 1.0, 1.0, 0.0],
+    ]
+};
+
+/// Weights m_j of the transformed form: y1 = y0 + Σ m_j U_j (= row 8 of A plus e_8).
+pub const M: [f64; STAGES] = [A[7][0], A[7][1], A[7][2], A[7][3], A[7][4], 1.0, 1.0, 1.0];
+
+/// C_ij of the transformed form (strictly lower triangular; sign as in the stage equation
+/// in the module documentation).
+pub const C: [[f64; STAGES]; STAGES] = [
+    [0.0; 8],
+    [-14.155112264123755, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [
+        -17.97296035885952,
+        -2.859693295451294,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        147.12150275711716,
+        -1.41221402718213,
+        71.68940251302358,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        165.43517024871676,
+        -0.4592823456491126,
+        42.90938336958603,
+        -5.961986721573306,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        24.854864614690072,
+        -3.0009227002832186,
+        47.4931110020768,
+        5.5814197821558125,
+        -0.6610691825249471,
+        0.0,
+        0.0,
+        0.0,
+    ],
+    [
+        30.91273214028599,
+        -3.1208243349937974,
+        77.79954646070892,
+        34.28646028294783,
+        -19.097331116725623,
+        -28.087943162872662,
+        0.0,
+        0.0,
+    ],
+    [
+        37.80277123390563,
+        -3.2571969029072276,
+        112.26918849496327,
+        66.9347231244047,
+        -40.06618937091002,
+        -54.66780262877968,
+        -9.48861652309627,
+        0.0,
+    ],
+];
+
+/// Stage times c_i (= row sums of α = A Γ; checked in the tableau test).
+pub const C_NODES: [f64; STAGES] = [
+    0.0,
+    0.6358126895828704,
+    0.4095798393397535,
+    0.9769306725060716,
+    0.4288403609558664,
+    1.0,
+    1.0,
+    1.0,
+];
+
+/// d_i = γ_i = Σ_j γ_ij, the coefficients of h ∂f/∂t (zero for the stiffly accurate stages).
+pub const D: [f64; STAGES] = [
+    0.21193756319429014,
+    -0.42387512638858027,
+    -0.3384627126235924,
+    1.8046452872882734,
+    2.325825639765069,
+    0.0,
+    0.0,
+    0.0,
+];
+
+/// Dense-output coefficients H_rj: K_r = Σ_j H_rj U_j.
+pub const H: [[f64; STAGES]; 3] = [
+    [
+        25.948786856663858,
+        -2.5579724845846235,
+        10.433815404888879,
+        -2.3679251022685204,
+        0.524948541321073,
+        1.1241088310450404,
+        0.4272876194431874,
+        -0.17202221070155493,
+    ],
+    [
+        -9.91568850695171,
+        -0.9689944594115154,
+        3.0438037242978453,
+        -24.495224566215796,
+        20.176138334709044,
+        15.98066361424651,
+        -6.789040303419874,
+        -6.710236069923372,
+    ],
+    [
+        11.419903575922262,
+        2.8879645146136994,
+        72.92137995996029,
+        80.12511834622643,
+        -52.072871366152654,
+        -59.78993625266729,
+        -0.15582684282751913,
+        4.883087185713722,
+    ],
+];
+
+/// The classical form (α, Γ, b) of the method, computed from the transformed tableau:
+/// Γ = (I/γ - C)⁻¹, α = A Γ, bᵀ = mᵀ Γ. Used by the order-condition tests.
+pub fn classical_form() -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
+    let s = STAGES;
+    let ginv = DMatrix::from_fn(s, s, |i, j| if i == j { 1.0 / GAMMA } else { -C[i][j] });
+    let gam = ginv.try_inverse().unwrap_or_else(|| DMatrix::zeros(s, s));
+    let a = DMatrix::from_fn(s, s, |i, j| A[i][j]);
+    let alpha = &a * &gam;
+    let m = DMatrix::from_fn(1, s, |_, j| M[j]);
+    let b = (&m * &gam).transpose();
+    (alpha, gam, DVector::from_column_slice(b.as_slice()))
+}
+
+/// Order of the error estimator's local error exponent minus one: err ~ h^5.
+const ERR_ORDER: f64 = 5.0;
+/// PI controller exponents (Hairer & Wanner II, Sec. IV.2 / Gustafsson 1991):
+/// h_new = h · SAFE · err^(-BETA1) · err_prev^(BETA2), with β1 = 0.7/k, β2 = 0.4/k, k = 5.
+const BETA1: f64 = 0.7 / ERR_ORDER;
+const BETA2: f64 = 0.4 / ERR_ORDER;
+const SAFE: f64 = 0.9;
+/// Bounds of h_new / h (as in Hairer's RODAS: 0.2 ≤ h_new/h ≤ 6).
+const FAC_MIN: f64 = 0.2;
+const FAC_MAX: f64 = 6.0;
+
+/// Why a step attempt failed.
+enum Reject {
+    /// A stage produced NaN/inf.
+    NonFinite,
+    /// W = I/(hγ) - J is singular for this h.
+    Singular,
+}
+
+/// Workspace of one `advance` call (not part of the saved state: recomputed on every call).
+struct Work {
+    f0: Vec<f64>,
+    dfdt: Vec<f64>,
+    jac: DMatrix<f64>,
+    u: Vec<Vec<f64>>,
+    y: Vec<f64>,
+    fy: Vec<f64>,
+    x1: Vec<f64>,
+    sc: Vec<f64>,
+    rhs: DVector<f64>,
+}
+
+/// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
+/// ∂f/∂t already in `w`. On success `w.x1` holds y1 and the return value is the error norm.
+fn step<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    w: &mut Work,
+    h: f64,
+    autonomous: bool,
+) -> Result<f64, Reject> {
+    let n = integ.x.len();
+    let t = integ.t;
+    // W = I/(h γ) - J, one LU for all 8 stages.
+    let fac = 1.0 / (h * GAMMA);
+    let mut wm = -w.jac.clone();
+    for i in 0..n {
+        wm[(i, i)] += fac;
+    }
+    integ.stats.lu_decompositions += 1;
+    let lu = wm.lu();
+    if !lu.is_invertible() {
+        return Err(Reject::Singular);
+    }
+    for s in 0..STAGES {
+        // Stage argument Y_s and f(Y_s) (stage 1 is f0).
+        if s == 0 {
+            w.fy.copy_from_slice(&w.f0);
+        } else {
+            for i in 0..n {
+                let mut acc = integ.x[i];
+                for j in 0..s {
+                    acc += A[s][j] * w.u[j][i];
+                }
+                w.y[i] = acc;
+            }
+            eval(sys, &mut integ.stats, t + C_NODES[s] * h, &w.y, &mut w.fy);
+        }
+        for i in 0..n {
+            let mut acc = w.fy[i];
+            for j in 0..s {
+                acc += (C[s][j] / h) * w.u[j][i];
+            }
+            if !autonomous && D[s] != 0.0 {
+                acc += h * D[s] * w.dfdt[i];
+            }
+            w.rhs[i] = acc;
+        }
+        if !lu.solve_mut(&mut w.rhs) {
+            return Err(Reject::Singular);
+        }
+        if !all_finite(w.rhs.as_slice()) {
+            return Err(Reject::NonFinite);
+        }
+        w.u[s].copy_from_slice(w.rhs.as_slice());
+    }
+    for i in 0..n {
+        let mut acc = integ.x[i];
+        for j in 0..STAGES {
+            acc += M[j] * w.u[j][i];
+        }
+        w.x1[i] = acc;
+    }
+    if !all_finite(&w.x1) {
+        return Err(Reject::NonFinite);
+    }
+    scale_into(
+        &integ.options.atol,
+        integ.options.rtol,
+        &integ.x,
+        &w.x1,
+        &mut w.sc,
+    );
+    let err = rms(&w.u[STAGES - 1], &w.sc);
+    if err.is_finite() {
+        Ok(err)
+    } else {
+        Err(Reject::NonFinite)
+    }
+}
+
+/// Evaluate the dense output at θ into `buf` from y0, y1 and the stage vectors.
+fn interpolate(y0: &[f64], y1: &[f64], u: &[Vec<f64>], theta: f64, buf: &mut [f64]) {
+    let t1 = 1.0 - theta;
+    for i in 0..y0.len() {
+        let mut k = [0.0; 3];
+        for (r, kr) in k.iter_mut().enumerate() {
+            for j in 0..STAGES {
+                *kr += H[r][j] * u[j][i];
+            }
+        }
+        buf[i] = t1 * y0[i] + theta * (y1[i] + t1 * (k[0] + theta * (k[1] + theta * k[2])));
+    }
+}
+
+/// Evaluate f0 (and Jacobian/∂f/∂t lazily later) at the current point, failing on NaN/inf.
+fn eval_f0<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    f0: &mut [f64],
+) -> Result<(), SolverError> {
+    eval(sys, &mut integ.stats, integ.t, &integ.x, f0);
+    if all_finite(f0) {
+        Ok(())
+    } else {
+        Err(SolverError::new(
+            SolverErrorKind::NonFinite,
+            integ.t,
+            "the right-hand side f(t, x) is not finite at the current point",
+        ))
+    }
+}
+
+/// Advance `integ` to exactly `t_end` with Rodas5P (called by `Integrator::advance_to*`).
+pub(crate) fn advance<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    t_end: f64,
+    times: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
+) -> Result<(), SolverError> {
+    let n = integ.x.len();
+    let autonomous = sys.is_autonomous();
+    let mut w = Work {
+        f0: vec![0.0; n],
+        dfdt: vec![0.0; n],
+        jac: DMatrix::zeros(n, n),
+        u: vec![vec![0.0; n]; STAGES],
+        y: vec![0.0; n],
+        fy: vec![0.0; n],
+        x1: vec![0.0; n],
+        sc: vec![0.0; n],
+        rhs: DVector::zeros(n),
+    };
+    let mut outputs = Outputs::new(times, integ.t, n);
+    eval_f0(integ, sys, &mut w.f0)?;
+    if integ.h <= 0.0 {
+        let opts = integ.options.clone();
+        integ.h = initial_step(
+            sys,
+            &opts,
+            &mut integ.stats,
+            integ.t,
+            &integ.x,
+            &w.f0,
+            t_end,
+            4.0,
+        );
+    }
+    let mut jac_ok = false; // J (and ∂f/∂t) evaluated at the current point?
+    let mut attempts: u64 = 0;
+    let mut consecutive_rejections: u32 = 0;
+    let mut last_nonfinite = false;
+    loop {
+        let t = integ.t;
+        let remaining = t_end - t;
+        let hmin = h_min(&integ.options, t);
+        if remaining <= hmin {
+            // Less than a minimal step is left (can only happen through rounding of the
+            // caller's times): cover it with an explicit Euler step, error O(hmin^2).
+            for i in 0..n {
+                integ.x[i] += remaining * w.f0[i];
+            }
+            integ.t = t_end;
+            return Ok(());
+        }
+        attempts += 1;
+        if attempts > integ.options.max_steps {
+            return Err(SolverError::new(
+                SolverErrorKind::TooManySteps,
+                t,
+                format!(
+                    "more than max_steps = {} step attempts in one call",
+                    integ.options.max_steps
+                ),
+            ));
+        }
+        let h_proposed = integ.h.min(integ.options.max_step);
+        let (h, last) = if h_proposed >= remaining {
+            (remaining, true)
+        } else {
+            (h_proposed, false)
+        };
+        if h < hmin {
+            let (kind, why) = if last_nonfinite {
+                (SolverErrorKind::NonFinite, "after non-finite values of f")
+            } else {
+                (SolverErrorKind::StepTooSmall, "to meet the tolerances")
+            };
+            return Err(SolverError::new(
+                kind,
+                t,
+                format!("step size {h:e} fell below the minimum {hmin:e} {why}"),
+            ));
+        }
+        if !jac_ok {
+            let opts = &integ.options;
+            let ok = jacobian::evaluate(
+                sys,
+                &mut integ.stats,
+                t,
+                &integ.x,
+                &w.f0,
+                &opts.atol,
+                opts.rtol,
+                &mut w.jac,
+            ) && (autonomous
+                || jacobian::time_derivative(
+                    sys,
+                    &mut integ.stats,
+                    t,
+                    &integ.x,
+                    &w.f0,
+                    &mut w.dfdt,
+                ));
+            if !ok {
+                return Err(SolverError::new(
+                    SolverErrorKind::NonFinite,
+                    t,
+                    "the Jacobian (or df/dt) is not finite at the current point",
+                ));
+            }
+            jac_ok = true;
+        }
+        match step(integ, sys, &mut w, h, autonomous) {
+            Ok(err) if err <= 1.0 => {
+                let t1 = if last { t_end } else { t + h };
+                if outputs.pending(t1) {
+                    let (x0, x1, u) = (&integ.x, &w.x1, &w.u);
+                    outputs.emit(
+                        t,
+                        h,
+                        t1,
+                        x1,
+                        &mut |th, buf| interpolate(x0, x1, u, th, buf),
+                        out,
+                    );
+                }
+                integ.x.copy_from_slice(&w.x1);
+                integ.t = t1;
+                integ.stats.accepted += 1;
+                consecutive_rejections = 0;
+                last_nonfinite = false;
+                // PI step-size controller.
+                let e = err.max(1e-10);
+                let mut fac = if integ.hist.err_prev > 0.0 {
+                    SAFE * e.powf(-BETA1) * integ.hist.err_prev.powf(BETA2)
+                } else {
+                    SAFE * e.powf(-1.0 / ERR_ORDER)
+                };
+                fac = fac.clamp(FAC_MIN, FAC_MAX);
+                if integ.hist.last_rejected {
+                    fac = fac.min(1.0);
+                }
+                integ.hist.err_prev = e;
+                integ.hist.last_rejected = false;
+                integ.hist.first = false;
+                let mut h_new = h * fac;
+                if last {
+                    // The step was shortened to hit t_end: do not let that shrink the next one.
+                    h_new = h_new.max(h_proposed);
+                }
+                integ.h = h_new.min(integ.options.max_step);
+                if last {
+                    return Ok(());
+                }
+                eval_f0(integ, sys, &mut w.f0)?;
+                jac_ok = false;
+            }
+            result => {
+                integ.stats.rejected += 1;
+                consecutive_rejections += 1;
+                integ.hist.last_rejected = true;
+                let fac = match result {
+                    Ok(err) => {
+                        last_nonfinite = false;
+                        (SAFE * err.powf(-1.0 / ERR_ORDER)).clamp(FAC_MIN, 1.0)
+                    }
+                    Err(Reject::NonFinite) => {
+                        last_nonfinite = true;
+                        0.25
+                    }
+                    Err(Reject::Singular) => 0.5,
+                };
+                integ.h = h * fac;
+                if consecutive_rejections > integ.options.max_consecutive_rejections {
+                    let kind = if last_nonfinite {
+                        SolverErrorKind::NonFinite
+                    } else {
+                        SolverErrorKind::TooManyRejections
+                    };
+                    return Err(SolverError::new(
+                        kind,
+                        t,
+                        format!(
+                            "{consecutive_rejections} consecutive step rejections (last h = {h:e})"
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+}
