@@ -491,7 +491,6 @@ pub unsafe fn string_value(p: Fmi2String) -> Option<Value> {
 macro_rules! export_fmi2_cosimulation {
     ($model:ty) => {
         mod fmi2_exports {
-            use super::*;
             use $crate::fmi2::exports as x;
             use $crate::fmi2::ffi::*;
             use $crate::fmi2::variables::Value;

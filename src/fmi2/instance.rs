@@ -98,7 +98,8 @@ impl Logger {
         // print it as it is both exist; passing the message itself, with '%' doubled, reads right
         // in the first and nearly right in the second, and never lets a '%' in a message be taken
         // for a conversion.
-        let message = CString::new(message.replace('\0', " ").replace('%', "%%")).unwrap_or_default();
+        let message =
+            CString::new(message.replace('\0', " ").replace('%', "%%")).unwrap_or_default();
         unsafe {
             logger(
                 self.callbacks.component_environment,

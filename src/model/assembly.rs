@@ -45,9 +45,15 @@ impl Assembled {
         let input_index = compiled
             .input_names()
             .iter()
-            .map(|n| position(n).ok_or_else(|| format!("the model's input '{n}' is not an FMU variable")))
+            .map(|n| {
+                position(n).ok_or_else(|| format!("the model's input '{n}' is not an FMU variable"))
+            })
             .collect::<Result<Vec<_>, _>>()?;
-        let output_index = compiled.output_names().iter().map(|n| position(n)).collect();
+        let output_index = compiled
+            .output_names()
+            .iter()
+            .map(|n| position(n))
+            .collect();
         let nominal = compiled
             .state_names()
             .iter()

@@ -70,16 +70,26 @@ impl Parameters {
         }
         let hydraulics = match values.integer(idx::HYDRAULICS_MODEL) {
             1 => HydraulicsModel::Loes,
-            other => return Err(format!("hydraulics.model: {other} is not a hydraulic model (1 = LOES)")),
+            other => {
+                return Err(format!(
+                    "hydraulics.model: {other} is not a hydraulic model (1 = LOES)"
+                ))
+            }
         };
         let method = match values.integer(idx::SOLVER_METHOD) {
             1 => Method::Rodas5P,
             2 => Method::Radau5,
-            other => return Err(format!("solver.method: {other} is not a method (1 = Rodas5P, 2 = Radau5)")),
+            other => {
+                return Err(format!(
+                    "solver.method: {other} is not a method (1 = Rodas5P, 2 = Radau5)"
+                ))
+            }
         };
         let max_steps = values.integer(idx::SOLVER_MAX_STEPS);
         if max_steps < 1 {
-            return Err(format!("solver.max_steps: must be at least 1, got {max_steps}"));
+            return Err(format!(
+                "solver.max_steps: must be at least 1, got {max_steps}"
+            ));
         }
         Ok(Parameters {
             hydraulics,
@@ -97,7 +107,9 @@ impl Parameters {
                 k_pot: values.real(idx::CONTROLLER_K_POT),
             },
             method,
-            rtol: experiment.tolerance.unwrap_or(values.real(idx::SOLVER_RTOL)),
+            rtol: experiment
+                .tolerance
+                .unwrap_or(values.real(idx::SOLVER_RTOL)),
             atol: values.real(idx::SOLVER_ATOL),
             max_step: values.real(idx::SOLVER_MAX_STEP),
             max_steps: max_steps as u64,

@@ -21,16 +21,17 @@ def start(slave, vr, r=1.0, stop=None, method=1):
 
 
 def run(slave, vr, t0, n, r_at=None):
-    """n steps of H from t0; r_at(t) gives the input to set before the step at t. Returns outputs."""
+    """n steps of H from t0 (a multiple of H); r_at(t) gives the input to set before the step at t.
+    The communication points are k * H, so that every run meets the same floating-point grid."""
     outs = []
     names = ["y_pot", "theta_motor", "omega_motor", "p_load", "q_valve", "energy"]
     refs = [vr[n_] for n_ in names]
-    t = t0
-    for i in range(n):
+    k0 = round(t0 / H)
+    for k in range(k0, k0 + n):
+        t = k * H
         if r_at is not None:
             slave.setReal([vr["r"]], [r_at(t)])
-        slave.doStep(t, H)
-        t = t0 + (i + 1) * H
+        slave.doStep(t, (k + 1) * H - t)
         outs.append(slave.getReal(refs))
     return outs
 

@@ -23,9 +23,12 @@ type Setup = unsafe extern "C" fn(Fmi2Component, c_int, f64, f64, c_int, f64) ->
 type Simple = unsafe extern "C" fn(Fmi2Component) -> Fmi2Status;
 type GetReal = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *mut f64) -> Fmi2Status;
 type SetReal = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const f64) -> Fmi2Status;
-type GetInteger = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *mut c_int) -> Fmi2Status;
-type SetInteger = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const c_int) -> Fmi2Status;
-type SetBoolean = unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const c_int) -> Fmi2Status;
+type GetInteger =
+    unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *mut c_int) -> Fmi2Status;
+type SetInteger =
+    unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const c_int) -> Fmi2Status;
+type SetBoolean =
+    unsafe extern "C" fn(Fmi2Component, *const c_uint, usize, *const c_int) -> Fmi2Status;
 type DoStep = unsafe extern "C" fn(Fmi2Component, f64, f64, c_int) -> Fmi2Status;
 type Free = unsafe extern "C" fn(Fmi2Component);
 
@@ -81,14 +84,19 @@ impl Fmu {
     pub fn load(fmu: &Path) -> Result<Fmu, String> {
         let dir = std::env::temp_dir().join(format!("hsp-run-{}", std::process::id()));
         let file = std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?;
-        let mut archive = zip::ZipArchive::new(file).map_err(|e| format!("{}: {e}", fmu.display()))?;
-        archive.extract(&dir).map_err(|e| format!("unpacking {}: {e}", fmu.display()))?;
+        let mut archive =
+            zip::ZipArchive::new(file).map_err(|e| format!("{}: {e}", fmu.display()))?;
+        archive
+            .extract(&dir)
+            .map_err(|e| format!("unpacking {}: {e}", fmu.display()))?;
         let so = dir.join(format!("binaries/linux64/{MODEL_IDENTIFIER}.so"));
         let path = CString::new(so.to_string_lossy().as_bytes()).map_err(|e| e.to_string())?;
         // SAFETY: dlopen of a path we just wrote; RTLD_LOCAL keeps its symbols apart from ours.
         let handle = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
         if handle.is_null() {
-            let err = unsafe { CStr::from_ptr(libc::dlerror()) }.to_string_lossy().into_owned();
+            let err = unsafe { CStr::from_ptr(libc::dlerror()) }
+                .to_string_lossy()
+                .into_owned();
             return Err(format!("dlopen {}: {err}", so.display()));
         }
         unsafe fn sym<T: Copy>(handle: *mut c_void, name: &str) -> Result<T, String> {
@@ -126,8 +134,21 @@ impl Fmu {
             // SAFETY: see `logger`: the FMU passes no variadic arguments.
             logger: Some(unsafe {
                 std::mem::transmute::<
-                    unsafe extern "C" fn(*mut c_void, *const c_char, Fmi2Status, *const c_char, *const c_char),
-                    unsafe extern "C" fn(*mut c_void, *const c_char, Fmi2Status, *const c_char, *const c_char, ...),
+                    unsafe extern "C" fn(
+                        *mut c_void,
+                        *const c_char,
+                        Fmi2Status,
+                        *const c_char,
+                        *const c_char,
+                    ),
+                    unsafe extern "C" fn(
+                        *mut c_void,
+                        *const c_char,
+                        Fmi2Status,
+                        *const c_char,
+                        *const c_char,
+                        ...
+                    ),
                 >(logger)
             }),
             allocate_memory: None,
@@ -137,9 +158,18 @@ impl Fmu {
         };
         let name = CString::new(name).map_err(|e| e.to_string())?;
         let guid = CString::new(GUID).map_err(|e| e.to_string())?;
-        let resources = CString::new(format!("file://{}/resources", self.dir.display())).map_err(|e| e.to_string())?;
+        let resources = CString::new(format!("file://{}/resources", self.dir.display()))
+            .map_err(|e| e.to_string())?;
         let c = unsafe {
-            (self.instantiate)(name.as_ptr(), FMI2_CO_SIMULATION, guid.as_ptr(), resources.as_ptr(), &callbacks, FMI2_FALSE, FMI2_FALSE)
+            (self.instantiate)(
+                name.as_ptr(),
+                FMI2_CO_SIMULATION,
+                guid.as_ptr(),
+                resources.as_ptr(),
+                &callbacks,
+                FMI2_FALSE,
+                FMI2_FALSE,
+            )
         };
         if c.is_null() {
             return Err("fmi2Instantiate returned NULL".into());
@@ -163,40 +193,80 @@ pub struct Instance<'a> {
 
 impl Instance<'_> {
     pub fn setup(&self, tolerance: Option<f64>, start: f64, stop: f64) -> Result<(), String> {
-        let tol_def = if tolerance.is_some() { FMI2_TRUE } else { FMI2_FALSE };
-        check(unsafe { (self.fmu.setup)(self.c, tol_def, tolerance.unwrap_or(0.0), start, FMI2_TRUE, stop) }, "fmi2SetupExperiment")
+        let tol_def = if tolerance.is_some() {
+            FMI2_TRUE
+        } else {
+            FMI2_FALSE
+        };
+        check(
+            unsafe {
+                (self.fmu.setup)(
+                    self.c,
+                    tol_def,
+                    tolerance.unwrap_or(0.0),
+                    start,
+                    FMI2_TRUE,
+                    stop,
+                )
+            },
+            "fmi2SetupExperiment",
+        )
     }
     pub fn enter_initialization(&self) -> Result<(), String> {
-        check(unsafe { (self.fmu.enter_init)(self.c) }, "fmi2EnterInitializationMode")
+        check(
+            unsafe { (self.fmu.enter_init)(self.c) },
+            "fmi2EnterInitializationMode",
+        )
     }
     pub fn exit_initialization(&self) -> Result<(), String> {
-        check(unsafe { (self.fmu.exit_init)(self.c) }, "fmi2ExitInitializationMode")
+        check(
+            unsafe { (self.fmu.exit_init)(self.c) },
+            "fmi2ExitInitializationMode",
+        )
     }
     pub fn terminate(&self) -> Result<(), String> {
         check(unsafe { (self.fmu.terminate)(self.c) }, "fmi2Terminate")
     }
     pub fn get_reals(&self, vrs: &[u32]) -> Result<Vec<f64>, String> {
         let mut out = vec![0.0; vrs.len()];
-        check(unsafe { (self.fmu.get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) }, "fmi2GetReal")?;
+        check(
+            unsafe { (self.fmu.get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) },
+            "fmi2GetReal",
+        )?;
         Ok(out)
     }
     pub fn set_real(&self, vr: u32, v: f64) -> Result<(), String> {
-        check(unsafe { (self.fmu.set_real)(self.c, &vr, 1, &v) }, "fmi2SetReal")
+        check(
+            unsafe { (self.fmu.set_real)(self.c, &vr, 1, &v) },
+            "fmi2SetReal",
+        )
     }
     pub fn get_integers(&self, vrs: &[u32]) -> Result<Vec<i32>, String> {
         let mut out = vec![0; vrs.len()];
-        check(unsafe { (self.fmu.get_integer)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) }, "fmi2GetInteger")?;
+        check(
+            unsafe { (self.fmu.get_integer)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) },
+            "fmi2GetInteger",
+        )?;
         Ok(out)
     }
     pub fn set_integer(&self, vr: u32, v: i32) -> Result<(), String> {
-        check(unsafe { (self.fmu.set_integer)(self.c, &vr, 1, &v) }, "fmi2SetInteger")
+        check(
+            unsafe { (self.fmu.set_integer)(self.c, &vr, 1, &v) },
+            "fmi2SetInteger",
+        )
     }
     pub fn set_boolean(&self, vr: u32, v: bool) -> Result<(), String> {
         let v = if v { FMI2_TRUE } else { FMI2_FALSE };
-        check(unsafe { (self.fmu.set_boolean)(self.c, &vr, 1, &v) }, "fmi2SetBoolean")
+        check(
+            unsafe { (self.fmu.set_boolean)(self.c, &vr, 1, &v) },
+            "fmi2SetBoolean",
+        )
     }
     pub fn do_step(&self, t: f64, h: f64) -> Result<(), String> {
-        check(unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) }, &format!("fmi2DoStep at t = {t}"))
+        check(
+            unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) },
+            &format!("fmi2DoStep at t = {t}"),
+        )
     }
 }
 

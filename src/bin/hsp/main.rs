@@ -19,7 +19,11 @@ use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
 #[derive(Parser)]
-#[command(name = "hsp", version, about = "Hydraulic slewing plate (Barbosa & Goes, 2002): FMU tools")]
+#[command(
+    name = "hsp",
+    version,
+    about = "Hydraulic slewing plate (Barbosa & Goes, 2002): FMU tools"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -70,7 +74,9 @@ fn linearize(sets: &[String]) -> Result<String, String> {
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
     let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {
-        (0..m.nrows()).map(|i| m.row(i).iter().copied().collect()).collect()
+        (0..m.nrows())
+            .map(|i| m.row(i).iter().copied().collect())
+            .collect()
     };
     let json = serde_json::json!({
         "states": lin.state_names,

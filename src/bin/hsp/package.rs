@@ -34,7 +34,9 @@ fn build_library() -> Result<PathBuf, String> {
     if !status.success() {
         return Err(format!("cargo build --release --lib failed ({status})"));
     }
-    let so = target_dir().join("release").join("libhydraulic_slewing_plate.so");
+    let so = target_dir()
+        .join("release")
+        .join("libhydraulic_slewing_plate.so");
     if !so.exists() {
         return Err(format!("{} was not built", so.display()));
     }
@@ -62,26 +64,27 @@ pub fn package(output: &str) -> Result<String, String> {
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated)
         .unix_permissions(0o644);
+    let doc = documentation();
     let entries: [(&str, &[u8]); 3] = [
         ("modelDescription.xml", &xml),
-        (
-            &format!("binaries/linux64/{MODEL_IDENTIFIER}.so"),
-            &binary,
-        ),
-        ("documentation/index.html", documentation().as_bytes()),
+        (&format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), &binary),
+        ("documentation/index.html", doc.as_bytes()),
     ];
     for (name, data) in entries {
         zip.start_file(name, options)
             .and_then(|_| zip.write_all(data).map_err(Into::into))
             .map_err(|e| format!("writing {name} into {}: {e}", tmp.display()))?;
     }
-    zip.finish().map_err(|e| format!("{}: {e}", tmp.display()))?;
+    zip.finish()
+        .map_err(|e| format!("{}: {e}", tmp.display()))?;
     std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
     Ok(out.display().to_string())
 }
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 /// `documentation/index.html`: what the model is, where it comes from, and every variable.
@@ -91,7 +94,10 @@ pub fn documentation() -> String {
     for (section, causalities) in [
         ("Inputs", &[Causality::Input][..]),
         ("Outputs", &[Causality::Output][..]),
-        ("Parameters", &[Causality::Parameter, Causality::CalculatedParameter][..]),
+        (
+            "Parameters",
+            &[Causality::Parameter, Causality::CalculatedParameter][..],
+        ),
     ] {
         writeln!(rows, "<h2>{section}</h2>\n<table>\n<tr><th>name</th><th>type</th><th>start</th><th>unit</th><th>description</th></tr>").unwrap();
         for (i, v) in VARIABLES.iter().enumerate() {

@@ -77,8 +77,12 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         let text = text.trim();
         let bad = || format!("--set {name}: '{text}' is not a {}", var.kind.type_name());
         match var.kind {
-            Kind::Real { .. } => inst.set_real(var.value_reference, text.parse().map_err(|_| bad())?)?,
-            Kind::Integer { .. } => inst.set_integer(var.value_reference, text.parse().map_err(|_| bad())?)?,
+            Kind::Real { .. } => {
+                inst.set_real(var.value_reference, text.parse().map_err(|_| bad())?)?
+            }
+            Kind::Integer { .. } => {
+                inst.set_integer(var.value_reference, text.parse().map_err(|_| bad())?)?
+            }
             Kind::Boolean { .. } => inst.set_boolean(
                 var.value_reference,
                 match text {
@@ -87,7 +91,9 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
                     _ => return Err(bad()),
                 },
             )?,
-            Kind::String { .. } => return Err(format!("--set {name}: String variables cannot be set")),
+            Kind::String { .. } => {
+                return Err(format!("--set {name}: String variables cannot be set"))
+            }
         }
     }
     inst.set_real(vr::R, args.r)?;
@@ -102,7 +108,11 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     for i in 0..n {
         // Communication points computed from the index, not summed, so the grid does not drift.
         let t = i as f64 * args.step;
-        let t_next = if i + 1 == n { args.stop } else { (i + 1) as f64 * args.step };
+        let t_next = if i + 1 == n {
+            args.stop
+        } else {
+            (i + 1) as f64 * args.step
+        };
         inst.do_step(t, t_next - t)?;
         rows.push((t_next, inst.get_reals(&vrs)?));
     }
@@ -135,19 +145,43 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     }
     std::fs::write(&csv_path, csv).map_err(|e| format!("{}: {e}", csv_path.display()))?;
 
-    print!("{}", summary(args, &rows, &stats, seconds, &csv_path.display().to_string()));
+    print!(
+        "{}",
+        summary(
+            args,
+            &rows,
+            &stats,
+            seconds,
+            &csv_path.display().to_string()
+        )
+    );
     Ok(())
 }
 
 /// Step-response figures of y_pot against the reference r.
-fn summary(args: &RunArgs, rows: &[(f64, Vec<f64>)], stats: &[i32], seconds: f64, csv: &str) -> String {
+fn summary(
+    args: &RunArgs,
+    rows: &[(f64, Vec<f64>)],
+    stats: &[i32],
+    seconds: f64,
+    csv: &str,
+) -> String {
     let y: Vec<f64> = rows.iter().map(|(_, v)| v[0]).collect();
     let t: Vec<f64> = rows.iter().map(|(t, _)| *t).collect();
     let last = rows.last().map(|(_, v)| v.clone()).unwrap_or_default();
     let r = args.r;
     let peak = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let overshoot = if r != 0.0 { (peak - r) / r * 100.0 } else { 0.0 };
-    let crossing = |level: f64| t.iter().zip(&y).find(|(_, y)| **y >= level * r).map(|(t, _)| *t);
+    let overshoot = if r != 0.0 {
+        (peak - r) / r * 100.0
+    } else {
+        0.0
+    };
+    let crossing = |level: f64| {
+        t.iter()
+            .zip(&y)
+            .find(|(_, y)| **y >= level * r)
+            .map(|(t, _)| *t)
+    };
     let rise = match (crossing(0.1), crossing(0.9)) {
         (Some(a), Some(b)) => format!("{:.1} ms", (b - a) * 1e3),
         _ => "not reached".into(),
@@ -160,12 +194,42 @@ fn summary(args: &RunArgs, rows: &[(f64, Vec<f64>)], stats: &[i32], seconds: f64
     };
     let max_abs = |k: usize| rows.iter().map(|(_, v)| v[k].abs()).fold(0.0, f64::max);
     let mut s = String::new();
-    writeln!(s, "Hydraulic slewing plate: step of r = {r} V, {} s in steps of {} s", args.stop, args.step).unwrap();
-    writeln!(s, "  final   y_pot = {:.6} V, theta_motor = {:.4} deg, omega_motor = {:.3e} rad/s", last[0], last[1].to_degrees(), last[2]).unwrap();
+    writeln!(
+        s,
+        "Hydraulic slewing plate: step of r = {r} V, {} s in steps of {} s",
+        args.stop, args.step
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "  final   y_pot = {:.6} V, theta_motor = {:.4} deg, omega_motor = {:.3e} rad/s",
+        last[0],
+        last[1].to_degrees(),
+        last[2]
+    )
+    .unwrap();
     writeln!(s, "  step    overshoot {overshoot:.2} %, rise time (10-90 %) {rise}, settling time (2 %) {settling}").unwrap();
-    writeln!(s, "  peaks   |p_load| = {:.2} bar, |q_valve| = {:.3} L/min, |omega_motor| = {:.3} rad/s", max_abs(3) * 1e-5, max_abs(4) * 6e4, max_abs(2)).unwrap();
-    writeln!(s, "  solver  {} steps, {} rejected, {} f evaluations, {} Jacobians, {} LU factorisations", stats[0], stats[1], stats[2], stats[3], stats[4]).unwrap();
-    writeln!(s, "  time    {:.3} s wall, {:.0} x real time", seconds, args.stop / seconds.max(1e-9)).unwrap();
+    writeln!(
+        s,
+        "  peaks   |p_load| = {:.2} bar, |q_valve| = {:.3} L/min, |omega_motor| = {:.3} rad/s",
+        max_abs(3) * 1e-5,
+        max_abs(4) * 6e4,
+        max_abs(2)
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "  solver  {} steps, {} rejected, {} f evaluations, {} Jacobians, {} LU factorisations",
+        stats[0], stats[1], stats[2], stats[3], stats[4]
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "  time    {:.3} s wall, {:.0} x real time",
+        seconds,
+        args.stop / seconds.max(1e-9)
+    )
+    .unwrap();
     writeln!(s, "  results {csv}").unwrap();
     s
 }
