@@ -43,5 +43,7 @@ fn nodes_are_row_sums_of_a() {
     let a = radau_iia_a();
     let (c1, c2) = nodes();
     let rs: Vec<f64> = (0..3).map(|i| a.row(i).sum()).collect();
-    assert!((rs[0] - c1).abs() < 1e-15 && (rs[1] - c2).abs() < 1e-15 && (rs[2] - 1.0).abs() < 1e-15);
+    assert!(
+        (rs[0] - c1).abs() < 1e-15 && (rs[1] - c2).abs() < 1e-15 && (rs[2] - 1.0).abs() < 1e-15
+    );
 }

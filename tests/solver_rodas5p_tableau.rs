@@ -33,7 +33,13 @@ fn trees(n: usize) -> Vec<Tree> {
     }
     pool.sort();
     let mut out = Vec::new();
-    fn forests(pool: &[Tree], max_idx: usize, remaining: usize, cur: &mut Vec<Tree>, out: &mut Vec<Tree>) {
+    fn forests(
+        pool: &[Tree],
+        max_idx: usize,
+        remaining: usize,
+        cur: &mut Vec<Tree>,
+        out: &mut Vec<Tree>,
+    ) {
         if remaining == 0 {
             out.push(Tree(cur.clone()));
             return;
@@ -95,7 +101,10 @@ fn rodas5p_has_order_5_and_embedded_order_4() {
         let d = max_defect(p, &bhat, &alpha, &beta);
         assert!(d < 1e-12, "embedded order-{p} conditions violated by {d:e}");
     }
-    assert!(max_defect(5, &bhat, &alpha, &beta) > 1e-6, "embedded method should be of order 4 only");
+    assert!(
+        max_defect(5, &bhat, &alpha, &beta) > 1e-6,
+        "embedded method should be of order 4 only"
+    );
 }
 
 #[test]
@@ -103,11 +112,22 @@ fn rodas5p_nodes_d_and_stiff_accuracy() {
     let (alpha, gam, b) = classical_form();
     for i in 0..STAGES {
         // c_i = Σ_j α_ij, d_i = γ_i = Σ_j γ_ij, diagonal of Γ = γ.
-        assert!((alpha.row(i).sum() - C_NODES[i]).abs() < 1e-12, "c_{} mismatch", i + 1);
-        assert!((gam.row(i).sum() - D[i]).abs() < 1e-12, "d_{} mismatch", i + 1);
+        assert!(
+            (alpha.row(i).sum() - C_NODES[i]).abs() < 1e-12,
+            "c_{} mismatch",
+            i + 1
+        );
+        assert!(
+            (gam.row(i).sum() - D[i]).abs() < 1e-12,
+            "d_{} mismatch",
+            i + 1
+        );
         assert!((gam[(i, i)] - GAMMA).abs() < 1e-15);
         // Stiff accuracy: b_j = β_sj (last row of α + Γ).
-        assert!((b[i] - (alpha[(STAGES - 1, i)] + gam[(STAGES - 1, i)])).abs() < 1e-12, "not stiffly accurate at {i}");
+        assert!(
+            (b[i] - (alpha[(STAGES - 1, i)] + gam[(STAGES - 1, i)])).abs() < 1e-12,
+            "not stiffly accurate at {i}"
+        );
     }
 }
 
@@ -133,5 +153,8 @@ fn rodas5p_is_a_stable_and_l_stable() {
     for x in [-1e-2, -1.0, -10.0, -1e3] {
         assert!(stability(Complex::new(x, 0.0)).norm() < 1.0);
     }
-    assert!(stability(Complex::new(-1e14, 0.0)).norm() < 1e-10, "R(-inf) should be 0");
+    assert!(
+        stability(Complex::new(-1e14, 0.0)).norm() < 1e-10,
+        "R(-inf) should be 0"
+    );
 }

@@ -9,9 +9,14 @@ fn check(name: &str) {
     for method in [Method::Rodas5P, Method::Radau5] {
         for rtol in [1e-4, 1e-6, 1e-8] {
             let r = run(prob.as_ref(), method, rtol, None);
-            let scd = r.scd.unwrap_or_else(|| panic!("{name} {method:?} rtol {rtol:e} failed: {:?}", r.error));
+            let scd = r
+                .scd
+                .unwrap_or_else(|| panic!("{name} {method:?} rtol {rtol:e} failed: {:?}", r.error));
             let need = -rtol.log10() - 1.5;
-            assert!(scd >= need, "{name} {method:?} rtol {rtol:e}: scd {scd:.2} < {need:.2} ({r:?})");
+            assert!(
+                scd >= need,
+                "{name} {method:?} rtol {rtol:e}: scd {scd:.2} < {need:.2} ({r:?})"
+            );
             assert!(r.steps > 0 && r.f_evals > 0 && r.jac_evals > 0 && r.lu > 0);
         }
     }

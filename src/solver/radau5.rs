@@ -25,6 +25,9 @@
 //! Jacobian and LU live only within one `advance` call (the call starts with a fresh
 //! Jacobian), so a restored state continues bit-identically.
 
+// Index loops over stages and components mirror the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::common::{all_finite, eval, h_min, initial_step, Outputs};
@@ -65,6 +68,7 @@ pub fn error_weights() -> (f64, f64, f64) {
 }
 
 /// T with T⁻¹ A⁻¹ T = [[γ,0,0],[0,α,-β],[0,β,α]] (RADAU5's T11…T33; T32 = 1, T33 = 0).
+#[allow(clippy::excessive_precision)] // digits as published in radau5.f
 pub const T: [[f64; 3]; 3] = [
     [
         9.1232394870892942792e-02,
@@ -79,6 +83,7 @@ pub const T: [[f64; 3]; 3] = [
     [0.96604818261509293619, 1.0, 0.0],
 ];
 /// T⁻¹ (RADAU5's TI11…TI33).
+#[allow(clippy::excessive_precision)] // digits as published in radau5.f
 pub const TI: [[f64; 3]; 3] = [
     [
         4.3255798900631553510,
