@@ -353,3 +353,18 @@ fn loes_dot_export() {
         assert!(dot.contains(n), "missing {n}:\n{dot}");
     }
 }
+
+#[test]
+fn loes_plan_listing_reads_like_eq1() {
+    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let text = m.plan_listing();
+    println!("{text}");
+    for line in [
+        "d(loes.theta_a)/dt = loes.omega",
+        "d(loes.I_b.p)/dt = e(loes.rotor->loes.I_b)",
+        "d(loes.C3.q)/dt = f(loes.chamber->loes.C3)",
+    ] {
+        assert!(text.contains(line), "missing {line}");
+    }
+    assert_eq!(text.lines().count(), m.plan_len());
+}

@@ -328,6 +328,7 @@ pub struct CompiledModel {
     storages: Vec<Storage>,
     power_terms: Vec<PowerTerm>,
     effort_to_head: Vec<bool>,
+    slot_names: Vec<String>,
 }
 
 thread_local! {
@@ -383,6 +384,81 @@ impl CompiledModel {
     /// Number of operations in the evaluation plan.
     pub fn plan_len(&self) -> usize {
         self.ops.len()
+    }
+
+    /// The evaluation plan as text, one assignment per line in evaluation order, e.g.
+    /// `d(loes.C3.q)/dt = f(loes.chamber->loes.C3)`: the state equations as derived from the
+    /// graph, for people to read. `e(b)` and `f(b)` are the effort and flow of bond `b`.
+    pub fn plan_listing(&self) -> String {
+        let nm = |k: u32| self.slot_names[k as usize].as_str();
+        let mut out = String::new();
+        for op in &self.ops {
+            let line = match *op {
+                Op::Const { dst, c } => format!("{} = {c:e}", nm(dst)),
+                Op::Copy { dst, src } => format!("{} = {}", nm(dst), nm(src)),
+                Op::Lin { dst, start, end } => {
+                    let t = &self.terms[start as usize..end as usize];
+                    let rhs = if t.is_empty() {
+                        "0".to_string()
+                    } else {
+                        t.iter()
+                            .enumerate()
+                            .map(|(i, &(k, s))| {
+                                let sign = if k < 0.0 {
+                                    " - "
+                                } else if i > 0 {
+                                    " + "
+                                } else {
+                                    ""
+                                };
+                                let k = k.abs();
+                                if k == 1.0 {
+                                    format!("{sign}{}", nm(s))
+                                } else {
+                                    format!("{sign}{k:e}*{}", nm(s))
+                                }
+                            })
+                            .collect::<String>()
+                    };
+                    format!("{} = {rhs}", nm(dst))
+                }
+                Op::Law {
+                    dst,
+                    law,
+                    arg,
+                    ki,
+                    ko,
+                    m,
+                } => {
+                    let l = &self.laws[law as usize].label;
+                    let a = if ki == 1.0 {
+                        nm(arg).to_string()
+                    } else {
+                        format!("{ki}*{}", nm(arg))
+                    };
+                    let mm = if m == NONE {
+                        String::new()
+                    } else {
+                        format!(", {}", nm(m))
+                    };
+                    let k = if ko == 1.0 {
+                        String::new()
+                    } else {
+                        format!("{ko}*")
+                    };
+                    format!("{} = {k}{l}({a}{mm})", nm(dst))
+                }
+                Op::Mul { dst, a, b, k } => {
+                    format!("{} = {k}*{}*{}", nm(dst), nm(a), nm(b))
+                }
+                Op::Div { dst, a, b, k } => {
+                    format!("{} = {k}*{}/{}", nm(dst), nm(a), nm(b))
+                }
+            };
+            out.push_str(&line);
+            out.push('\n');
+        }
+        out
     }
     /// Causality per bond: `true` if the causal stroke is at the head (the `to` element receives
     /// the effort).
@@ -1084,6 +1160,25 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     let n_slots = b.next_slot;
     let order = sort_equations(&b.eqs, n_slots, n + m)?;
 
+    // --- slot names, for the plan listing
+    let mut slot_names = vec![String::new(); n_slots];
+    for (k, nm) in state_names.iter().enumerate() {
+        slot_names[k] = nm.clone();
+        slot_names[deriv_slots[k]] = format!("d({nm})/dt");
+    }
+    for (k, nm) in input_names.iter().enumerate() {
+        slot_names[n + k] = nm.clone();
+    }
+    for (k, bd) in g.bonds.iter().enumerate() {
+        slot_names[b.e(BondId(k))] = format!("e({})", bd.name);
+        slot_names[b.f(BondId(k))] = format!("f({})", bd.name);
+    }
+    for (k, sg) in g.signals.iter().enumerate() {
+        if slot_names[sig_slot[k]].is_empty() {
+            slot_names[sig_slot[k]] = sg.name.clone();
+        }
+    }
+
     // --- flatten
     let mut ops = Vec::with_capacity(order.len());
     let mut terms: Vec<(f64, u32)> = Vec::new();
@@ -1152,6 +1247,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         storages,
         power_terms,
         effort_to_head: b.caus.effort_to_head,
+        slot_names,
     })
 }
 
