@@ -715,3 +715,50 @@ fn outputs_of_any_effort_flow_state_and_signal() {
     m.bond_values(&x, &u, &mut e, &mut f);
     assert_eq!(e[0], 1e7);
 }
+
+#[test]
+fn causal_strokes_of_the_mass_spring_damper() {
+    // bonds: force->v, v->mass, v->spring, v->damper
+    let m = msd(1.0, 1.0, 1.0, false).compile().unwrap();
+    // Se imposes the effort on the junction (stroke at the junction, the head); the mass
+    // receives the effort (head); the spring imposes it (tail); the damper receives the flow
+    // (junction imposes flow, R computes effort: stroke at the junction, the tail).
+    assert_eq!(m.causal_strokes(), [true, true, false, false]);
+}
+
+#[test]
+fn two_flow_sources_on_a_one_junction_conflict() {
+    let mut g = BondGraph::new("conflict");
+    let s1 = g.add_sf("Q1", 1.0);
+    let s2 = g.add_sf("Q2", 2.0);
+    let j = g.add_one("J");
+    let i = g.add_i("I", 1.0);
+    g.bond(s1, j);
+    g.bond(s2, j);
+    g.bond(j, i);
+    let err = g.compile().unwrap_err();
+    assert!(
+        matches!(err, BondGraphError::CausalConflict { .. }),
+        "{err:?}"
+    );
+    let msg = err.to_string();
+    assert!(
+        msg.contains("'J'") && msg.contains("'Q1'") && msg.contains("'Q2'"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn effort_source_on_a_capacitor_is_derivative_causality() {
+    let mut g = BondGraph::new("se_c");
+    let se = g.add_se("E", 1.0);
+    let c = g.add_c("C", 1.0);
+    g.bond(se, c);
+    match g.compile().unwrap_err() {
+        BondGraphError::DerivativeCausality { element, forced_by } => {
+            assert_eq!(element, "C");
+            assert_eq!(forced_by, ["E"]);
+        }
+        e => panic!("{e:?}"),
+    }
+}

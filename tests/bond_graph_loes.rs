@@ -368,3 +368,29 @@ fn loes_plan_listing_reads_like_eq1() {
     }
     assert_eq!(text.lines().count(), m.plan_len());
 }
+
+#[test]
+fn loes_bad_parameter_is_named() {
+    let p = LoesParameters {
+        c3: -1e-11,
+        ..LoesParameters::default()
+    };
+    let err = loes::build_loop(&p, &ControllerParameters::default())
+        .compile()
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "element 'loes.C3': capacitance must be positive and finite, got -1e-11"
+    );
+    let p = LoesParameters {
+        i_b: f64::INFINITY,
+        ..LoesParameters::default()
+    };
+    let err = loes::build_loop(&p, &ControllerParameters::default())
+        .compile()
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "element 'loes.I_b': inertance must be positive and finite, got inf"
+    );
+}
