@@ -55,6 +55,8 @@ fn check_eq1(p: &LoesParameters, c: &ControllerParameters) {
     );
     let lin = m.linearize(&[0.0; 3], &[0.0]);
     let (a, b, cm) = eq1(p, c);
+    let (a2, b2, c2) = loes::eq1_matrices(p, c);
+    assert_eq!((&a2, &b2, &c2), (&a, &b, &cm));
     assert_close(&lin.a, &a, 1e-14, "A");
     assert_close(&lin.b, &b, 1e-14, "B");
     assert_close(&lin.c.rows(0, 1).into_owned(), &cm, 1e-14, "C");

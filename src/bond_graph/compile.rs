@@ -1327,3 +1327,71 @@ fn sort_equations(
     }
     Err(BondGraphError::AlgebraicLoop { elements })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dual_arithmetic_is_exact() {
+        let x = Dual { v: 3.0, d: 1.0 };
+        let c = Dual::cst(2.0);
+        // f(x) = (x * x - 2) / (x + 2) * (-1) scaled by 0.5
+        let f = (-((x * x - c) / (x + c))).scale(0.5);
+        let v = -0.5 * (9.0 - 2.0) / 5.0;
+        let d = -0.5 * (2.0 * 3.0 * 5.0 - 7.0) / 25.0;
+        assert!((f.v - v).abs() < 1e-15 && (f.d - d).abs() < 1e-15);
+        let law = NonlinearLaw::modulated("xm", |x, m| (x * m, m, x));
+        let m = Dual { v: 4.0, d: 0.5 };
+        let y = Dual::law(&law, x, m);
+        assert_eq!(
+            y,
+            Dual {
+                v: 12.0,
+                d: 4.0 + 1.5
+            }
+        );
+        assert_eq!(f64::law(&law, 3.0, 4.0), 12.0);
+    }
+
+    #[test]
+    fn quadrature_energy_is_accurate() {
+        let law = NonlinearLaw::new("cubic", |q| (q + q * q * q, 1.0 + 3.0 * q * q));
+        for q in [-2.0, -0.3, 0.0, 0.7, 5.0] {
+            let exact = q * q / 2.0 + q * q * q * q / 4.0;
+            assert!((quad_energy(&law, q) - exact).abs() <= 1e-13 * exact.abs().max(1.0));
+        }
+        let tanh = NonlinearLaw::new("tanh", |q: f64| (q.tanh(), 1.0 - q.tanh().powi(2)));
+        let exact = 3.0f64.cosh().ln();
+        assert!((quad_energy(&tanh, 3.0) - exact).abs() < 1e-12);
+    }
+
+    #[test]
+    fn sorting_reports_the_cycle_only() {
+        // slots: 0 = state; 1..=4 computed. 1 = x; 2 = 3 + 1; 3 = 2; 4 = 3 (downstream of the cycle)
+        let eq = |dst, t: Vec<(f64, usize)>, o: &str| Equation {
+            dst,
+            expr: Expr::Lin(t),
+            owner: o.into(),
+        };
+        let eqs = vec![
+            eq(1, vec![(1.0, 0)], "a"),
+            eq(2, vec![(1.0, 3), (1.0, 1)], "b"),
+            eq(3, vec![(2.0, 2)], "c"),
+            eq(4, vec![(1.0, 3)], "d"),
+        ];
+        match sort_equations(&eqs, 5, 1) {
+            Err(BondGraphError::AlgebraicLoop { mut elements }) => {
+                elements.sort();
+                assert_eq!(elements, ["b", "c"]);
+            }
+            r => panic!("{r:?}"),
+        }
+        let ok = vec![
+            eqs[0].clone(),
+            eq(2, vec![(1.0, 1)], "b"),
+            eq(3, vec![(1.0, 2)], "c"),
+        ];
+        assert_eq!(sort_equations(&ok, 5, 1).unwrap(), [0, 1, 2]);
+    }
+}

@@ -47,7 +47,8 @@
 //! * TF: `e2 = m e1`, `f1 = m f2`; GY: `e1 = r f2`, `e2 = r f1`; port 1 is the bond pointing in,
 //!   port 2 the bond pointing out. Both may be modulated by a signal (MTF, MGY).
 //! * I- and C-fields: multiport storage with a symmetric mass (`f = M^-1 p`) or stiffness
-//!   (`e = K q`) matrix, for coupled modes.
+//!   (`e = K q`) matrix, for coupled modes. All ports of a field are in integral causality; a
+//!   graph that would need otherwise is rejected like a dependent storage element.
 //! * Signal blocks (inputs, constants, gains, sums, products, integrators, effort / flow / state
 //!   sensors, and signal ports for forward references between fragments) make a controlled bond
 //!   graph. An integrator's output is a state (the rotor angle `theta_a` of eq. 1 is the integral
