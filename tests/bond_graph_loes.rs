@@ -55,6 +55,8 @@ fn check_eq1(p: &LoesParameters, c: &ControllerParameters) {
     );
     let lin = m.linearize(&[0.0; 3], &[0.0]);
     let (a, b, cm) = eq1(p, c);
+    let (a2, b2, c2) = loes::eq1_matrices(p, c);
+    assert_eq!((&a2, &b2, &c2), (&a, &b, &cm));
     assert_close(&lin.a, &a, 1e-14, "A");
     assert_close(&lin.b, &b, 1e-14, "B");
     assert_close(&lin.c.rows(0, 1).into_owned(), &cm, 1e-14, "C");
@@ -254,5 +256,143 @@ fn default_parameters_match_model_notes() {
     assert_eq!(
         LoesParameters::by_name("paper_printed"),
         Some(LoesParameters::paper_printed())
+    );
+}
+
+#[test]
+fn loes_power_balance_and_jacobian() {
+    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let mut s: u64 = 0xDEAD_BEEF_CAFE_F00D;
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for _ in 0..20 {
+        let x = [rnd(), 0.05 * rnd(), 1e-3 * 5.28e-11 * 1e7 * rnd()];
+        let u = [5.0 * rnd()];
+        let pb = m.power_balance(&x, &u);
+        let size = pb.stored_rate.abs() + pb.source_power.abs() + pb.dissipated_power.abs();
+        assert!(pb.residual.abs() <= 1e-13 * size, "{pb:?}");
+        let names: Vec<&str> = pb.elements.iter().map(|e| e.0.as_str()).collect();
+        assert_eq!(names, ["loes.I_b", "loes.C3", "loes.valve", "loes.R7"]);
+        // the valve delivers Q p3, the leakage dissipates p3^2 / R7
+        let p = LoesParameters::default();
+        let p3 = x[2] / p.c3;
+        assert!((pb.dissipated_power - p3 * p3 / p.r7).abs() <= 1e-13 * pb.dissipated_power);
+        let mut y = [0.0; 5];
+        m.outputs(&x, &u, &mut y);
+        assert!((pb.source_power - y[4] * y[3]).abs() <= 1e-13 * pb.source_power.abs());
+        let mut jac = DMatrix::zeros(3, 3);
+        m.jacobian(&x, &u, &mut jac);
+        assert_eq!(jac, m.linearize(&x, &u).a);
+    }
+    let json = m.linearize(&[0.0; 3], &[0.0]).to_json();
+    assert_eq!(json["state_names"][0], "loes.theta_a");
+    assert_eq!(json["a"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn loes_rotor_junction_accepts_a_torsion_bar_and_hub() {
+    // Preview of issue 5: motor rotor -> torsion bar C -> hub inertia, bonded onto the LOES
+    // rotor 1-junction.
+    use hydraulic_slewing_plate::bond_graph::BondGraph;
+    use hydraulic_slewing_plate::fragments::controller;
+    let mut g = BondGraph::new("coupled");
+    let r = g.add_input("r");
+    let l = loes::add_loes(&mut g, "loes", &LoesParameters::default());
+    let c = controller::add_controller(
+        &mut g,
+        "controller",
+        &ControllerParameters::default(),
+        r,
+        l.theta,
+    );
+    g.connect_signal_port(l.valve_command, c.command);
+    let shaft = g.add_zero("shaft.torque");
+    let k_bar = g.add_c("shaft.K", 1.0 / 2.5e3);
+    let hub_j = g.add_one("hub.omega");
+    let hub = g.add_i("hub.I", 3.5);
+    g.bond(l.rotor, shaft);
+    g.bond(shaft, k_bar);
+    g.bond(shaft, hub_j);
+    g.bond(hub_j, hub);
+    let m = g.compile().unwrap();
+    assert_eq!(
+        m.state_names(),
+        [
+            "loes.theta_a",
+            "loes.I_b.p",
+            "loes.C3.q",
+            "shaft.K.q",
+            "hub.I.p"
+        ]
+    );
+    // still a stable closed loop
+    let a = m.linearize(&[0.0; 5], &[0.0]).a;
+    for e in a.complex_eigenvalues().iter() {
+        assert!(e.re < 0.0, "{e}");
+    }
+    let dot = g.to_dot();
+    assert!(dot.contains("loes.rotor->shaft.torque"));
+}
+
+#[test]
+fn loes_dot_export() {
+    let g = loes::build_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let dot = g.to_dot();
+    for n in [
+        "C: loes.C3",
+        "I: loes.I_b",
+        "R: loes.R7",
+        "TF: loes.D_m",
+        "MSf: loes.valve",
+        "gain controller.A1",
+        "integrator loes.theta_a",
+        "teelnormal",
+    ] {
+        assert!(dot.contains(n), "missing {n}:\n{dot}");
+    }
+}
+
+#[test]
+fn loes_plan_listing_reads_like_eq1() {
+    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let text = m.plan_listing();
+    println!("{text}");
+    for line in [
+        "d(loes.theta_a)/dt = loes.omega",
+        "d(loes.I_b.p)/dt = e(loes.rotor->loes.I_b)",
+        "d(loes.C3.q)/dt = f(loes.chamber->loes.C3)",
+    ] {
+        assert!(text.contains(line), "missing {line}");
+    }
+    assert_eq!(text.lines().count(), m.plan_len());
+}
+
+#[test]
+fn loes_bad_parameter_is_named() {
+    let p = LoesParameters {
+        c3: -1e-11,
+        ..LoesParameters::default()
+    };
+    let err = loes::build_loop(&p, &ControllerParameters::default())
+        .compile()
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "element 'loes.C3': capacitance must be positive and finite, got -1e-11"
+    );
+    let p = LoesParameters {
+        i_b: f64::INFINITY,
+        ..LoesParameters::default()
+    };
+    let err = loes::build_loop(&p, &ControllerParameters::default())
+        .compile()
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "element 'loes.I_b': inertance must be positive and finite, got inf"
     );
 }

@@ -79,9 +79,10 @@ impl<'a> Scap<'a> {
                 if let Some(c) = self.cause[b.0] {
                     involved.push(self.name(c));
                 }
-                let n = self.name(cause);
-                if !involved.contains(&n) {
-                    involved.push(n);
+                for n in [self.name(cause), self.name(bond.from), self.name(bond.to)] {
+                    if !involved.contains(&n) {
+                        involved.push(n);
+                    }
                 }
                 Err(BondGraphError::CausalConflict {
                     element: self.name(at),

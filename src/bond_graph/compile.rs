@@ -328,6 +328,7 @@ pub struct CompiledModel {
     storages: Vec<Storage>,
     power_terms: Vec<PowerTerm>,
     effort_to_head: Vec<bool>,
+    slot_names: Vec<String>,
 }
 
 thread_local! {
@@ -383,6 +384,81 @@ impl CompiledModel {
     /// Number of operations in the evaluation plan.
     pub fn plan_len(&self) -> usize {
         self.ops.len()
+    }
+
+    /// The evaluation plan as text, one assignment per line in evaluation order, e.g.
+    /// `d(loes.C3.q)/dt = f(loes.chamber->loes.C3)`: the state equations as derived from the
+    /// graph, for people to read. `e(b)` and `f(b)` are the effort and flow of bond `b`.
+    pub fn plan_listing(&self) -> String {
+        let nm = |k: u32| self.slot_names[k as usize].as_str();
+        let mut out = String::new();
+        for op in &self.ops {
+            let line = match *op {
+                Op::Const { dst, c } => format!("{} = {c:e}", nm(dst)),
+                Op::Copy { dst, src } => format!("{} = {}", nm(dst), nm(src)),
+                Op::Lin { dst, start, end } => {
+                    let t = &self.terms[start as usize..end as usize];
+                    let rhs = if t.is_empty() {
+                        "0".to_string()
+                    } else {
+                        t.iter()
+                            .enumerate()
+                            .map(|(i, &(k, s))| {
+                                let sign = if k < 0.0 {
+                                    " - "
+                                } else if i > 0 {
+                                    " + "
+                                } else {
+                                    ""
+                                };
+                                let k = k.abs();
+                                if k == 1.0 {
+                                    format!("{sign}{}", nm(s))
+                                } else {
+                                    format!("{sign}{k:e}*{}", nm(s))
+                                }
+                            })
+                            .collect::<String>()
+                    };
+                    format!("{} = {rhs}", nm(dst))
+                }
+                Op::Law {
+                    dst,
+                    law,
+                    arg,
+                    ki,
+                    ko,
+                    m,
+                } => {
+                    let l = &self.laws[law as usize].label;
+                    let a = if ki == 1.0 {
+                        nm(arg).to_string()
+                    } else {
+                        format!("{ki}*{}", nm(arg))
+                    };
+                    let mm = if m == NONE {
+                        String::new()
+                    } else {
+                        format!(", {}", nm(m))
+                    };
+                    let k = if ko == 1.0 {
+                        String::new()
+                    } else {
+                        format!("{ko}*")
+                    };
+                    format!("{} = {k}{l}({a}{mm})", nm(dst))
+                }
+                Op::Mul { dst, a, b, k } => {
+                    format!("{} = {k}*{}*{}", nm(dst), nm(a), nm(b))
+                }
+                Op::Div { dst, a, b, k } => {
+                    format!("{} = {k}*{}/{}", nm(dst), nm(a), nm(b))
+                }
+            };
+            out.push_str(&line);
+            out.push('\n');
+        }
+        out
     }
     /// Causality per bond: `true` if the causal stroke is at the head (the `to` element receives
     /// the effort).
@@ -1084,6 +1160,25 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     let n_slots = b.next_slot;
     let order = sort_equations(&b.eqs, n_slots, n + m)?;
 
+    // --- slot names, for the plan listing
+    let mut slot_names = vec![String::new(); n_slots];
+    for (k, nm) in state_names.iter().enumerate() {
+        slot_names[k] = nm.clone();
+        slot_names[deriv_slots[k]] = format!("d({nm})/dt");
+    }
+    for (k, nm) in input_names.iter().enumerate() {
+        slot_names[n + k] = nm.clone();
+    }
+    for (k, bd) in g.bonds.iter().enumerate() {
+        slot_names[b.e(BondId(k))] = format!("e({})", bd.name);
+        slot_names[b.f(BondId(k))] = format!("f({})", bd.name);
+    }
+    for (k, sg) in g.signals.iter().enumerate() {
+        if slot_names[sig_slot[k]].is_empty() {
+            slot_names[sig_slot[k]] = sg.name.clone();
+        }
+    }
+
     // --- flatten
     let mut ops = Vec::with_capacity(order.len());
     let mut terms: Vec<(f64, u32)> = Vec::new();
@@ -1152,6 +1247,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         storages,
         power_terms,
         effort_to_head: b.caus.effort_to_head,
+        slot_names,
     })
 }
 
@@ -1230,4 +1326,72 @@ fn sort_equations(
         }
     }
     Err(BondGraphError::AlgebraicLoop { elements })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dual_arithmetic_is_exact() {
+        let x = Dual { v: 3.0, d: 1.0 };
+        let c = Dual::cst(2.0);
+        // f(x) = (x * x - 2) / (x + 2) * (-1) scaled by 0.5
+        let f = (-((x * x - c) / (x + c))).scale(0.5);
+        let v = -0.5 * (9.0 - 2.0) / 5.0;
+        let d = -0.5 * (2.0 * 3.0 * 5.0 - 7.0) / 25.0;
+        assert!((f.v - v).abs() < 1e-15 && (f.d - d).abs() < 1e-15);
+        let law = NonlinearLaw::modulated("xm", |x, m| (x * m, m, x));
+        let m = Dual { v: 4.0, d: 0.5 };
+        let y = Dual::law(&law, x, m);
+        assert_eq!(
+            y,
+            Dual {
+                v: 12.0,
+                d: 4.0 + 1.5
+            }
+        );
+        assert_eq!(f64::law(&law, 3.0, 4.0), 12.0);
+    }
+
+    #[test]
+    fn quadrature_energy_is_accurate() {
+        let law = NonlinearLaw::new("cubic", |q| (q + q * q * q, 1.0 + 3.0 * q * q));
+        for q in [-2.0, -0.3, 0.0, 0.7, 5.0] {
+            let exact = q * q / 2.0 + q * q * q * q / 4.0;
+            assert!((quad_energy(&law, q) - exact).abs() <= 1e-13 * exact.abs().max(1.0));
+        }
+        let tanh = NonlinearLaw::new("tanh", |q: f64| (q.tanh(), 1.0 - q.tanh().powi(2)));
+        let exact = 3.0f64.cosh().ln();
+        assert!((quad_energy(&tanh, 3.0) - exact).abs() < 1e-12);
+    }
+
+    #[test]
+    fn sorting_reports_the_cycle_only() {
+        // slots: 0 = state; 1..=4 computed. 1 = x; 2 = 3 + 1; 3 = 2; 4 = 3 (downstream of the cycle)
+        let eq = |dst, t: Vec<(f64, usize)>, o: &str| Equation {
+            dst,
+            expr: Expr::Lin(t),
+            owner: o.into(),
+        };
+        let eqs = vec![
+            eq(1, vec![(1.0, 0)], "a"),
+            eq(2, vec![(1.0, 3), (1.0, 1)], "b"),
+            eq(3, vec![(2.0, 2)], "c"),
+            eq(4, vec![(1.0, 3)], "d"),
+        ];
+        match sort_equations(&eqs, 5, 1) {
+            Err(BondGraphError::AlgebraicLoop { mut elements }) => {
+                elements.sort();
+                assert_eq!(elements, ["b", "c"]);
+            }
+            r => panic!("{r:?}"),
+        }
+        let ok = vec![
+            eqs[0].clone(),
+            eq(2, vec![(1.0, 1)], "b"),
+            eq(3, vec![(1.0, 2)], "c"),
+        ];
+        assert_eq!(sort_equations(&ok, 5, 1).unwrap(), [0, 1, 2]);
+    }
 }

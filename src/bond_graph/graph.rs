@@ -81,6 +81,11 @@ impl BondGraph {
             .map(SignalId)
     }
 
+    /// The bond with this name.
+    pub fn find_bond(&self, name: &str) -> Option<BondId> {
+        self.bonds.iter().position(|b| b.name == name).map(BondId)
+    }
+
     /// Name of an element.
     pub fn element_name(&self, id: ElementId) -> &str {
         &self.elements[id.0].name

@@ -40,10 +40,15 @@
 //!   `f = p / I`; a C element has the state `q` (displacement), `dq/dt = f`, `e = q / C`, where
 //!   `e` and `f` are the element's effort and inflow (bond flow with the sign of the half arrow
 //!   into the element). Sources' effort and flow are those of a bond pointing away from them.
+//!   So reversing the half arrow of a one-port flips its flow, not its effort: on a 0-junction
+//!   (common effort) that changes nothing physically; on a 1-junction it makes the element move
+//!   against the junction's common flow. Draw one-ports with the half arrow pointing into them
+//!   (sources: out of them) unless there is a reason not to.
 //! * TF: `e2 = m e1`, `f1 = m f2`; GY: `e1 = r f2`, `e2 = r f1`; port 1 is the bond pointing in,
 //!   port 2 the bond pointing out. Both may be modulated by a signal (MTF, MGY).
 //! * I- and C-fields: multiport storage with a symmetric mass (`f = M^-1 p`) or stiffness
-//!   (`e = K q`) matrix, for coupled modes.
+//!   (`e = K q`) matrix, for coupled modes. All ports of a field are in integral causality; a
+//!   graph that would need otherwise is rejected like a dependent storage element.
 //! * Signal blocks (inputs, constants, gains, sums, products, integrators, effort / flow / state
 //!   sensors, and signal ports for forward references between fragments) make a controlled bond
 //!   graph. An integrator's output is a state (the rotor angle `theta_a` of eq. 1 is the integral
@@ -70,6 +75,13 @@
 //! Jacobian (forward-mode dual numbers through the same plan), linearisation `A, B, C, D`, the
 //! stored energy and the power balance `dE/dt = P_sources - P_dissipated`.
 //! [`BondGraph::to_dot`] draws the graph with its causal strokes.
+//!
+//! `CompiledModel` is `Clone + Send + Sync`; evaluation uses a per-thread scratch buffer, so one
+//! model can be used from several threads at once (a law closure must not call back into the
+//! model). Parameters are baked into the plan: to change one, change the graph (or rebuild it
+//! from its fragment) and compile again, which takes microseconds for graphs of this size.
+//! A modulated TF or GY whose causality needs the inverse modulus divides by the signal; keep it
+//! away from zero.
 
 mod causality;
 mod compile;

@@ -30,6 +30,8 @@
 //! y_POT        = k_POT theta_a
 //! ```
 
+use nalgebra::DMatrix;
+
 use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
 
 use super::controller::{self, ControllerParameters};
@@ -137,6 +139,25 @@ impl LoesParameters {
             _ => None,
         }
     }
+}
+
+/// Eq. 1 of the paper written out: `(A, B, C)` of the closed loop with states
+/// `(theta_a, p_b, q_3)`, input `r` and output `y_POT`. The graph built by [`build_loop`] yields
+/// exactly these matrices; this function is for checks and reports, not used to build the model.
+pub fn eq1_matrices(
+    p: &LoesParameters,
+    c: &ControllerParameters,
+) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    let k = p.k_sv * c.a1 * c.a2;
+    #[rustfmt::skip]
+    let a = DMatrix::from_row_slice(3, 3, &[
+        0.0, 1.0 / p.i_b, 0.0,
+        0.0, 0.0, p.d_m / p.c3,
+        -k * c.k_pot, -p.d_m / p.i_b, -1.0 / (p.r7 * p.c3),
+    ]);
+    let b = DMatrix::from_row_slice(3, 1, &[0.0, 0.0, k]);
+    let cm = DMatrix::from_row_slice(1, 3, &[c.k_pot, 0.0, 0.0]);
+    (a, b, cm)
 }
 
 /// Handles into the LOES fragment, for bonding and wiring other fragments onto it.

@@ -1,6 +1,9 @@
 //! Pieces shared by both methods: scaling, norms, the starting step, the step-size floor,
 //! dense-output bookkeeping and non-finite checks.
 
+// Index loops over stages and components mirror the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
 
 /// Error weights `atol_i + rtol * max(|a_i|, |b_i|)`, floored at the smallest normal number so

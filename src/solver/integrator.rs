@@ -153,10 +153,20 @@ impl Integrator {
         if t_end == self.t {
             return Ok(());
         }
-        match self.options.method {
+        let result = match self.options.method {
             Method::Rodas5P => super::rodas5p::advance(self, sys, t_end, times, out),
             Method::Radau5 => super::radau5::advance(self, sys, t_end, times, out),
+        };
+        if let Err(e) = &result {
+            if e.kind != SolverErrorKind::TooManySteps {
+                // The step size and history that led into the failure are no guide for the
+                // next attempt (typically made after the caller changed something): restart
+                // with a fresh step-size estimate.
+                self.h = 0.0;
+                self.hist = History::fresh();
+            }
         }
+        result
     }
 
     /// The inputs of the system jumped (zero-order hold at a communication point): forget

@@ -1,17 +1,577 @@
-//! Radau IIA order 5 (placeholder, being written).
-use super::integrator::Integrator;
-use super::{OdeSystem, SolverError, SolverErrorKind};
+//! Radau IIA of order 5 (3 stages), implemented in the manner of Hairer's RADAU5
+//! (E. Hairer & G. Wanner, Solving ODEs II, Sec. IV.8; Fortran code `radau5.f`, version of
+//! 1996/2002). All constants below are those of `radau5.f`; the comments say what each is.
+//!
+//! # Method
+//!
+//! Collocation at c = ((4-√6)/10, (4+√6)/10, 1). With Z_i = Y_i - y0, the stage equations
+//! Z = h (A ⊗ I) F(Z) are solved by a simplified Newton iteration whose matrix
+//! I - h A ⊗ J is block-diagonalised with the eigen-decomposition T⁻¹ A⁻¹ T = diag(γ, α ± iβ):
+//! one real LU of (γ/h) I - J and one complex LU of ((α + iβ)/h) I - J per factorisation
+//! (W = T⁻¹ Z are the transformed increments; Hairer & Wanner II, eq. IV.8.16ff).
+//!
+//! * Jacobian and LU are reused while Newton converges fast (contraction θ ≤ 0.001) and the
+//!   proposed step changes by less than the factor window [1, 1.2].
+//! * Newton start values: extrapolation of the previous step's collocation polynomial.
+//! * Error estimate (Hairer & Wanner II, eq. IV.8.19–8.20): err = ((γ/h) I - J)⁻¹
+//!   (f(y0) + (e1 Z1 + e2 Z2 + e3 Z3)/h), the filter (I - h γ0 J)⁻¹ suppresses the stiff
+//!   components; after a rejection or on the first step it is refined once with f(y0 + err).
+//! * Step control: Gustafsson's predictive controller (eq. IV.8.25) with safety factor
+//!   depending on the Newton iteration count.
+//! * Tolerances are transformed as in RADAU5: rtol' = 0.1 rtol^(2/3), atol' = rtol' atol/rtol,
+//!   because the local error estimate is O(h^4) while the method is of order 5.
+//! * Dense output: the collocation polynomial (CONTR5).
+//!
+//! Jacobian and LU live only within one `advance` call (the call starts with a fresh
+//! Jacobian), so a restored state continues bit-identically.
 
+// Index loops over stages and components mirror the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::{Complex, DMatrix, DVector};
+
+use super::common::{all_finite, eval, h_min, initial_step, Outputs};
+use super::integrator::Integrator;
+use super::jacobian;
+use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
+
+/// √6.
+fn sq6() -> f64 {
+    6f64.sqrt()
+}
+
+/// Collocation nodes c1 = (4-√6)/10 and c2 = (4+√6)/10 (c3 = 1).
+pub fn nodes() -> (f64, f64) {
+    ((4.0 - sq6()) / 10.0, (4.0 + sq6()) / 10.0)
+}
+
+/// Eigenvalues of A⁻¹ (A the Radau IIA matrix): a real one γ and a complex pair α ± iβ.
+/// RADAU5: U1 = 1/((6 + 81^(1/3) - 9^(1/3))/30), ALPH, BETA = (…)/(ALPH² + BETA²).
+pub fn inverse_eigenvalues() -> (f64, f64, f64) {
+    let c81 = 81f64.cbrt();
+    let c9 = 9f64.cbrt();
+    let u1 = (6.0 + c81 - c9) / 30.0; // real eigenvalue of A
+    let alph = (12.0 - c81 + c9) / 60.0; // real part of the complex pair of A
+    let beta = (c81 + c9) * 3f64.sqrt() / 60.0; // imaginary part
+    let cno = alph * alph + beta * beta;
+    (1.0 / u1, alph / cno, beta / cno)
+}
+
+/// Error-estimate weights (DD1, DD2, DD3) of RADAU5: the embedded combination
+/// e = γ0 h f(y0) + Σ e_i Z_i (eq. IV.8.19) written with e_i = DD_i / γ (DD_i below).
+pub fn error_weights() -> (f64, f64, f64) {
+    (
+        -(13.0 + 7.0 * sq6()) / 3.0,
+        (-13.0 + 7.0 * sq6()) / 3.0,
+        -1.0 / 3.0,
+    )
+}
+
+/// T with T⁻¹ A⁻¹ T = [[γ,0,0],[0,α,-β],[0,β,α]] (RADAU5's T11…T33; T32 = 1, T33 = 0).
+#[allow(clippy::excessive_precision)] // digits as published in radau5.f
+pub const T: [[f64; 3]; 3] = [
+    [
+        9.1232394870892942792e-02,
+        -0.14125529502095420843,
+        -3.0029194105147424492e-02,
+    ],
+    [
+        0.24171793270710701896,
+        0.20412935229379993199,
+        0.38294211275726193779,
+    ],
+    [0.96604818261509293619, 1.0, 0.0],
+];
+/// T⁻¹ (RADAU5's TI11…TI33).
+#[allow(clippy::excessive_precision)] // digits as published in radau5.f
+pub const TI: [[f64; 3]; 3] = [
+    [
+        4.3255798900631553510,
+        0.33919925181580986954,
+        0.54177053993587487119,
+    ],
+    [
+        -4.1787185915519047273,
+        -0.32768282076106238708,
+        0.47662355450055045196,
+    ],
+    [
+        -0.50287263494578687595,
+        2.5719269498556054292,
+        -0.59603920482822492497,
+    ],
+];
+
+/// Maximum number of Newton iterations (RADAU5 NIT default).
+const NIT: usize = 7;
+/// Jacobian is kept if the Newton contraction rate θ stays below this (RADAU5 WORK(3)).
+const THET: f64 = 0.001;
+/// Keep h (and the LU) if h_new/h lies in [QUOT1, QUOT2] (RADAU5 WORK(5), WORK(6)).
+const QUOT1: f64 = 1.0;
+const QUOT2: f64 = 1.2;
+/// Safety factor (WORK(2)) and step ratio limits 1/FACL ≤ h_new/h ≤ 1/FACR (WORK(8), WORK(9)).
+const SAFE: f64 = 0.9;
+const FACL: f64 = 5.0;
+const FACR: f64 = 0.125;
+
+/// Why a step attempt was rejected (to report the right error kind if h gets too small).
+#[derive(Clone, Copy, PartialEq)]
+enum Why {
+    Error,
+    Newton,
+    NonFinite,
+    Singular,
+}
+
+struct Lu {
+    real: nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    complex: nalgebra::linalg::LU<Complex<f64>, nalgebra::Dyn, nalgebra::Dyn>,
+    h: f64,
+}
+
+/// Advance `integ` to exactly `t_end` with Radau IIA (called by `Integrator::advance_to*`).
 pub(crate) fn advance<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
-    _sys: &S,
-    _t_end: f64,
-    _times: &[f64],
-    _out: &mut dyn FnMut(f64, &[f64]),
+    sys: &S,
+    t_end: f64,
+    times: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
-    Err(SolverError::new(
-        SolverErrorKind::InvalidOptions,
-        integ.t,
-        "radau5 not yet implemented",
-    ))
+    let n = integ.x.len();
+    let (c1, c2) = nodes();
+    let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
+    let (u1, alph, beta) = inverse_eigenvalues();
+    let (dd1, dd2, dd3) = error_weights();
+
+    // Transformed tolerances (RADAU5: RTOL = 0.1 RTOL^(2/3), ATOL = RTOL * ATOL/RTOL_user).
+    let rtol_user = integ.options.rtol;
+    let rtol = 0.1 * rtol_user.powf(2.0 / 3.0);
+    let atol: Vec<f64> = (0..n)
+        .map(|i| rtol * integ.options.atol.get(i) / rtol_user)
+        .collect();
+    let atol_for_fd = Atol::Vector(atol.clone());
+    // Newton stopping criterion (RADAU5 FNEWT default).
+    let fnewt = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
+    // CFAC: numerator of the Newton-count-dependent safety factor.
+    let cfac = SAFE * (1 + 2 * NIT) as f64;
+
+    let mut scal = vec![0.0; n];
+    let set_scal = |x: &[f64], scal: &mut [f64]| {
+        for i in 0..n {
+            scal[i] = (atol[i] + rtol * x[i].abs()).max(f64::MIN_POSITIVE);
+        }
+    };
+    set_scal(&integ.x, &mut scal);
+
+    let mut f0 = vec![0.0; n];
+    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut f0);
+    if !all_finite(&f0) {
+        return Err(nonfinite_here(integ.t));
+    }
+    if integ.h <= 0.0 {
+        let opts = integ.options.clone();
+        integ.h = initial_step(
+            sys,
+            &opts,
+            &mut integ.stats,
+            integ.t,
+            &integ.x,
+            &f0,
+            t_end,
+            3.0,
+        );
+    }
+    let mut outputs = Outputs::new(times, integ.t, n);
+
+    let mut jac = DMatrix::<f64>::zeros(n, n);
+    let mut need_jac = true;
+    let mut jac_fresh = false; // J evaluated at the current point?
+    let mut lu: Option<Lu> = None;
+    let mut theta = THET; // last Newton contraction estimate
+    let (mut z1, mut z2, mut z3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut w1, mut w2, mut w3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut a1, mut a2, mut a3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut ytmp = vec![0.0; n];
+    let mut rr = DVector::<f64>::zeros(n);
+    let mut rc = DVector::<Complex<f64>>::zeros(n);
+    let mut f2 = vec![0.0; n];
+    let mut x1 = vec![0.0; n];
+    let mut attempts: u64 = 0;
+    let mut consecutive_rejections: u32 = 0;
+    let mut why = Why::Error;
+    let mut newt = 0usize; // Newton iterations of the current attempt
+
+    loop {
+        let t = integ.t;
+        let remaining = t_end - t;
+        let hmin = h_min(&integ.options, t);
+        if remaining <= hmin {
+            // Rounding remnant below a minimal step: explicit Euler, error O(hmin^2).
+            for i in 0..n {
+                integ.x[i] += remaining * f0[i];
+            }
+            integ.t = t_end;
+            return Ok(());
+        }
+        attempts += 1;
+        if attempts > integ.options.max_steps {
+            return Err(SolverError::new(
+                SolverErrorKind::TooManySteps,
+                t,
+                format!(
+                    "more than max_steps = {} step attempts in one call",
+                    integ.options.max_steps
+                ),
+            ));
+        }
+        let h_proposed = integ.h.min(integ.options.max_step);
+        let (h, last) = if h_proposed >= remaining {
+            (remaining, true)
+        } else {
+            (h_proposed, false)
+        };
+        if h < hmin {
+            let (kind, reason) = match why {
+                Why::NonFinite => (SolverErrorKind::NonFinite, "after non-finite values of f"),
+                Why::Singular => (
+                    SolverErrorKind::SingularMatrix,
+                    "with a singular iteration matrix",
+                ),
+                Why::Newton => (
+                    SolverErrorKind::StepTooSmall,
+                    "because Newton did not converge",
+                ),
+                Why::Error => (SolverErrorKind::StepTooSmall, "to meet the tolerances"),
+            };
+            return Err(SolverError::new(
+                kind,
+                t,
+                format!("step size {h:e} fell below the minimum {hmin:e} {reason}"),
+            ));
+        }
+        if need_jac {
+            if !jacobian::evaluate(
+                sys,
+                &mut integ.stats,
+                t,
+                &integ.x,
+                &f0,
+                &atol_for_fd,
+                rtol,
+                &mut jac,
+            ) {
+                return Err(SolverError::new(
+                    SolverErrorKind::NonFinite,
+                    t,
+                    "the Jacobian is not finite at the current point",
+                ));
+            }
+            need_jac = false;
+            jac_fresh = true;
+            lu = None;
+        }
+
+        // Outcome of this attempt: Ok(err) or a rejection reason with the factor for h.
+        let attempt: Result<f64, (Why, f64)> = 'attempt: {
+            if lu.as_ref().is_none_or(|l| l.h != h) {
+                let fac1 = u1 / h;
+                let (alphn, betan) = (alph / h, beta / h);
+                let mut e1 = -jac.clone();
+                let mut e2 = jac.map(|v| Complex::new(-v, 0.0));
+                for i in 0..n {
+                    e1[(i, i)] += fac1;
+                    e2[(i, i)] += Complex::new(alphn, betan);
+                }
+                integ.stats.lu_decompositions += 2;
+                let (real, complex) = (e1.lu(), e2.lu());
+                if !real.is_invertible() || !complex.is_invertible() {
+                    lu = None;
+                    break 'attempt Err((Why::Singular, 0.5));
+                }
+                lu = Some(Lu { real, complex, h });
+            }
+            let Some(lu) = lu.as_ref() else {
+                break 'attempt Err((Why::Singular, 0.5));
+            };
+            let fac1 = u1 / h;
+            let (alphn, betan) = (alph / h, beta / h);
+
+            // Newton start values: extrapolated collocation polynomial, or zero.
+            if integ.hist.first || integ.hist.cont.len() != 3 * n || integ.hist.h_old <= 0.0 {
+                z1.fill(0.0);
+                z2.fill(0.0);
+                z3.fill(0.0);
+                w1.fill(0.0);
+                w2.fill(0.0);
+                w3.fill(0.0);
+            } else {
+                let c3q = h / integ.hist.h_old;
+                let (c1q, c2q) = (c1 * c3q, c2 * c3q);
+                let cont = &integ.hist.cont;
+                for i in 0..n {
+                    let (k1, k2, k3) = (cont[i], cont[n + i], cont[2 * n + i]);
+                    let p = |q: f64| q * (k1 + (q - c2m1) * (k2 + (q - c1m1) * k3));
+                    z1[i] = p(c1q);
+                    z2[i] = p(c2q);
+                    z3[i] = p(c3q);
+                    w1[i] = TI[0][0] * z1[i] + TI[0][1] * z2[i] + TI[0][2] * z3[i];
+                    w2[i] = TI[1][0] * z1[i] + TI[1][1] * z2[i] + TI[1][2] * z3[i];
+                    w3[i] = TI[2][0] * z1[i] + TI[2][1] * z2[i] + TI[2][2] * z3[i];
+                }
+            }
+
+            // Simplified Newton iteration (RADAU5 labels 40 ff.).
+            integ.hist.faccon = integ.hist.faccon.max(f64::EPSILON).powf(0.8);
+            theta = THET;
+            newt = 0;
+            let mut dynold = 0.0;
+            let mut thqold = 0.0;
+            loop {
+                if newt >= NIT {
+                    break 'attempt Err((Why::Newton, 0.5));
+                }
+                for i in 0..n {
+                    ytmp[i] = integ.x[i] + z1[i];
+                }
+                eval(sys, &mut integ.stats, t + c1 * h, &ytmp, &mut a1);
+                for i in 0..n {
+                    ytmp[i] = integ.x[i] + z2[i];
+                }
+                eval(sys, &mut integ.stats, t + c2 * h, &ytmp, &mut a2);
+                for i in 0..n {
+                    ytmp[i] = integ.x[i] + z3[i];
+                }
+                eval(sys, &mut integ.stats, t + h, &ytmp, &mut a3);
+                if !(all_finite(&a1) && all_finite(&a2) && all_finite(&a3)) {
+                    break 'attempt Err((Why::NonFinite, 0.5));
+                }
+                // Transformed residual, then the two block solves (SLVRAD).
+                for i in 0..n {
+                    let r1 = TI[0][0] * a1[i] + TI[0][1] * a2[i] + TI[0][2] * a3[i];
+                    let r2 = TI[1][0] * a1[i] + TI[1][1] * a2[i] + TI[1][2] * a3[i];
+                    let r3 = TI[2][0] * a1[i] + TI[2][1] * a2[i] + TI[2][2] * a3[i];
+                    rr[i] = r1 - fac1 * w1[i];
+                    rc[i] = Complex::new(
+                        r2 - alphn * w2[i] + betan * w3[i],
+                        r3 - betan * w2[i] - alphn * w3[i],
+                    );
+                }
+                if !lu.real.solve_mut(&mut rr) || !lu.complex.solve_mut(&mut rc) {
+                    break 'attempt Err((Why::Singular, 0.5));
+                }
+                newt += 1;
+                let mut dyno = 0.0;
+                for i in 0..n {
+                    let s = scal[i];
+                    dyno += (rr[i] / s).powi(2) + (rc[i].re / s).powi(2) + (rc[i].im / s).powi(2);
+                }
+                let dyno = (dyno / (3 * n) as f64).sqrt();
+                if !dyno.is_finite() {
+                    break 'attempt Err((Why::NonFinite, 0.5));
+                }
+                // Convergence monitor: contraction θ and predicted remaining error.
+                if newt > 1 && newt < NIT {
+                    let thq = dyno / dynold;
+                    theta = if newt == 2 {
+                        thq
+                    } else {
+                        (thq * thqold).sqrt()
+                    };
+                    thqold = thq;
+                    if theta < 0.99 {
+                        integ.hist.faccon = theta / (1.0 - theta);
+                        let dyth =
+                            integ.hist.faccon * dyno * theta.powi((NIT - 1 - newt) as i32) / fnewt;
+                        if dyth >= 1.0 {
+                            // Would not converge within NIT iterations: smaller step.
+                            let qnewt = dyth.clamp(1e-4, 20.0);
+                            let hhfac = 0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64));
+                            break 'attempt Err((Why::Newton, hhfac));
+                        }
+                    } else {
+                        break 'attempt Err((Why::Newton, 0.5));
+                    }
+                }
+                dynold = dyno.max(f64::EPSILON);
+                for i in 0..n {
+                    w1[i] += rr[i];
+                    w2[i] += rc[i].re;
+                    w3[i] += rc[i].im;
+                    z1[i] = T[0][0] * w1[i] + T[0][1] * w2[i] + T[0][2] * w3[i];
+                    z2[i] = T[1][0] * w1[i] + T[1][1] * w2[i] + T[1][2] * w3[i];
+                    z3[i] = T[2][0] * w1[i] + w2[i];
+                }
+                if integ.hist.faccon * dyno <= fnewt {
+                    break;
+                }
+            }
+
+            // Error estimate (ESTRAD).
+            let (hee1, hee2, hee3) = (dd1 / h, dd2 / h, dd3 / h);
+            for i in 0..n {
+                f2[i] = hee1 * z1[i] + hee2 * z2[i] + hee3 * z3[i];
+                rr[i] = f2[i] + f0[i];
+            }
+            if !lu.real.solve_mut(&mut rr) {
+                break 'attempt Err((Why::Singular, 0.5));
+            }
+            let norm = |v: &DVector<f64>| {
+                let s: f64 = (0..n).map(|i| (v[i] / scal[i]).powi(2)).sum();
+                (s / n as f64).sqrt().max(1e-10)
+            };
+            let mut err = norm(&rr);
+            if err >= 1.0 && (integ.hist.first || integ.hist.last_rejected) {
+                // Refined estimate with one more f evaluation (stiff components).
+                for i in 0..n {
+                    ytmp[i] = integ.x[i] + rr[i];
+                }
+                eval(sys, &mut integ.stats, t, &ytmp, &mut a1);
+                if !all_finite(&a1) {
+                    break 'attempt Err((Why::NonFinite, 0.5));
+                }
+                for i in 0..n {
+                    rr[i] = a1[i] + f2[i];
+                }
+                if !lu.real.solve_mut(&mut rr) {
+                    break 'attempt Err((Why::Singular, 0.5));
+                }
+                err = norm(&rr);
+            }
+            if err.is_finite() {
+                Ok(err)
+            } else {
+                Err((Why::NonFinite, 0.5))
+            }
+        };
+
+        // Step-size proposal from the error (with Newton-count-dependent safety), RADAU5.
+        let newt_safety = |newt_used: usize| SAFE.min(cfac / (newt_used + 2 * NIT) as f64);
+        match attempt {
+            Ok(err) => {
+                let fac = newt_safety(newt);
+                let mut quot = FACR.max(FACL.min(err.powf(0.25) / fac));
+                let mut hnew = h / quot;
+                if err < 1.0 {
+                    // Accepted. Gustafsson's predictive controller.
+                    if !integ.hist.first && integ.hist.h_acc > 0.0 {
+                        let facgus = (integ.hist.h_acc / h)
+                            * (err * err / integ.hist.err_acc).powf(0.25)
+                            / SAFE;
+                        let facgus = facgus.clamp(FACR, FACL);
+                        quot = quot.max(facgus);
+                        hnew = h / quot;
+                    }
+                    integ.hist.h_acc = h;
+                    integ.hist.err_acc = err.max(1e-2);
+                    let t1 = if last { t_end } else { t + h };
+                    for i in 0..n {
+                        x1[i] = integ.x[i] + z3[i];
+                    }
+                    if !all_finite(&x1) {
+                        return Err(nonfinite_here(t));
+                    }
+                    // Collocation polynomial of this step (CONT(N+1..4N) of RADAU5).
+                    let mut cont = std::mem::take(&mut integ.hist.cont);
+                    cont.resize(3 * n, 0.0);
+                    for i in 0..n {
+                        let k1 = (z2[i] - z3[i]) / c2m1;
+                        let ak = (z1[i] - z2[i]) / c1mc2;
+                        let acont3 = (ak - z1[i] / c1) / c2;
+                        let k2 = (ak - k1) / c1m1;
+                        cont[i] = k1;
+                        cont[n + i] = k2;
+                        cont[2 * n + i] = k2 - acont3;
+                    }
+                    if outputs.pending(t1) {
+                        let cref = &cont;
+                        let x1r = &x1;
+                        outputs.emit(
+                            t,
+                            h,
+                            t1,
+                            &x1,
+                            &mut |th, buf| {
+                                let s = th - 1.0;
+                                for i in 0..n {
+                                    buf[i] = x1r[i]
+                                        + s * (cref[i]
+                                            + (s - c2m1)
+                                                * (cref[n + i] + (s - c1m1) * cref[2 * n + i]));
+                                }
+                            },
+                            out,
+                        );
+                    }
+                    integ.hist.cont = cont;
+                    integ.hist.h_old = h;
+                    integ.hist.first = false;
+                    integ.x.copy_from_slice(&x1);
+                    integ.t = t1;
+                    integ.stats.accepted += 1;
+                    consecutive_rejections = 0;
+                    why = Why::Error;
+                    set_scal(&integ.x, &mut scal);
+                    if integ.hist.last_rejected {
+                        hnew = hnew.min(h);
+                    }
+                    integ.hist.last_rejected = false;
+                    hnew = hnew.min(integ.options.max_step);
+                    if last {
+                        integ.h = hnew.max(h_proposed);
+                        return Ok(());
+                    }
+                    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut f0);
+                    if !all_finite(&f0) {
+                        integ.h = hnew;
+                        return Err(nonfinite_here(integ.t));
+                    }
+                    jac_fresh = false;
+                    let qt = hnew / h;
+                    if theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+                        // Keep h, J and LU.
+                        integ.h = h;
+                    } else {
+                        integ.h = hnew;
+                        // Reuse J (new LU) only while Newton converges very fast.
+                        need_jac = theta > THET;
+                    }
+                    continue;
+                }
+                // Rejected by the error test.
+                integ.h = if integ.hist.first { h * 0.1 } else { hnew };
+                why = Why::Error;
+            }
+            Err((reason, fac)) => {
+                integ.h = h * fac;
+                why = reason;
+            }
+        }
+        // Common rejection bookkeeping: RADAU5 recomputes J unless it is already current.
+        integ.stats.rejected += 1;
+        integ.hist.last_rejected = true;
+        consecutive_rejections += 1;
+        if !jac_fresh {
+            need_jac = true;
+        }
+        if consecutive_rejections > integ.options.max_consecutive_rejections {
+            let kind = match why {
+                Why::NonFinite => SolverErrorKind::NonFinite,
+                Why::Singular => SolverErrorKind::SingularMatrix,
+                _ => SolverErrorKind::TooManyRejections,
+            };
+            return Err(SolverError::new(
+                kind,
+                t,
+                format!("{consecutive_rejections} consecutive step rejections (last h = {h:e})"),
+            ));
+        }
+    }
+}
+
+fn nonfinite_here(t: f64) -> SolverError {
+    SolverError::new(
+        SolverErrorKind::NonFinite,
+        t,
+        "the right-hand side f(t, x) is not finite at the current point",
+    )
 }

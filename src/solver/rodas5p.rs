@@ -25,6 +25,9 @@
 //! Dense output (same source): with K_r = Σ_j H_rj U_j (r = 1, 2, 3) and θ = (t - t0)/h,
 //! y(θ) = (1-θ) y0 + θ (y1 + (1-θ) (K_1 + θ (K_2 + θ K_3))).
 
+// Index loops over stages and components mirror the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{DMatrix, DVector};
 
 use super::common::{all_finite, eval, h_min, initial_step, rms, scale_into, Outputs};
