@@ -242,7 +242,7 @@ struct PowerTerm {
 
 /// Power balance of the model at a state: `stored_rate = source_power - dissipated_power`
 /// (up to round-off), the bond-graph statement of energy conservation.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PowerBalance {
     /// `dE/dt`: rate of change of the total stored energy, `sum(dH/dx_i * dx_i/dt)` over the
     /// storage elements.

@@ -14,7 +14,7 @@ pub const POT_FULL_SCALE_VOLTS: f64 = 10.0;
 pub const POT_SPAN_DEG: f64 = 150.0;
 
 /// Controller gains.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ControllerParameters {
     /// Error amplifier gain `A1` [V/V] (paper: 2).
     pub a1: f64,

@@ -52,7 +52,7 @@ pub const PRINTED_I_B: f64 = 0.0025;
 pub const PRINTED_R7: f64 = 3.8e7;
 
 /// Physical parameters of the LOES (SI units).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LoesParameters {
     /// Chamber capacitance `C3` [m^5/N].
     pub c3: f64,
