@@ -356,7 +356,7 @@ impl CompiledModel {
     pub fn n_outputs(&self) -> usize {
         self.output_names.len()
     }
-    /// State names: "<I>.p", "<C>.q", "<field>.p[k]", "<field>.q[k]" (1-based k), "<integrator>".
+    /// State names: `<I>.p`, `<C>.q`, `<field>.p[k]`, `<field>.q[k]` (1-based k), `<integrator>`.
     pub fn state_names(&self) -> &[String] {
         &self.state_names
     }
