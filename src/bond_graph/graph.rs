@@ -149,13 +149,13 @@ impl BondGraph {
         self.push(name, ElementKind::Sf(value.into()))
     }
 
-    /// Inertia; state `p` (generalised momentum), named "<name>.p". `Law::Linear(i)` is the
+    /// Inertia; state `p` (generalised momentum), named `<name>.p`. `Law::Linear(i)` is the
     /// inertance: `f = p / i`, kinetic energy `p^2 / (2 i)`.
     pub fn add_i(&mut self, name: impl Into<String>, law: impl Into<Law>) -> ElementId {
         self.push(name, ElementKind::I(law.into()))
     }
 
-    /// Capacitor; state `q` (generalised displacement), named "<name>.q". `Law::Linear(c)` is
+    /// Capacitor; state `q` (generalised displacement), named `<name>.q`. `Law::Linear(c)` is
     /// the capacitance (compliance): `e = q / c`, potential energy `q^2 / (2 c)`.
     pub fn add_c(&mut self, name: impl Into<String>, law: impl Into<Law>) -> ElementId {
         self.push(name, ElementKind::C(law.into()))
@@ -204,14 +204,14 @@ impl BondGraph {
     }
 
     /// Multiport I-field with a symmetric positive-definite mass matrix `M` (n x n, one port per
-    /// bond, in bond creation order): `f = M^-1 p`, states "<name>.p[1]".."<name>.p[n]",
+    /// bond, in bond creation order): `f = M^-1 p`, states `<name>.p[1]` .. `<name>.p[n]`,
     /// energy `p' M^-1 p / 2`.
     pub fn add_i_field(&mut self, name: impl Into<String>, mass: DMatrix<f64>) -> ElementId {
         self.push(name, ElementKind::IField(mass))
     }
 
     /// Multiport C-field with a symmetric positive-semidefinite stiffness matrix `K` (n x n, one
-    /// port per bond, in bond creation order): `e = K q`, states "<name>.q[1]".."<name>.q[n]",
+    /// port per bond, in bond creation order): `e = K q`, states `<name>.q[1]` .. `<name>.q[n]`,
     /// energy `q' K q / 2`.
     pub fn add_c_field(&mut self, name: impl Into<String>, stiffness: DMatrix<f64>) -> ElementId {
         self.push(name, ElementKind::CField(stiffness))
@@ -290,7 +290,7 @@ impl BondGraph {
         self.push_signal(name, SignalKind::Product(a, b))
     }
 
-    /// `dy/dt = u`; `y` becomes a state named "<name>" (e.g. the rotor angle "loes.theta_a", the
+    /// `dy/dt = u`; `y` becomes a state named `<name>` (e.g. the rotor angle "loes.theta_a", the
     /// integral of the rotor speed).
     pub fn add_integrator(&mut self, name: impl Into<String>, input: SignalId) -> SignalId {
         self.push_signal(name, SignalKind::Integrator(Some(input)))

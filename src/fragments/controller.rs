@@ -8,19 +8,19 @@
 
 use crate::bond_graph::{BondGraph, SignalId};
 
-/// Potentiometer full-scale voltage assumed for the default `k_POT` [V].
+/// Potentiometer full-scale voltage assumed for the default `k_POT` \[V\].
 pub const POT_FULL_SCALE_VOLTS: f64 = 10.0;
-/// Potentiometer angle span for that voltage [deg] (MODEL_NOTES section 2 item 7).
+/// Potentiometer angle span for that voltage \[deg\] (MODEL_NOTES section 2 item 7).
 pub const POT_SPAN_DEG: f64 = 150.0;
 
 /// Controller gains.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ControllerParameters {
-    /// Error amplifier gain `A1` [V/V] (paper: 2).
+    /// Error amplifier gain `A1` \[V/V\] (paper: 2).
     pub a1: f64,
-    /// Power amplifier gain `A2` [V/V] (paper: 10).
+    /// Power amplifier gain `A2` \[V/V\] (paper: 10).
     pub a2: f64,
-    /// Potentiometer gain `k_POT` [V/rad]. The paper does not give it; default 10 V over 150 deg
+    /// Potentiometer gain `k_POT` \[V/rad\]. The paper does not give it; default 10 V over 150 deg
     /// = 3.8197 V/rad (MODEL_NOTES section 2 item 7).
     pub k_pot: f64,
 }
@@ -38,17 +38,17 @@ impl Default for ControllerParameters {
 /// Signals of the controller fragment.
 #[derive(Clone, Copy, Debug)]
 pub struct ControllerPorts {
-    /// Potentiometer voltage `y_POT = k_POT theta_a` [V] ("<prefix>.k_pot").
+    /// Potentiometer voltage `y_POT = k_POT theta_a` \[V\] (`<prefix>.k_pot`).
     pub y_pot: SignalId,
-    /// Error `r - y_POT` [V] ("<prefix>.error").
+    /// Error `r - y_POT` \[V\] (`<prefix>.error`).
     pub error: SignalId,
-    /// Error amplifier output `A1 (r - y_POT)` [V] ("<prefix>.A1").
+    /// Error amplifier output `A1 (r - y_POT)` \[V\] (`<prefix>.A1`).
     pub amplified_error: SignalId,
-    /// Power amplifier output (valve command) `e_in = A2 A1 (r - y_POT)` [V] ("<prefix>.A2").
+    /// Power amplifier output (valve command) `e_in = A2 A1 (r - y_POT)` \[V\] (`<prefix>.A2`).
     pub command: SignalId,
 }
 
-/// The potentiometer: `y_POT = k_POT angle`, signal "<prefix>.k_pot".
+/// The potentiometer: `y_POT = k_POT angle`, signal `<prefix>.k_pot`.
 pub fn add_potentiometer(
     g: &mut BondGraph,
     prefix: &str,
@@ -58,7 +58,7 @@ pub fn add_potentiometer(
     g.add_gain(format!("{prefix}.k_pot"), p.k_pot, angle)
 }
 
-/// The two amplifiers: returns `(A1 error, A2 A1 error)`, signals "<prefix>.A1", "<prefix>.A2".
+/// The two amplifiers: returns `(A1 error, A2 A1 error)`, signals `<prefix>.A1`, `<prefix>.A2`.
 pub fn add_amplifiers(
     g: &mut BondGraph,
     prefix: &str,
@@ -70,7 +70,7 @@ pub fn add_amplifiers(
     (a1, a2)
 }
 
-/// The closed-loop controller: potentiometer on `angle` [rad], error against `reference` [V],
+/// The closed-loop controller: potentiometer on `angle` \[rad\], error against `reference` \[V\],
 /// both amplifiers.
 pub fn add_controller(
     g: &mut BondGraph,

@@ -10,18 +10,18 @@
 //!           C3   R7
 //! ```
 //!
-//! * `MSf` "<prefix>.valve": valve flow `Q = k_sv e_in` [m^3/s], modulated by the valve command
-//!   `e_in` [V] (in the closed loop `e_in = A2 A1 (r - k_POT theta_a)`);
-//! * 0-junction "<prefix>.chamber": the load pressure `p3` [Pa]; C3 "<prefix>.C3" (chamber
-//!   compressibility, state `q_3` [m^3], `p3 = q3 / C3`) and R7 "<prefix>.R7" (leakage,
+//! * `MSf` `<prefix>.valve`: valve flow `Q = k_sv e_in` \[m^3/s\], modulated by the valve command
+//!   `e_in` \[V\] (in the closed loop `e_in = A2 A1 (r - k_POT theta_a)`);
+//! * 0-junction `<prefix>.chamber`: the load pressure `p3` \[Pa\]; C3 `<prefix>.C3` (chamber
+//!   compressibility, state `q_3` \[m^3\], `p3 = q3 / C3`) and R7 `<prefix>.R7` (leakage,
 //!   `Q_leak = p3 / R7`);
-//! * TF "<prefix>.D_m": vane motor displacement, torque `= D_m p3`, `Q_motor = D_m omega`;
-//! * 1-junction "<prefix>.rotor": rotor speed `omega` [rad/s]; I "<prefix>.I_b" (rotor inertia,
-//!   state `p_b` [N m s] = `I_b omega`);
-//! * the rotor angle `theta_a` [rad] is the integral of `omega` (integrator "<prefix>.theta_a").
+//! * TF `<prefix>.D_m`: vane motor displacement, torque `= D_m p3`, `Q_motor = D_m omega`;
+//! * 1-junction `<prefix>.rotor`: rotor speed `omega` \[rad/s\]; I `<prefix>.I_b` (rotor inertia,
+//!   state `p_b` \[N m s\] = `I_b omega`);
+//! * the rotor angle `theta_a` \[rad\] is the integral of `omega` (integrator `<prefix>.theta_a`).
 //!
-//! The states are, in this order, `theta_a` ("<prefix>.theta_a"), `p_b` ("<prefix>.I_b.p"),
-//! `q_3` ("<prefix>.C3.q"), those of eq. 1, and the graph yields exactly eq. 1:
+//! The states are, in this order, `theta_a` (`<prefix>.theta_a`), `p_b` (`<prefix>.I_b.p`),
+//! `q_3` (`<prefix>.C3.q`), those of eq. 1, and the graph yields exactly eq. 1:
 //!
 //! ```text
 //! d theta_a/dt = p_b / I_b
@@ -37,32 +37,32 @@ use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
 use super::controller::{self, ControllerParameters};
 
 /// Gain of the identified open-loop transfer function `G_est(s) = K / (s (s + a) (s + b))`,
-/// eq. 2 of the paper [V/V / s^3].
+/// eq. 2 of the paper \[V/V / s^3\].
 pub const G_EST_GAIN: f64 = 2.25e6;
-/// First real pole of `G_est` [rad/s] (eq. 2: `s + 65`).
+/// First real pole of `G_est` \[rad/s\] (eq. 2: `s + 65`).
 pub const G_EST_POLE_1: f64 = 65.0;
-/// Second real pole of `G_est` [rad/s] (eq. 2: `s + 753`).
+/// Second real pole of `G_est` \[rad/s\] (eq. 2: `s + 753`).
 pub const G_EST_POLE_2: f64 = 753.0;
-/// Chamber capacitance printed in the paper [m^5/N].
+/// Chamber capacitance printed in the paper \[m^5/N\].
 pub const PRINTED_C3: f64 = 5.28e-11;
-/// Rotor inertia printed in the paper [kg m^2] (printed as "I_6", read I_b).
+/// Rotor inertia printed in the paper \[kg m^2\] (printed as "I_6", read I_b).
 pub const PRINTED_I_B: f64 = 0.0025;
-/// Leakage resistance printed in the paper [N s/m^5] (inconsistent with `G_est`, see
+/// Leakage resistance printed in the paper \[N s/m^5\] (inconsistent with `G_est`, see
 /// MODEL_NOTES section 2 item 7).
 pub const PRINTED_R7: f64 = 3.8e7;
 
 /// Physical parameters of the LOES (SI units).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LoesParameters {
-    /// Chamber capacitance `C3` [m^5/N].
+    /// Chamber capacitance `C3` \[m^5/N\].
     pub c3: f64,
-    /// Rotor inertia `I_b` [kg m^2].
+    /// Rotor inertia `I_b` \[kg m^2\].
     pub i_b: f64,
-    /// Leakage resistance `R7` [N s/m^5].
+    /// Leakage resistance `R7` \[N s/m^5\].
     pub r7: f64,
-    /// Vane motor displacement `D_m` [m^3/rad].
+    /// Vane motor displacement `D_m` \[m^3/rad\].
     pub d_m: f64,
-    /// Valve flow gain `k_sv` [m^3/(s V)].
+    /// Valve flow gain `k_sv` \[m^3/(s V)\].
     pub k_sv: f64,
 }
 
@@ -163,20 +163,20 @@ pub fn eq1_matrices(
 /// Handles into the LOES fragment, for bonding and wiring other fragments onto it.
 #[derive(Clone, Copy, Debug)]
 pub struct LoesPorts {
-    /// The rotor 1-junction "<prefix>.rotor" (common flow: rotor speed). Bond a torsion bar
+    /// The rotor 1-junction `<prefix>.rotor` (common flow: rotor speed). Bond a torsion bar
     /// (a C between this junction and the hub inertia) onto it.
     pub rotor: ElementId,
-    /// The chamber 0-junction "<prefix>.chamber" (common effort: load pressure `p3`).
+    /// The chamber 0-junction `<prefix>.chamber` (common effort: load pressure `p3`).
     pub chamber: ElementId,
-    /// The valve flow source "<prefix>.valve" (MSf).
+    /// The valve flow source `<prefix>.valve` (MSf).
     pub valve: ElementId,
-    /// The chamber capacitance "<prefix>.C3".
+    /// The chamber capacitance `<prefix>.C3`.
     pub c3: ElementId,
-    /// The leakage resistance "<prefix>.R7".
+    /// The leakage resistance `<prefix>.R7`.
     pub r7: ElementId,
-    /// The motor transformer "<prefix>.D_m".
+    /// The motor transformer `<prefix>.D_m`.
     pub d_m: ElementId,
-    /// The rotor inertia "<prefix>.I_b".
+    /// The rotor inertia `<prefix>.I_b`.
     pub i_b: ElementId,
     /// Bond valve -> chamber (its flow is the valve flow).
     pub valve_bond: BondId,
@@ -184,16 +184,16 @@ pub struct LoesPorts {
     pub c3_bond: BondId,
     /// Bond rotor -> I_b (its flow is the rotor speed).
     pub i_b_bond: BondId,
-    /// Input signal port "<prefix>.valve_command": the valve command voltage `e_in` [V]. Must be
+    /// Input signal port `<prefix>.valve_command`: the valve command voltage `e_in` \[V\]. Must be
     /// connected with [`BondGraph::connect_signal_port`].
     pub valve_command: SignalId,
-    /// Rotor angle `theta_a` [rad] (integrator "<prefix>.theta_a", a state).
+    /// Rotor angle `theta_a` \[rad\] (integrator `<prefix>.theta_a`, a state).
     pub theta: SignalId,
-    /// Rotor speed `omega` [rad/s] ("<prefix>.omega").
+    /// Rotor speed `omega` \[rad/s\] (`<prefix>.omega`).
     pub omega: SignalId,
-    /// Load pressure `p3 = q3 / C3` [Pa] ("<prefix>.p_load").
+    /// Load pressure `p3 = q3 / C3` \[Pa\] (`<prefix>.p_load`).
     pub p_load: SignalId,
-    /// Valve flow `Q = k_sv e_in` [m^3/s] ("<prefix>.q_valve").
+    /// Valve flow `Q = k_sv e_in` \[m^3/s\] (`<prefix>.q_valve`).
     pub q_valve: SignalId,
 }
 
@@ -244,9 +244,9 @@ pub fn add_loes(g: &mut BondGraph, prefix: &str, p: &LoesParameters) -> LoesPort
     }
 }
 
-/// The closed loop of eq. 1: reference input "r" [V], the LOES under "loes", the controller
-/// under "controller"; states `loes.theta_a`, `loes.I_b.p`, `loes.C3.q`; outputs "y_pot" [V],
-/// "theta_motor" [rad], "omega_motor" [rad/s], "p_load" [Pa], "q_valve" [m^3/s].
+/// The closed loop of eq. 1: reference input "r" \[V\], the LOES under "loes", the controller
+/// under "controller"; states `loes.theta_a`, `loes.I_b.p`, `loes.C3.q`; outputs "y_pot" \[V\],
+/// "theta_motor" \[rad\], "omega_motor" \[rad/s\], "p_load" \[Pa\], "q_valve" \[m^3/s\].
 pub fn build_loop(loes: &LoesParameters, ctrl: &ControllerParameters) -> BondGraph {
     let mut g = BondGraph::new("loes_closed_loop");
     let r = g.add_input("r");
