@@ -476,3 +476,38 @@ fn max_step_is_respected_and_reset_works() {
         assert_eq!(integ.t(), 1.0);
     }
 }
+
+struct Decay;
+impl OdeSystem for Decay {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, x: &[f64], f: &mut [f64]) {
+        f[0] = -x[0];
+    }
+}
+
+#[test]
+fn final_steps_shorter_than_min_step_are_allowed() {
+    // Communication steps below min_step: such a step size is dictated by t_end, not by error
+    // control, so it is no failure, and it is a real step (accurate).
+    for method in METHODS {
+        let o = SolverOptions {
+            method,
+            rtol: 1e-8,
+            atol: Atol::Scalar(1e-10),
+            min_step: 1e-3,
+            ..Default::default()
+        };
+        let mut integ = Integrator::new(o, 0.0, vec![1.0]).unwrap();
+        for k in 1..=10 {
+            integ.advance_to(&Decay, k as f64 * 1e-5).unwrap();
+        }
+        assert_eq!(integ.stats().accepted, 10);
+        assert!(
+            (integ.x()[0] - (-1e-4f64).exp()).abs() < 1e-13,
+            "{method:?}: {}",
+            integ.x()[0]
+        );
+    }
+}
