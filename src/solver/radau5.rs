@@ -67,7 +67,7 @@ pub fn error_weights() -> (f64, f64, f64) {
     )
 }
 
-/// T with T⁻¹ A⁻¹ T = [[γ,0,0],[0,α,-β],[0,β,α]] (RADAU5's T11…T33; T32 = 1, T33 = 0).
+/// T with `T⁻¹ A⁻¹ T = [[γ,0,0],[0,α,-β],[0,β,α]]` (RADAU5's T11…T33; T32 = 1, T33 = 0).
 #[allow(clippy::excessive_precision)] // digits as published in radau5.f
 pub const T: [[f64; 3]; 3] = [
     [
