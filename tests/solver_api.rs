@@ -1,478 +1,575 @@
 //! Behaviour of the public integrator API: exact stop times, bit-exact checkpoint/restore,
 //! failure reporting, Jacobian checks, dense output, option validation.
 
-use std::cell::Cell;
+// Wrapped in a module so that `cargo test solver` selects these tests by name.
+mod solver_api {
+    use std::cell::Cell;
 
-use hydraulic_slewing_plate::solver::testset::{problem, Oscillator, TestProblem, PROBLEMS};
-use hydraulic_slewing_plate::solver::{
-    finite_difference_jacobian, Atol, Integrator, Method, OdeSystem, SolverErrorKind, SolverOptions,
-};
-use nalgebra::DMatrix;
+    use hydraulic_slewing_plate::solver::testset::{problem, Oscillator, TestProblem, PROBLEMS};
+    use hydraulic_slewing_plate::solver::{
+        finite_difference_jacobian, Atol, Integrator, Method, OdeSystem, SolverErrorKind,
+        SolverOptions,
+    };
+    use nalgebra::DMatrix;
 
-const METHODS: [Method; 2] = [Method::Rodas5P, Method::Radau5];
+    const METHODS: [Method; 2] = [Method::Rodas5P, Method::Radau5];
 
-fn opts(method: Method, rtol: f64, atol: f64) -> SolverOptions {
-    SolverOptions {
-        method,
-        rtol,
-        atol: Atol::Scalar(atol),
-        ..Default::default()
-    }
-}
-
-/// A stiff first-order lag with a zero-order-held input u (changed by the "master" at
-/// communication points) plus a lightly damped mode driven by it: like a servo valve
-/// feeding a plate mode.
-struct Plant {
-    u: Cell<f64>,
-}
-
-impl OdeSystem for Plant {
-    fn dim(&self) -> usize {
-        3
-    }
-    fn rhs(&self, _t: f64, x: &[f64], f: &mut [f64]) {
-        let (w, z) = (2e3, 0.02);
-        f[0] = -1e5 * (x[0] - self.u.get());
-        f[1] = w * x[2];
-        f[2] = -w * x[1] - 2.0 * z * w * x[2] + w * x[0];
-    }
-    fn jacobian(&self, _t: f64, _x: &[f64], j: &mut DMatrix<f64>) -> bool {
-        let (w, z) = (2e3, 0.02);
-        j.fill(0.0);
-        j[(0, 0)] = -1e5;
-        j[(1, 2)] = w;
-        j[(2, 1)] = -w;
-        j[(2, 2)] = -2.0 * z * w;
-        j[(2, 0)] = w;
-        true
-    }
-    fn is_autonomous(&self) -> bool {
-        true
-    }
-}
-
-fn input_at(k: usize) -> f64 {
-    ((k as f64) * 0.7).sin()
-}
-
-/// Co-simulation loop: input jump, notify, advance one communication step.
-fn cosim(integ: &mut Integrator, plant: &Plant, k0: usize, k1: usize, dt: f64) {
-    for k in k0..k1 {
-        plant.u.set(input_at(k));
-        integ.notify_discontinuity();
-        let t_end = (k + 1) as f64 * dt;
-        integ.advance_to(plant, t_end).unwrap();
-        assert_eq!(
-            integ.t().to_bits(),
-            t_end.to_bits(),
-            "stop time not hit exactly"
-        );
-    }
-}
-
-#[test]
-fn stop_times_are_hit_exactly() {
-    for method in METHODS {
-        let p = problem("vdpol").unwrap();
-        let mut integ = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
-        // Awkward, non-representable communication points.
-        for k in 1..=30 {
-            let t_end = k as f64 * 0.0667;
-            integ.advance_to(p.as_ref(), t_end).unwrap();
-            assert_eq!(integ.t(), t_end, "{method:?}");
-        }
-        // advance_to the current time is a no-op.
-        let before = integ.clone();
-        integ.advance_to(p.as_ref(), integ.t()).unwrap();
-        assert_eq!(before, integ);
-        // Going backwards is an error naming the problem, and leaves the state alone.
-        let e = integ.advance_to(p.as_ref(), 0.5).unwrap_err();
-        assert_eq!(e.kind, SolverErrorKind::InvalidInput);
-        assert!(e.message.contains("t_end"), "{e}");
-        assert_eq!(before, integ);
-    }
-}
-
-#[test]
-fn checkpoint_restore_continue_is_bit_identical() {
-    for method in METHODS {
-        let dt = 1e-3;
-        let plant = Plant { u: Cell::new(0.0) };
-        let mut a = Integrator::new(opts(method, 1e-7, 1e-9), 0.0, vec![0.0; 3]).unwrap();
-        cosim(&mut a, &plant, 0, 20, dt);
-        // Save (serialise) the state at a communication point.
-        let json = serde_json::to_string(&a).unwrap();
-        let copy = a.clone();
-        cosim(&mut a, &plant, 20, 50, dt);
-
-        let mut b: Integrator = serde_json::from_str(&json).unwrap();
-        assert_eq!(b, copy, "JSON round trip must be exact");
-        cosim(&mut b, &plant, 20, 50, dt);
-        let mut c = copy;
-        cosim(&mut c, &plant, 20, 50, dt);
-        for other in [&b, &c] {
-            assert_eq!(a.t().to_bits(), other.t().to_bits());
-            let xa: Vec<u64> = a.x().iter().map(|v| v.to_bits()).collect();
-            let xo: Vec<u64> = other.x().iter().map(|v| v.to_bits()).collect();
-            assert_eq!(xa, xo, "{method:?}: state differs after restore");
-            assert_eq!(a.stats(), other.stats());
-            assert_eq!(&a, other);
-        }
-        assert!(a.stats().accepted > 50);
-    }
-}
-
-#[test]
-fn checkpoint_without_discontinuities_is_bit_identical() {
-    // Same without notify_discontinuity: the controller history and Radau's Newton start
-    // polynomial are carried across calls and must be part of the saved state.
-    for method in METHODS {
-        let p = problem("orego").unwrap();
-        let mut a = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
-        for k in 1..=10 {
-            a.advance_to(p.as_ref(), k as f64 * 7.0).unwrap();
-        }
-        let json = serde_json::to_string(&a).unwrap();
-        for k in 11..=30 {
-            a.advance_to(p.as_ref(), k as f64 * 7.0).unwrap();
-        }
-        let mut b: Integrator = serde_json::from_str(&json).unwrap();
-        for k in 11..=30 {
-            b.advance_to(p.as_ref(), k as f64 * 7.0).unwrap();
-        }
-        assert_eq!(a, b, "{method:?}");
-    }
-}
-
-#[test]
-fn serialised_state_has_no_non_finite_numbers() {
-    for method in METHODS {
-        let p = problem("hires").unwrap();
-        let integ = Integrator::new(opts(method, 1e-6, 1e-10), 0.0, p.y0()).unwrap();
-        let j = serde_json::to_string(&integ).unwrap();
-        // serde_json writes NaN/inf as null; the only null allowed is initial_step: None.
-        let stripped = j.replace("\"initial_step\":null", "");
-        assert!(!stripped.contains("null"), "{j}");
-        let back: Integrator = serde_json::from_str(&j).unwrap();
-        assert_eq!(back, integ);
-    }
-}
-
-struct NanAfter {
-    t_bad: f64,
-}
-
-impl OdeSystem for NanAfter {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&self, t: f64, x: &[f64], f: &mut [f64]) {
-        if t > self.t_bad {
-            f[0] = f64::NAN;
-            f[1] = 0.0;
-        } else {
-            f[0] = -x[0];
-            f[1] = -1e4 * (x[1] - x[0]);
+    fn opts(method: Method, rtol: f64, atol: f64) -> SolverOptions {
+        SolverOptions {
+            method,
+            rtol,
+            atol: Atol::Scalar(atol),
+            ..Default::default()
         }
     }
-}
 
-#[test]
-fn nan_everywhere_is_an_error_not_a_panic() {
-    for method in METHODS {
-        let sys = NanAfter { t_bad: -1.0 };
-        let mut integ = Integrator::new(opts(method, 1e-6, 1e-9), 0.0, vec![1.0, 0.0]).unwrap();
-        let before = integ.clone();
-        let e = integ.advance_to(&sys, 1.0).unwrap_err();
-        assert_eq!(e.kind, SolverErrorKind::NonFinite, "{method:?}: {e}");
-        assert_eq!(e.t, 0.0);
-        assert_eq!(integ.t(), before.t());
-        assert_eq!(integ.x(), before.x());
-        assert!(!e.to_string().is_empty());
+    /// A stiff first-order lag with a zero-order-held input u (changed by the "master" at
+    /// communication points) plus a lightly damped mode driven by it: like a servo valve
+    /// feeding a plate mode.
+    struct Plant {
+        u: Cell<f64>,
     }
-}
 
-#[test]
-fn nan_later_stops_at_last_good_point_and_stays_usable() {
-    for method in METHODS {
-        let sys = NanAfter { t_bad: 0.5 };
-        let mut integ = Integrator::new(opts(method, 1e-6, 1e-9), 0.0, vec![1.0, 0.0]).unwrap();
-        let e = integ.advance_to(&sys, 1.0).unwrap_err();
-        assert!(
-            matches!(
-                e.kind,
-                SolverErrorKind::NonFinite
-                    | SolverErrorKind::StepTooSmall
-                    | SolverErrorKind::TooManyRejections
-            ),
-            "{method:?}: {e}"
-        );
-        assert!(e.t <= 0.5 && e.t > 0.4, "{method:?}: stopped at {}", e.t);
-        assert_eq!(integ.t(), e.t);
-        assert!(integ.x().iter().all(|v| v.is_finite()));
-        // The state is still serialisable and the integrator usable with a healthy model.
-        let _ = serde_json::to_string(&integ).unwrap();
-        let good = NanAfter {
-            t_bad: f64::INFINITY,
-        };
-        integ.advance_to(&good, 1.0).unwrap();
-        assert_eq!(integ.t(), 1.0);
-        assert!(
-            (integ.x()[0] - (-1.0f64).exp()).abs() < 1e-5,
-            "{method:?}: {:?}",
-            integ.x()
-        );
+    impl OdeSystem for Plant {
+        fn dim(&self) -> usize {
+            3
+        }
+        fn rhs(&self, _t: f64, x: &[f64], f: &mut [f64]) {
+            let (w, z) = (2e3, 0.02);
+            f[0] = -1e5 * (x[0] - self.u.get());
+            f[1] = w * x[2];
+            f[2] = -w * x[1] - 2.0 * z * w * x[2] + w * x[0];
+        }
+        fn jacobian(&self, _t: f64, _x: &[f64], j: &mut DMatrix<f64>) -> bool {
+            let (w, z) = (2e3, 0.02);
+            j.fill(0.0);
+            j[(0, 0)] = -1e5;
+            j[(1, 2)] = w;
+            j[(2, 1)] = -w;
+            j[(2, 2)] = -2.0 * z * w;
+            j[(2, 0)] = w;
+            true
+        }
+        fn is_autonomous(&self) -> bool {
+            true
+        }
     }
-}
 
-#[test]
-fn too_many_steps_is_reported() {
-    let p = problem("vdpol").unwrap();
-    let mut o = opts(Method::Rodas5P, 1e-8, 1e-8);
-    o.max_steps = 10;
-    let mut integ = Integrator::new(o, 0.0, p.y0()).unwrap();
-    let e = integ.advance_to(p.as_ref(), 2.0).unwrap_err();
-    assert_eq!(e.kind, SolverErrorKind::TooManySteps);
-    assert_eq!(integ.t(), e.t);
-    assert!(e.t > 0.0 && e.t < 2.0);
-}
+    fn input_at(k: usize) -> f64 {
+        ((k as f64) * 0.7).sin()
+    }
 
-#[test]
-fn analytic_jacobians_match_finite_differences() {
-    for name in PROBLEMS {
-        let p = problem(name).unwrap();
-        let n = p.dim();
-        let y0 = p.y0();
-        // Check at y0 and at a perturbed point with all components non-zero.
-        let y1: Vec<f64> = y0
-            .iter()
-            .enumerate()
-            .map(|(i, v)| v * 1.1 + 1e-3 * (i as f64 + 1.0))
-            .collect();
-        for y in [y0, y1] {
-            let t = 0.3 * p.t_end();
-            let mut ja = DMatrix::zeros(n, n);
-            assert!(
-                p.jacobian(t, &y, &mut ja),
-                "{name} has an analytic Jacobian"
-            );
-            let jf = finite_difference_jacobian(p.as_ref(), t, &y);
-            let scale = ja.abs().max().max(1.0);
-            let diff = (&ja - &jf).abs().max();
-            assert!(
-                diff <= 1e-6 * scale,
-                "{name}: |J - J_fd| = {diff:e} (scale {scale:e})\n{ja}\n{jf}"
+    /// Co-simulation loop: input jump, notify, advance one communication step.
+    fn cosim(integ: &mut Integrator, plant: &Plant, k0: usize, k1: usize, dt: f64) {
+        for k in k0..k1 {
+            plant.u.set(input_at(k));
+            integ.notify_discontinuity();
+            let t_end = (k + 1) as f64 * dt;
+            integ.advance_to(plant, t_end).unwrap();
+            assert_eq!(
+                integ.t().to_bits(),
+                t_end.to_bits(),
+                "stop time not hit exactly"
             );
         }
     }
-}
 
-/// HIRES without its Jacobian: exercises the finite-difference fallback.
-struct NoJac(Box<dyn TestProblem>);
-impl OdeSystem for NoJac {
-    fn dim(&self) -> usize {
-        self.0.dim()
-    }
-    fn rhs(&self, t: f64, x: &[f64], f: &mut [f64]) {
-        self.0.rhs(t, x, f)
-    }
-    fn is_autonomous(&self) -> bool {
-        self.0.is_autonomous()
-    }
-}
-
-#[test]
-fn finite_difference_fallback_works() {
-    use hydraulic_slewing_plate::solver::testset::scd;
-    for name in ["hires", "rober", "prothero-robinson"] {
+    #[test]
+    fn stop_times_are_hit_exactly() {
         for method in METHODS {
+            let p = problem("vdpol").unwrap();
+            let mut integ = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
+            // Awkward, non-representable communication points.
+            for k in 1..=30 {
+                let t_end = k as f64 * 0.0667;
+                integ.advance_to(p.as_ref(), t_end).unwrap();
+                assert_eq!(integ.t(), t_end, "{method:?}");
+            }
+            // advance_to the current time is a no-op.
+            let before = integ.clone();
+            integ.advance_to(p.as_ref(), integ.t()).unwrap();
+            assert_eq!(before, integ);
+            // Going backwards is an error naming the problem, and leaves the state alone.
+            let e = integ.advance_to(p.as_ref(), 0.5).unwrap_err();
+            assert_eq!(e.kind, SolverErrorKind::InvalidInput);
+            assert!(e.message.contains("t_end"), "{e}");
+            assert_eq!(before, integ);
+        }
+    }
+
+    #[test]
+    fn checkpoint_restore_continue_is_bit_identical() {
+        for method in METHODS {
+            let dt = 1e-3;
+            let plant = Plant { u: Cell::new(0.0) };
+            let mut a = Integrator::new(opts(method, 1e-7, 1e-9), 0.0, vec![0.0; 3]).unwrap();
+            cosim(&mut a, &plant, 0, 20, dt);
+            // Save (serialise) the state at a communication point.
+            let json = serde_json::to_string(&a).unwrap();
+            let copy = a.clone();
+            cosim(&mut a, &plant, 20, 50, dt);
+
+            let mut b: Integrator = serde_json::from_str(&json).unwrap();
+            assert_eq!(b, copy, "JSON round trip must be exact");
+            cosim(&mut b, &plant, 20, 50, dt);
+            let mut c = copy;
+            cosim(&mut c, &plant, 20, 50, dt);
+            for other in [&b, &c] {
+                assert_eq!(a.t().to_bits(), other.t().to_bits());
+                let xa: Vec<u64> = a.x().iter().map(|v| v.to_bits()).collect();
+                let xo: Vec<u64> = other.x().iter().map(|v| v.to_bits()).collect();
+                assert_eq!(xa, xo, "{method:?}: state differs after restore");
+                assert_eq!(a.stats(), other.stats());
+                assert_eq!(&a, other);
+            }
+            assert!(a.stats().accepted > 50);
+        }
+    }
+
+    #[test]
+    fn checkpoint_without_discontinuities_is_bit_identical() {
+        // Same without notify_discontinuity: the controller history and Radau's Newton start
+        // polynomial are carried across calls and must be part of the saved state.
+        for method in METHODS {
+            let p = problem("orego").unwrap();
+            let mut a = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
+            for k in 1..=10 {
+                a.advance_to(p.as_ref(), k as f64 * 7.0).unwrap();
+            }
+            let json = serde_json::to_string(&a).unwrap();
+            for k in 11..=30 {
+                a.advance_to(p.as_ref(), k as f64 * 7.0).unwrap();
+            }
+            let mut b: Integrator = serde_json::from_str(&json).unwrap();
+            for k in 11..=30 {
+                b.advance_to(p.as_ref(), k as f64 * 7.0).unwrap();
+            }
+            assert_eq!(a, b, "{method:?}");
+        }
+    }
+
+    #[test]
+    fn serialised_state_has_no_non_finite_numbers() {
+        for method in METHODS {
+            let p = problem("hires").unwrap();
+            let integ = Integrator::new(opts(method, 1e-6, 1e-10), 0.0, p.y0()).unwrap();
+            let j = serde_json::to_string(&integ).unwrap();
+            // serde_json writes NaN/inf as null; the only null allowed is initial_step: None.
+            let stripped = j.replace("\"initial_step\":null", "");
+            assert!(!stripped.contains("null"), "{j}");
+            let back: Integrator = serde_json::from_str(&j).unwrap();
+            assert_eq!(back, integ);
+        }
+    }
+
+    struct NanAfter {
+        t_bad: f64,
+    }
+
+    impl OdeSystem for NanAfter {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&self, t: f64, x: &[f64], f: &mut [f64]) {
+            if t > self.t_bad {
+                f[0] = f64::NAN;
+                f[1] = 0.0;
+            } else {
+                f[0] = -x[0];
+                f[1] = -1e4 * (x[1] - x[0]);
+            }
+        }
+    }
+
+    #[test]
+    fn nan_everywhere_is_an_error_not_a_panic() {
+        for method in METHODS {
+            let sys = NanAfter { t_bad: -1.0 };
+            let mut integ = Integrator::new(opts(method, 1e-6, 1e-9), 0.0, vec![1.0, 0.0]).unwrap();
+            let before = integ.clone();
+            let e = integ.advance_to(&sys, 1.0).unwrap_err();
+            assert_eq!(e.kind, SolverErrorKind::NonFinite, "{method:?}: {e}");
+            assert_eq!(e.t, 0.0);
+            assert_eq!(integ.t(), before.t());
+            assert_eq!(integ.x(), before.x());
+            assert!(!e.to_string().is_empty());
+        }
+    }
+
+    #[test]
+    fn nan_later_stops_at_last_good_point_and_stays_usable() {
+        for method in METHODS {
+            let sys = NanAfter { t_bad: 0.5 };
+            let mut integ = Integrator::new(opts(method, 1e-6, 1e-9), 0.0, vec![1.0, 0.0]).unwrap();
+            let e = integ.advance_to(&sys, 1.0).unwrap_err();
+            assert!(
+                matches!(
+                    e.kind,
+                    SolverErrorKind::NonFinite
+                        | SolverErrorKind::StepTooSmall
+                        | SolverErrorKind::TooManyRejections
+                ),
+                "{method:?}: {e}"
+            );
+            assert!(e.t <= 0.5 && e.t > 0.4, "{method:?}: stopped at {}", e.t);
+            assert_eq!(integ.t(), e.t);
+            assert!(integ.x().iter().all(|v| v.is_finite()));
+            // The state is still serialisable and the integrator usable with a healthy model.
+            let _ = serde_json::to_string(&integ).unwrap();
+            let good = NanAfter {
+                t_bad: f64::INFINITY,
+            };
+            integ.advance_to(&good, 1.0).unwrap();
+            assert_eq!(integ.t(), 1.0);
+            assert!(
+                (integ.x()[0] - (-1.0f64).exp()).abs() < 1e-5,
+                "{method:?}: {:?}",
+                integ.x()
+            );
+        }
+    }
+
+    #[test]
+    fn too_many_steps_is_reported() {
+        let p = problem("vdpol").unwrap();
+        let mut o = opts(Method::Rodas5P, 1e-8, 1e-8);
+        o.max_steps = 10;
+        let mut integ = Integrator::new(o, 0.0, p.y0()).unwrap();
+        let e = integ.advance_to(p.as_ref(), 2.0).unwrap_err();
+        assert_eq!(e.kind, SolverErrorKind::TooManySteps);
+        assert_eq!(integ.t(), e.t);
+        assert!(e.t > 0.0 && e.t < 2.0);
+    }
+
+    #[test]
+    fn analytic_jacobians_match_finite_differences() {
+        for name in PROBLEMS {
             let p = problem(name).unwrap();
-            let sys = NoJac(problem(name).unwrap());
+            let n = p.dim();
+            let y0 = p.y0();
+            // Check at y0 and at a perturbed point with all components non-zero.
+            let y1: Vec<f64> = y0
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v * 1.1 + 1e-3 * (i as f64 + 1.0))
+                .collect();
+            for y in [y0, y1] {
+                let t = 0.3 * p.t_end();
+                let mut ja = DMatrix::zeros(n, n);
+                assert!(
+                    p.jacobian(t, &y, &mut ja),
+                    "{name} has an analytic Jacobian"
+                );
+                let jf = finite_difference_jacobian(p.as_ref(), t, &y);
+                let scale = ja.abs().max().max(1.0);
+                let diff = (&ja - &jf).abs().max();
+                assert!(
+                    diff <= 1e-6 * scale,
+                    "{name}: |J - J_fd| = {diff:e} (scale {scale:e})\n{ja}\n{jf}"
+                );
+            }
+        }
+    }
+
+    /// HIRES without its Jacobian: exercises the finite-difference fallback.
+    struct NoJac(Box<dyn TestProblem>);
+    impl OdeSystem for NoJac {
+        fn dim(&self) -> usize {
+            self.0.dim()
+        }
+        fn rhs(&self, t: f64, x: &[f64], f: &mut [f64]) {
+            self.0.rhs(t, x, f)
+        }
+        fn is_autonomous(&self) -> bool {
+            self.0.is_autonomous()
+        }
+    }
+
+    #[test]
+    fn finite_difference_fallback_works() {
+        use hydraulic_slewing_plate::solver::testset::scd;
+        for name in ["hires", "rober", "prothero-robinson"] {
+            for method in METHODS {
+                let p = problem(name).unwrap();
+                let sys = NoJac(problem(name).unwrap());
+                let o = SolverOptions {
+                    method,
+                    rtol: 1e-6,
+                    atol: p.atol(1e-6),
+                    ..Default::default()
+                };
+                let mut integ = Integrator::new(o, 0.0, p.y0()).unwrap();
+                integ.advance_to(&sys, p.t_end()).unwrap();
+                let s = scd(integ.x(), &p.reference());
+                assert!(s >= 4.5, "{name} {method:?} with FD Jacobian: scd {s}");
+                assert!(integ.stats().f_evals > integ.stats().jac_evals * p.dim() as u64);
+            }
+        }
+    }
+
+    #[test]
+    fn dense_output_is_accurate() {
+        for method in METHODS {
+            let osc0 = Oscillator {
+                omega: 1e5,
+                zeta: 0.01,
+            };
+            let mut plain = Integrator::new(opts(method, 1e-8, 1e-8), 0.0, vec![1.0, 0.0]).unwrap();
+            plain.advance_to(&osc0, 1e-3).unwrap();
+            let osc = Oscillator {
+                omega: 1e5,
+                zeta: 0.01,
+            };
+            let mut integ = Integrator::new(opts(method, 1e-8, 1e-8), 0.0, vec![1.0, 0.0]).unwrap();
+            let times: Vec<f64> = (1..=200).map(|k| k as f64 * 5e-6).collect();
+            let mut seen = Vec::new();
+            integ
+                .advance_to_with_output(&osc, 1e-3, &times, &mut |t, x| {
+                    let ex = osc.exact(t);
+                    let err = (x[0] - ex[0]).abs().max((x[1] - ex[1]).abs());
+                    seen.push((t, err, x.to_vec()));
+                })
+                .unwrap();
+            assert_eq!(seen.len(), times.len());
+            for ((t, err, _), w) in seen.iter().zip(&times) {
+                assert_eq!(t, w);
+                assert!(
+                    *err < 1e-5,
+                    "{method:?}: dense output error {err:e} at t = {t}"
+                );
+            }
+            // The last output time is the end point: reported exactly as the state.
+            assert_eq!(seen.last().unwrap().2, integ.x());
+            // Outputs must not change the steps taken.
+            assert_eq!(integ, plain);
+        }
+    }
+
+    #[test]
+    fn output_times_must_be_sorted() {
+        let p = problem("vdpol").unwrap();
+        let mut integ = Integrator::new(SolverOptions::default(), 0.0, p.y0()).unwrap();
+        let e = integ
+            .advance_to_with_output(p.as_ref(), 1.0, &[0.5, 0.2], &mut |_, _| {})
+            .unwrap_err();
+        assert_eq!(e.kind, SolverErrorKind::InvalidInput);
+        assert_eq!(integ.t(), 0.0);
+    }
+
+    #[test]
+    fn invalid_options_name_the_culprit() {
+        let bad = |o: SolverOptions, dim: usize, word: &str| {
+            let e = o.validate(dim).unwrap_err();
+            assert_eq!(e.kind, SolverErrorKind::InvalidOptions);
+            assert!(
+                e.message.contains(word),
+                "message {:?} should name {word}",
+                e.message
+            );
+            assert!(Integrator::new(o, 0.0, vec![0.0; dim]).is_err());
+        };
+        let d = SolverOptions::default;
+        bad(SolverOptions { rtol: -1.0, ..d() }, 2, "rtol");
+        bad(
+            SolverOptions {
+                rtol: f64::NAN,
+                ..d()
+            },
+            2,
+            "rtol",
+        );
+        bad(
+            SolverOptions {
+                atol: Atol::Scalar(-1.0),
+                ..d()
+            },
+            2,
+            "atol",
+        );
+        bad(
+            SolverOptions {
+                atol: Atol::Vector(vec![1e-6; 3]),
+                ..d()
+            },
+            2,
+            "atol",
+        );
+        bad(
+            SolverOptions {
+                atol: Atol::Vector(vec![1e-6, f64::INFINITY]),
+                ..d()
+            },
+            2,
+            "atol[1]",
+        );
+        bad(
+            SolverOptions {
+                max_step: f64::INFINITY,
+                ..d()
+            },
+            2,
+            "max_step",
+        );
+        bad(
+            SolverOptions {
+                max_step: 0.0,
+                ..d()
+            },
+            2,
+            "max_step",
+        );
+        bad(
+            SolverOptions {
+                min_step: -1.0,
+                ..d()
+            },
+            2,
+            "min_step",
+        );
+        bad(
+            SolverOptions {
+                initial_step: Some(0.0),
+                ..d()
+            },
+            2,
+            "initial_step",
+        );
+        bad(
+            SolverOptions {
+                max_steps: 0,
+                ..d()
+            },
+            2,
+            "max_steps",
+        );
+        assert!(d().validate(2).is_ok());
+        // Default options serialise (finite max_step).
+        let j = serde_json::to_string(&d()).unwrap();
+        assert_eq!(serde_json::from_str::<SolverOptions>(&j).unwrap(), d());
+        // Non-finite initial state and dimension mismatch are input errors.
+        let e = Integrator::new(d(), 0.0, vec![f64::NAN]).unwrap_err();
+        assert_eq!(e.kind, SolverErrorKind::InvalidInput);
+        let p = problem("hires").unwrap();
+        let mut integ = Integrator::new(d(), 0.0, vec![0.0; 2]).unwrap();
+        assert_eq!(
+            integ.advance_to(p.as_ref(), 1.0).unwrap_err().kind,
+            SolverErrorKind::InvalidInput
+        );
+    }
+
+    #[test]
+    fn max_step_is_respected_and_reset_works() {
+        for method in METHODS {
+            let p = problem("hires").unwrap();
             let o = SolverOptions {
                 method,
-                rtol: 1e-6,
-                atol: p.atol(1e-6),
+                rtol: 1e-4,
+                atol: Atol::Scalar(1e-8),
+                max_step: 1.0,
                 ..Default::default()
             };
             let mut integ = Integrator::new(o, 0.0, p.y0()).unwrap();
-            integ.advance_to(&sys, p.t_end()).unwrap();
-            let s = scd(integ.x(), &p.reference());
-            assert!(s >= 4.5, "{name} {method:?} with FD Jacobian: scd {s}");
-            assert!(integ.stats().f_evals > integ.stats().jac_evals * p.dim() as u64);
+            integ.advance_to(p.as_ref(), 50.0).unwrap();
+            assert!(integ.stats().accepted >= 50, "{method:?}: max_step ignored");
+            assert!(integ.step_size() <= 1.0);
+            integ.reset(0.0, p.y0());
+            assert_eq!(integ.t(), 0.0);
+            assert_eq!(integ.x(), &p.y0()[..]);
+            integ.advance_to(p.as_ref(), 1.0).unwrap();
+            assert_eq!(integ.t(), 1.0);
         }
     }
-}
 
-#[test]
-fn dense_output_is_accurate() {
-    for method in METHODS {
-        let osc0 = Oscillator {
-            omega: 1e5,
-            zeta: 0.01,
-        };
-        let mut plain = Integrator::new(opts(method, 1e-8, 1e-8), 0.0, vec![1.0, 0.0]).unwrap();
-        plain.advance_to(&osc0, 1e-3).unwrap();
-        let osc = Oscillator {
-            omega: 1e5,
-            zeta: 0.01,
-        };
-        let mut integ = Integrator::new(opts(method, 1e-8, 1e-8), 0.0, vec![1.0, 0.0]).unwrap();
-        let times: Vec<f64> = (1..=200).map(|k| k as f64 * 5e-6).collect();
-        let mut seen = Vec::new();
-        integ
-            .advance_to_with_output(&osc, 1e-3, &times, &mut |t, x| {
-                let ex = osc.exact(t);
-                let err = (x[0] - ex[0]).abs().max((x[1] - ex[1]).abs());
-                seen.push((t, err, x.to_vec()));
-            })
-            .unwrap();
-        assert_eq!(seen.len(), times.len());
-        for ((t, err, _), w) in seen.iter().zip(&times) {
-            assert_eq!(t, w);
+    struct Decay;
+    impl OdeSystem for Decay {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&self, _t: f64, x: &[f64], f: &mut [f64]) {
+            f[0] = -x[0];
+        }
+    }
+
+    #[test]
+    fn final_steps_shorter_than_min_step_are_allowed() {
+        // Communication steps below min_step: such a step size is dictated by t_end, not by error
+        // control, so it is no failure, and it is a real step (accurate).
+        for method in METHODS {
+            let o = SolverOptions {
+                method,
+                rtol: 1e-8,
+                atol: Atol::Scalar(1e-10),
+                min_step: 1e-3,
+                ..Default::default()
+            };
+            let mut integ = Integrator::new(o, 0.0, vec![1.0]).unwrap();
+            for k in 1..=10 {
+                integ.advance_to(&Decay, k as f64 * 1e-5).unwrap();
+            }
+            assert_eq!(integ.stats().accepted, 10);
             assert!(
-                *err < 1e-5,
-                "{method:?}: dense output error {err:e} at t = {t}"
+                (integ.x()[0] - (-1e-4f64).exp()).abs() < 1e-13,
+                "{method:?}: {}",
+                integ.x()[0]
             );
         }
-        // The last output time is the end point: reported exactly as the state.
-        assert_eq!(seen.last().unwrap().2, integ.x());
-        // Outputs must not change the steps taken.
-        assert_eq!(integ, plain);
     }
-}
 
-#[test]
-fn output_times_must_be_sorted() {
-    let p = problem("vdpol").unwrap();
-    let mut integ = Integrator::new(SolverOptions::default(), 0.0, p.y0()).unwrap();
-    let e = integ
-        .advance_to_with_output(p.as_ref(), 1.0, &[0.5, 0.2], &mut |_, _| {})
-        .unwrap_err();
-    assert_eq!(e.kind, SolverErrorKind::InvalidInput);
-    assert_eq!(integ.t(), 0.0);
-}
-
-#[test]
-fn invalid_options_name_the_culprit() {
-    let bad = |o: SolverOptions, dim: usize, word: &str| {
-        let e = o.validate(dim).unwrap_err();
-        assert_eq!(e.kind, SolverErrorKind::InvalidOptions);
-        assert!(
-            e.message.contains(word),
-            "message {:?} should name {word}",
-            e.message
-        );
-        assert!(Integrator::new(o, 0.0, vec![0.0; dim]).is_err());
-    };
-    let d = SolverOptions::default;
-    bad(SolverOptions { rtol: -1.0, ..d() }, 2, "rtol");
-    bad(
-        SolverOptions {
-            rtol: f64::NAN,
-            ..d()
-        },
-        2,
-        "rtol",
-    );
-    bad(
-        SolverOptions {
-            atol: Atol::Scalar(-1.0),
-            ..d()
-        },
-        2,
-        "atol",
-    );
-    bad(
-        SolverOptions {
-            atol: Atol::Vector(vec![1e-6; 3]),
-            ..d()
-        },
-        2,
-        "atol",
-    );
-    bad(
-        SolverOptions {
-            atol: Atol::Vector(vec![1e-6, f64::INFINITY]),
-            ..d()
-        },
-        2,
-        "atol[1]",
-    );
-    bad(
-        SolverOptions {
-            max_step: f64::INFINITY,
-            ..d()
-        },
-        2,
-        "max_step",
-    );
-    bad(
-        SolverOptions {
-            max_step: 0.0,
-            ..d()
-        },
-        2,
-        "max_step",
-    );
-    bad(
-        SolverOptions {
-            min_step: -1.0,
-            ..d()
-        },
-        2,
-        "min_step",
-    );
-    bad(
-        SolverOptions {
-            initial_step: Some(0.0),
-            ..d()
-        },
-        2,
-        "initial_step",
-    );
-    bad(
-        SolverOptions {
-            max_steps: 0,
-            ..d()
-        },
-        2,
-        "max_steps",
-    );
-    assert!(d().validate(2).is_ok());
-    // Default options serialise (finite max_step).
-    let j = serde_json::to_string(&d()).unwrap();
-    assert_eq!(serde_json::from_str::<SolverOptions>(&j).unwrap(), d());
-    // Non-finite initial state and dimension mismatch are input errors.
-    let e = Integrator::new(d(), 0.0, vec![f64::NAN]).unwrap_err();
-    assert_eq!(e.kind, SolverErrorKind::InvalidInput);
-    let p = problem("hires").unwrap();
-    let mut integ = Integrator::new(d(), 0.0, vec![0.0; 2]).unwrap();
-    assert_eq!(
-        integ.advance_to(p.as_ref(), 1.0).unwrap_err().kind,
-        SolverErrorKind::InvalidInput
-    );
-}
-
-#[test]
-fn max_step_is_respected_and_reset_works() {
-    for method in METHODS {
+    #[test]
+    fn dense_output_on_stiff_problem_matches_tight_reference() {
+        // HIRES: outputs from a tolerance-1e-7 run must agree with a tight (1e-11) run of the other
+        // method at 40 interior times, i.e. the interpolants are accurate in the stiff regime too.
         let p = problem("hires").unwrap();
-        let o = SolverOptions {
-            method,
-            rtol: 1e-4,
-            atol: Atol::Scalar(1e-8),
-            max_step: 1.0,
-            ..Default::default()
+        let times: Vec<f64> = (1..=40).map(|k| k as f64 * 8.0).collect();
+        let collect = |method: Method, rtol: f64| {
+            let o = SolverOptions {
+                method,
+                rtol,
+                atol: p.atol(rtol),
+                ..Default::default()
+            };
+            let mut integ = Integrator::new(o, 0.0, p.y0()).unwrap();
+            let mut vals = Vec::new();
+            integ
+                .advance_to_with_output(p.as_ref(), 321.8122, &times, &mut |_, x| {
+                    vals.push(x.to_vec())
+                })
+                .unwrap();
+            vals
         };
-        let mut integ = Integrator::new(o, 0.0, p.y0()).unwrap();
-        integ.advance_to(p.as_ref(), 50.0).unwrap();
-        assert!(integ.stats().accepted >= 50, "{method:?}: max_step ignored");
-        assert!(integ.step_size() <= 1.0);
-        integ.reset(0.0, p.y0());
-        assert_eq!(integ.t(), 0.0);
-        assert_eq!(integ.x(), &p.y0()[..]);
-        integ.advance_to(p.as_ref(), 1.0).unwrap();
-        assert_eq!(integ.t(), 1.0);
+        for (method, other) in [
+            (Method::Rodas5P, Method::Radau5),
+            (Method::Radau5, Method::Rodas5P),
+        ] {
+            let reference = collect(other, 1e-11);
+            let got = collect(method, 1e-7);
+            assert_eq!(got.len(), times.len());
+            for (k, (g, r)) in got.iter().zip(&reference).enumerate() {
+                for i in 0..g.len() {
+                    let tol = 1e-5 * r[i].abs() + 1e-10;
+                    assert!(
+                        (g[i] - r[i]).abs() < tol,
+                        "{method:?} t = {} comp {i}: {} vs {}",
+                        times[k],
+                        g[i],
+                        r[i]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn notify_discontinuity_keeps_the_step_size() {
+        for method in METHODS {
+            let p = problem("orego").unwrap();
+            let mut integ = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
+            integ.advance_to(p.as_ref(), 10.0).unwrap();
+            let h = integ.step_size();
+            assert!(h > 0.0);
+            integ.notify_discontinuity();
+            assert_eq!(integ.step_size(), h);
+            assert_eq!(integ.t(), 10.0);
+        }
     }
 }

@@ -38,15 +38,38 @@ fn main() {
         std::process::exit(2);
     };
     let r = run(prob.as_ref(), args.method, args.rtol, args.atol);
-    let mut v = serde_json::json!({
-        "problem": r.problem, "method": r.method, "rtol": r.rtol, "atol": r.atol, "scd": r.scd,
-        "steps": r.steps, "rejected": r.rejected, "f_evals": r.f_evals, "jac_evals": r.jac_evals,
-        "lu": r.lu, "seconds": r.seconds,
-    });
-    if let Some(e) = &r.error {
-        v["error"] = serde_json::json!(e);
+    // A struct keeps the key order of the issue (serde_json's map would sort the keys).
+    #[derive(serde::Serialize)]
+    struct Line<'a> {
+        problem: &'a str,
+        method: &'a str,
+        rtol: f64,
+        atol: f64,
+        scd: Option<f64>,
+        steps: u64,
+        rejected: u64,
+        f_evals: u64,
+        jac_evals: u64,
+        lu: u64,
+        seconds: f64,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        error: Option<&'a str>,
     }
-    println!("{v}");
+    let line = Line {
+        problem: &r.problem,
+        method: &r.method,
+        rtol: r.rtol,
+        atol: r.atol,
+        scd: r.scd,
+        steps: r.steps,
+        rejected: r.rejected,
+        f_evals: r.f_evals,
+        jac_evals: r.jac_evals,
+        lu: r.lu,
+        seconds: r.seconds,
+        error: r.error.as_deref(),
+    };
+    println!("{}", serde_json::to_string(&line).expect("serialise"));
     if r.error.is_some() {
         std::process::exit(1);
     }

@@ -95,6 +95,49 @@ fn main() {
          Python overhead and are not comparable — counts are the fair comparison. scipy reports no \
          rejected-step count (`–`); its `steps` are the accepted steps (length of `sol.t` - 1).\n\n",
     );
+    // Compact summary: one row per problem and rtol, "scd / f evals / LU" per method.
+    md.push_str("## Summary (scd / f evals / LU)\n\n");
+    md.push_str("| problem | rtol | rodas5p | radau5 | scipy Radau | scipy LSODA |\n");
+    md.push_str("| --- | ---: | ---: | ---: | ---: | ---: |\n");
+    for name in PROBLEMS {
+        for rtol in RTOLS {
+            let mut cells = Vec::new();
+            for m in ["rodas5p", "radau5"] {
+                let cell = results
+                    .iter()
+                    .find(|r| r.problem == name && r.rtol == rtol && r.method == m)
+                    .map(|r| match r.scd {
+                        Some(s) => format!("{s:.1} / {} / {}", r.f_evals, r.lu),
+                        None => "fail".into(),
+                    })
+                    .unwrap_or_else(|| "–".into());
+                cells.push(cell);
+            }
+            for m in ["Radau", "LSODA"] {
+                let cell = scipy
+                    .iter()
+                    .find(|s| {
+                        s["problem"].as_str() == Some(name)
+                            && s["method"].as_str() == Some(m)
+                            && s["rtol"]
+                                .as_f64()
+                                .is_some_and(|x| (x - rtol).abs() <= 1e-3 * rtol)
+                    })
+                    .map(|s| match s["scd"].as_f64() {
+                        Some(v) => format!(
+                            "{v:.1} / {} / {}",
+                            fmt_opt(s.get("f_evals")),
+                            fmt_opt(s.get("lu"))
+                        ),
+                        None => "fail".into(),
+                    })
+                    .unwrap_or_else(|| "–".into());
+                cells.push(cell);
+            }
+            let _ = writeln!(md, "| {name} | {rtol:.0e} | {} |", cells.join(" | "));
+        }
+    }
+    md.push('\n');
     for name in PROBLEMS {
         let _ = writeln!(md, "## {name}\n");
         md.push_str(

@@ -41,10 +41,16 @@ pub(crate) fn eval<S: OdeSystem + ?Sized>(
     sys.rhs(t, x, out);
 }
 
-/// Smallest admissible step at time t: the user's `min_step`, but never below 16 ulp of the
-/// time (a smaller step would not change t reliably).
+/// 16 ulp of t: a step this small would not change t reliably. A remainder up to t_end below
+/// this (only possible through rounding in the caller's times) is covered by explicit Euler.
+pub(crate) fn rounding_floor(t: f64) -> f64 {
+    16.0 * f64::EPSILON * t.abs()
+}
+
+/// Smallest admissible step at time t chosen by error control: the user's `min_step`, but
+/// never below [`rounding_floor`].
 pub(crate) fn h_min(opts: &SolverOptions, t: f64) -> f64 {
-    opts.min_step.max(16.0 * f64::EPSILON * t.abs())
+    opts.min_step.max(rounding_floor(t))
 }
 
 /// Starting step size, Hairer, Nørsett & Wanner I, Sec. II.4 ("Starting step size"), with the

@@ -46,9 +46,9 @@ pub(crate) fn fd_jacobian_with<S: OdeSystem + ?Sized>(
 }
 
 /// Central-difference Jacobian, meant for *checking* a model's analytic Jacobian (the solver
-/// itself uses forward differences, see [`evaluate`]). Increment ε^(1/3) · max(|x_j|, 1e-3),
-/// made exactly representable; truncation error O(δ²) (exact for quadratic f), rounding
-/// error O(ε |f| / δ). Costs 2 dim evaluations of f.
+/// itself uses forward differences with increment sqrt(eps) · max(|x_j|, atol_j/rtol)).
+/// Increment ε^(1/3) · max(|x_j|, 1e-3), made exactly representable; truncation error O(δ²)
+/// (exact for quadratic f), rounding error O(ε |f| / δ). Costs 2 dim evaluations of f.
 pub fn finite_difference_jacobian<S: OdeSystem + ?Sized>(
     sys: &S,
     t: f64,

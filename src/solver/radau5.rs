@@ -30,7 +30,7 @@
 
 use nalgebra::{Complex, DMatrix, DVector};
 
-use super::common::{all_finite, eval, h_min, initial_step, Outputs};
+use super::common::{all_finite, eval, h_min, initial_step, rounding_floor, Outputs};
 use super::integrator::Integrator;
 use super::jacobian;
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
@@ -67,7 +67,7 @@ pub fn error_weights() -> (f64, f64, f64) {
     )
 }
 
-/// T with T⁻¹ A⁻¹ T = [[γ,0,0],[0,α,-β],[0,β,α]] (RADAU5's T11…T33; T32 = 1, T33 = 0).
+/// T with `T⁻¹ A⁻¹ T = [[γ,0,0],[0,α,-β],[0,β,α]]` (RADAU5's T11…T33; T32 = 1, T33 = 0).
 #[allow(clippy::excessive_precision)] // digits as published in radau5.f
 pub const T: [[f64; 3]; 3] = [
     [
@@ -205,8 +205,9 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         let t = integ.t;
         let remaining = t_end - t;
         let hmin = h_min(&integ.options, t);
-        if remaining <= hmin {
-            // Rounding remnant below a minimal step: explicit Euler, error O(hmin^2).
+        if remaining <= rounding_floor(t) {
+            // Only a rounding remnant (a few ulp of t) is left: explicit Euler, error
+            // O(remaining^2).
             for i in 0..n {
                 integ.x[i] += remaining * f0[i];
             }
@@ -230,7 +231,8 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         } else {
             (h_proposed, false)
         };
-        if h < hmin {
+        // A final step shorter than min_step is fine: its size is dictated by t_end.
+        if h < hmin && !last {
             let (kind, reason) = match why {
                 Why::NonFinite => (SolverErrorKind::NonFinite, "after non-finite values of f"),
                 Why::Singular => (

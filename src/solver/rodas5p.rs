@@ -30,7 +30,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::common::{all_finite, eval, h_min, initial_step, rms, scale_into, Outputs};
+use super::common::{
+    all_finite, eval, h_min, initial_step, rms, rounding_floor, scale_into, Outputs,
+};
 use super::integrator::Integrator;
 use super::jacobian;
 use super::{OdeSystem, SolverError, SolverErrorKind};
@@ -418,9 +420,9 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         let t = integ.t;
         let remaining = t_end - t;
         let hmin = h_min(&integ.options, t);
-        if remaining <= hmin {
-            // Less than a minimal step is left (can only happen through rounding of the
-            // caller's times): cover it with an explicit Euler step, error O(hmin^2).
+        if remaining <= rounding_floor(t) {
+            // Only a rounding remnant (a few ulp of t) is left: cover it with an explicit
+            // Euler step, error O(remaining^2).
             for i in 0..n {
                 integ.x[i] += remaining * w.f0[i];
             }
@@ -444,7 +446,8 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         } else {
             (h_proposed, false)
         };
-        if h < hmin {
+        // A final step shorter than min_step is fine: its size is dictated by t_end.
+        if h < hmin && !last {
             let (kind, why) = if last_nonfinite {
                 (SolverErrorKind::NonFinite, "after non-finite values of f")
             } else {
