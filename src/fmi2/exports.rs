@@ -490,7 +490,11 @@ pub unsafe fn string_value(p: Fmi2String) -> Option<Value> {
 #[macro_export]
 macro_rules! export_fmi2_cosimulation {
     ($model:ty) => {
-        mod fmi2_exports {
+        /// The `fmi2*` functions of the FMU, callable from Rust too (tests use them in-process).
+        ///
+        /// Safety: each has the contract the FMI 2.0 standard gives the C function of its name.
+        #[allow(clippy::missing_safety_doc)]
+        pub mod fmi2_exports {
             use $crate::fmi2::exports as x;
             use $crate::fmi2::ffi::*;
             use $crate::fmi2::variables::Value;
