@@ -67,14 +67,13 @@ const FMU_STATE_STATES: &[MachineState] = &[
 pub struct Logger {
     instance_name: CString,
     callbacks: Fmi2CallbackFunctions,
-    logging_on: bool,
+    /// Which debug categories are on, indexed by `LogCategory as usize`.
     enabled: [bool; LogCategory::ALL.len()],
 }
 
 impl Logger {
     /// Sends a message to the environment's logger. Warnings, discards, errors and fatal errors
-    /// are always sent (as the Reference FMUs do); the debug categories only when logging is on and
-    /// the category enabled.
+    /// are always sent (as the Reference FMUs do); the other categories when they are on.
     pub fn log(&self, status: Fmi2Status, category: LogCategory, message: &str) {
         let always = matches!(
             category,
@@ -83,11 +82,9 @@ impl Logger {
                 | LogCategory::StatusError
                 | LogCategory::StatusFatal
         );
-        let idx = LogCategory::ALL
-            .iter()
-            .position(|c| *c == category)
-            .unwrap_or(0);
-        if !(always || (self.logging_on && self.enabled[idx])) {
+        // logAll switches on every category.
+        let wanted = self.enabled[category as usize] || self.enabled[LogCategory::All as usize];
+        if !(always || wanted) {
             return;
         }
         let Some(logger) = self.callbacks.logger else {
@@ -225,8 +222,8 @@ impl<M: FmuModel> Instance<M> {
         let logger = Logger {
             instance_name: CString::new(instance_name).unwrap_or_default(),
             callbacks,
-            logging_on,
-            enabled: [true; LogCategory::ALL.len()],
+            // fmi2Instantiate's loggingOn switches every category (FMI 2.0.4, 2.1.5).
+            enabled: [logging_on; LogCategory::ALL.len()],
         };
         if instance_name.is_empty() {
             return Err((logger, "fmi2Instantiate: instanceName is empty".into()));
@@ -298,7 +295,9 @@ impl<M: FmuModel> Instance<M> {
 
     /// Logs the call when the `logCalls` category is on.
     pub fn log_call(&self, call: impl FnOnce() -> String) {
-        if self.logger.logging_on {
+        if self.logger.enabled[LogCategory::Calls as usize]
+            || self.logger.enabled[LogCategory::All as usize]
+        {
             self.logger.log(Fmi2Status::Ok, LogCategory::Calls, &call());
         }
     }
@@ -345,13 +344,12 @@ impl<M: FmuModel> Instance<M> {
                 }
             }
         }
-        self.logger.logging_on = logging_on;
+        // With no categories the switch applies to all, else only to those named (FMI 2.0.4, 2.1.5).
         if chosen.is_empty() {
             self.logger.enabled = [logging_on; LogCategory::ALL.len()];
         } else {
             for c in chosen {
-                let idx = LogCategory::ALL.iter().position(|x| *x == c).unwrap_or(0);
-                self.logger.enabled[idx] = logging_on;
+                self.logger.enabled[c as usize] = logging_on;
             }
         }
         Fmi2Status::Ok

@@ -39,7 +39,8 @@ impl Default for Experiment {
     }
 }
 
-/// The log categories every FMU of this crate declares, in `modelDescription.xml` order.
+/// The log categories every FMU of this crate declares, in `modelDescription.xml` order (which is
+/// also the order of the discriminants: `category as usize` indexes [`LogCategory::ALL`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LogCategory {
     StatusWarning,

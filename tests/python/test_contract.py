@@ -129,12 +129,25 @@ def test_unknown_log_category(slave_factory):
     assert any("logNoSuchThing" in m for m in errors(s)), s.recorder.text()
 
 
-def test_solver_log_category(slave_factory, vr):
-    s = slave_factory(logging_on=True)
+def test_log_categories_filter(slave_factory, vr):
+    # Logging off at instantiation, then only logSolver: solver lines, and no call lines.
+    s = slave_factory(logging_on=False)
     s.setDebugLogging(True, ["logSolver"])
     initialise(s, vr, r=1.0)
     s.doStep(0.0, 1e-2)
+    cats = [c for _, c, _ in s.recorder.messages]
     assert any(c == "logSolver" and "steps" in m for _, c, m in s.recorder.messages), s.recorder.text()
+    assert "logCalls" not in cats
+    # logCalls on: every call is logged with its arguments.
+    s.setDebugLogging(True, ["logCalls"])
+    s.doStep(1e-2, 1e-2)
+    assert any(c == "logCalls" and "fmi2DoStep(currentCommunicationPoint=0.01" in m
+               for _, c, m in s.recorder.messages), s.recorder.text()
+    # All off: nothing more but warnings and errors.
+    s.setDebugLogging(False, [])
+    n = len(s.recorder.messages)
+    s.doStep(2e-2, 1e-2)
+    assert len(s.recorder.messages) == n
 
 
 def test_solver_failure_is_a_discard_with_last_successful_time(slave_factory, vr):
