@@ -53,8 +53,9 @@ const GETTER_STATES: &[MachineState] = &[
     Terminated,
     Error,
 ];
-/// The states in which FMU states may be taken, restored and serialised.
-const FMU_STATE_STATES: &[MachineState] = &[
+/// Every state but fatal: where logging can be set, the instance reset, and FMU states taken,
+/// restored and serialised.
+const NOT_FATAL: &[MachineState] = &[
     Instantiated,
     InitializationMode,
     StepComplete,
@@ -319,17 +320,7 @@ impl<M: FmuModel> Instance<M> {
     }
 
     pub fn set_debug_logging(&mut self, logging_on: bool, categories: &[&str]) -> Fmi2Status {
-        if let Err(s) = self.allowed(
-            "fmi2SetDebugLogging",
-            &[
-                Instantiated,
-                InitializationMode,
-                StepComplete,
-                StepFailed,
-                Terminated,
-                Error,
-            ],
-        ) {
+        if let Err(s) = self.allowed("fmi2SetDebugLogging", NOT_FATAL) {
             return s;
         }
         let mut chosen = Vec::with_capacity(categories.len());
@@ -438,17 +429,7 @@ impl<M: FmuModel> Instance<M> {
 
     /// `fmi2Reset`: exactly the state of a fresh instantiation (the logging settings stay).
     pub fn reset(&mut self) -> Fmi2Status {
-        if let Err(s) = self.allowed(
-            "fmi2Reset",
-            &[
-                Instantiated,
-                InitializationMode,
-                StepComplete,
-                StepFailed,
-                Terminated,
-                Error,
-            ],
-        ) {
+        if let Err(s) = self.allowed("fmi2Reset", NOT_FATAL) {
             return s;
         }
         self.state = Instantiated;
@@ -664,7 +645,7 @@ impl<M: FmuModel> Instance<M> {
     }
 
     pub fn check_fmu_state_call(&mut self, function: &str) -> Result<(), Fmi2Status> {
-        self.allowed(function, FMU_STATE_STATES)
+        self.allowed(function, NOT_FATAL)
     }
 
     /// `fmi2GetFMUstate`.

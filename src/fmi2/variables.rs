@@ -162,6 +162,20 @@ impl Values {
     }
 }
 
+/// Checks `v` against a declared `min` and `max`; the error names the variable.
+fn check_range<T: PartialOrd + std::fmt::Display>(
+    name: &str,
+    v: T,
+    min: Option<T>,
+    max: Option<T>,
+) -> Result<(), String> {
+    match (min, max) {
+        (Some(min), _) if v < min => Err(format!("{name}: value {v} is below its minimum {min}")),
+        (_, Some(max)) if v > max => Err(format!("{name}: value {v} is above its maximum {max}")),
+        _ => Ok(()),
+    }
+}
+
 /// Checks a value against a variable's type and declared range; the error names the variable.
 pub fn check_value(var: &Variable, value: &Value) -> Result<(), String> {
     match (var.kind, value) {
@@ -169,43 +183,9 @@ pub fn check_value(var: &Variable, value: &Value) -> Result<(), String> {
             if !v.is_finite() {
                 return Err(format!("{}: value {v} is not finite", var.name));
             }
-            if let Some(min) = min {
-                if *v < min {
-                    return Err(format!(
-                        "{}: value {v} is below its minimum {min}",
-                        var.name
-                    ));
-                }
-            }
-            if let Some(max) = max {
-                if *v > max {
-                    return Err(format!(
-                        "{}: value {v} is above its maximum {max}",
-                        var.name
-                    ));
-                }
-            }
-            Ok(())
+            check_range(var.name, *v, min, max)
         }
-        (Kind::Integer { min, max, .. }, Value::Integer(v)) => {
-            if let Some(min) = min {
-                if *v < min {
-                    return Err(format!(
-                        "{}: value {v} is below its minimum {min}",
-                        var.name
-                    ));
-                }
-            }
-            if let Some(max) = max {
-                if *v > max {
-                    return Err(format!(
-                        "{}: value {v} is above its maximum {max}",
-                        var.name
-                    ));
-                }
-            }
-            Ok(())
-        }
+        (Kind::Integer { min, max, .. }, Value::Integer(v)) => check_range(var.name, *v, min, max),
         (Kind::Boolean { .. }, Value::Boolean(_)) | (Kind::String { .. }, Value::String(_)) => {
             Ok(())
         }

@@ -4,6 +4,7 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+use super::integrator::Integrator;
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
 
 /// Error weights `atol_i + rtol * max(|a_i|, |b_i|)`, floored at the smallest normal number so
@@ -175,4 +176,67 @@ impl<'a> Outputs<'a> {
             self.next += 1;
         }
     }
+}
+
+/// What the step loop of `advance_to` does next.
+pub(crate) enum NextStep {
+    /// `t_end` is reached.
+    Done,
+    /// Attempt a step of size `h`; `last` if it ends on `t_end`. `proposed` is the step the
+    /// controller asked for, kept as the next call's guess when `t_end` cut it short.
+    Step { h: f64, last: bool, proposed: f64 },
+}
+
+/// Plans the next step attempt, the same way for both methods: covers a rounding remnant before
+/// `t_end` (a few ulp of t) with an explicit Euler step, error O(remaining^2); counts the attempt
+/// against `max_steps`; clips h to `max_step` and to `t_end`; and fails when h has fallen below
+/// the minimum step, with the kind and reason `why_small` gives. A final step shorter than the
+/// minimum is fine: its size is dictated by `t_end`, not by error control.
+pub(crate) fn plan_step(
+    integ: &mut Integrator,
+    t_end: f64,
+    f0: &[f64],
+    attempts: &mut u64,
+    why_small: impl FnOnce() -> (SolverErrorKind, &'static str),
+) -> Result<NextStep, SolverError> {
+    let t = integ.t;
+    let remaining = t_end - t;
+    if remaining <= rounding_floor(t) {
+        for (x, f) in integ.x.iter_mut().zip(f0) {
+            *x += remaining * f;
+        }
+        integ.t = t_end;
+        return Ok(NextStep::Done);
+    }
+    *attempts += 1;
+    if *attempts > integ.options.max_steps {
+        return Err(SolverError::new(
+            SolverErrorKind::TooManySteps,
+            t,
+            format!(
+                "more than max_steps = {} step attempts in one call",
+                integ.options.max_steps
+            ),
+        ));
+    }
+    let h_proposed = integ.h.min(integ.options.max_step);
+    let (h, last) = if h_proposed >= remaining {
+        (remaining, true)
+    } else {
+        (h_proposed, false)
+    };
+    let hmin = h_min(&integ.options, t);
+    if h < hmin && !last {
+        let (kind, reason) = why_small();
+        return Err(SolverError::new(
+            kind,
+            t,
+            format!("step size {h:e} fell below the minimum {hmin:e} {reason}"),
+        ));
+    }
+    Ok(NextStep::Step {
+        h,
+        last,
+        proposed: h_proposed,
+    })
 }

@@ -30,7 +30,7 @@
 
 use nalgebra::{Complex, DMatrix, DVector};
 
-use super::common::{all_finite, eval, h_min, initial_step, rounding_floor, Outputs};
+use super::common::{all_finite, eval, initial_step, plan_step, NextStep, Outputs};
 use super::integrator::Integrator;
 use super::jacobian;
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
@@ -202,55 +202,23 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     let mut newt = 0usize; // Newton iterations of the current attempt
 
     loop {
-        let t = integ.t;
-        let remaining = t_end - t;
-        let hmin = h_min(&integ.options, t);
-        if remaining <= rounding_floor(t) {
-            // Only a rounding remnant (a few ulp of t) is left: explicit Euler, error
-            // O(remaining^2).
-            for i in 0..n {
-                integ.x[i] += remaining * f0[i];
-            }
-            integ.t = t_end;
-            return Ok(());
-        }
-        attempts += 1;
-        if attempts > integ.options.max_steps {
-            return Err(SolverError::new(
-                SolverErrorKind::TooManySteps,
-                t,
-                format!(
-                    "more than max_steps = {} step attempts in one call",
-                    integ.options.max_steps
-                ),
-            ));
-        }
-        let h_proposed = integ.h.min(integ.options.max_step);
-        let (h, last) = if h_proposed >= remaining {
-            (remaining, true)
-        } else {
-            (h_proposed, false)
+        let why_small = || match why {
+            Why::NonFinite => (SolverErrorKind::NonFinite, "after non-finite values of f"),
+            Why::Singular => (
+                SolverErrorKind::SingularMatrix,
+                "with a singular iteration matrix",
+            ),
+            Why::Newton => (
+                SolverErrorKind::StepTooSmall,
+                "because Newton did not converge",
+            ),
+            Why::Error => (SolverErrorKind::StepTooSmall, "to meet the tolerances"),
         };
-        // A final step shorter than min_step is fine: its size is dictated by t_end.
-        if h < hmin && !last {
-            let (kind, reason) = match why {
-                Why::NonFinite => (SolverErrorKind::NonFinite, "after non-finite values of f"),
-                Why::Singular => (
-                    SolverErrorKind::SingularMatrix,
-                    "with a singular iteration matrix",
-                ),
-                Why::Newton => (
-                    SolverErrorKind::StepTooSmall,
-                    "because Newton did not converge",
-                ),
-                Why::Error => (SolverErrorKind::StepTooSmall, "to meet the tolerances"),
-            };
-            return Err(SolverError::new(
-                kind,
-                t,
-                format!("step size {h:e} fell below the minimum {hmin:e} {reason}"),
-            ));
-        }
+        let (h, last, h_proposed) = match plan_step(integ, t_end, &f0, &mut attempts, why_small)? {
+            NextStep::Done => return Ok(()),
+            NextStep::Step { h, last, proposed } => (h, last, proposed),
+        };
+        let t = integ.t;
         if need_jac {
             if !jacobian::evaluate(
                 sys,

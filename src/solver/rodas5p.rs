@@ -31,7 +31,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::common::{
-    all_finite, eval, h_min, initial_step, rms, rounding_floor, scale_into, Outputs,
+    all_finite, eval, initial_step, plan_step, rms, scale_into, NextStep, Outputs,
 };
 use super::integrator::Integrator;
 use super::jacobian;
@@ -417,48 +417,19 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     let mut consecutive_rejections: u32 = 0;
     let mut last_nonfinite = false;
     loop {
-        let t = integ.t;
-        let remaining = t_end - t;
-        let hmin = h_min(&integ.options, t);
-        if remaining <= rounding_floor(t) {
-            // Only a rounding remnant (a few ulp of t) is left: cover it with an explicit
-            // Euler step, error O(remaining^2).
-            for i in 0..n {
-                integ.x[i] += remaining * w.f0[i];
-            }
-            integ.t = t_end;
-            return Ok(());
-        }
-        attempts += 1;
-        if attempts > integ.options.max_steps {
-            return Err(SolverError::new(
-                SolverErrorKind::TooManySteps,
-                t,
-                format!(
-                    "more than max_steps = {} step attempts in one call",
-                    integ.options.max_steps
-                ),
-            ));
-        }
-        let h_proposed = integ.h.min(integ.options.max_step);
-        let (h, last) = if h_proposed >= remaining {
-            (remaining, true)
-        } else {
-            (h_proposed, false)
-        };
-        // A final step shorter than min_step is fine: its size is dictated by t_end.
-        if h < hmin && !last {
-            let (kind, why) = if last_nonfinite {
+        let why_small = || {
+            if last_nonfinite {
                 (SolverErrorKind::NonFinite, "after non-finite values of f")
             } else {
                 (SolverErrorKind::StepTooSmall, "to meet the tolerances")
-            };
-            return Err(SolverError::new(
-                kind,
-                t,
-                format!("step size {h:e} fell below the minimum {hmin:e} {why}"),
-            ));
-        }
+            }
+        };
+        let (h, last, h_proposed) = match plan_step(integ, t_end, &w.f0, &mut attempts, why_small)?
+        {
+            NextStep::Done => return Ok(()),
+            NextStep::Step { h, last, proposed } => (h, last, proposed),
+        };
+        let t = integ.t;
         if !jac_ok {
             let opts = &integ.options;
             let ok = jacobian::evaluate(
