@@ -167,4 +167,132 @@ mod solver_rodas5p_tableau {
             "R(-inf) should be 0"
         );
     }
+
+    /// One Rodas5P step for the semi-explicit index-1 DAE M x' = F(t, x), M = diag(1, 1, 0),
+    /// in the transformed form with a mass matrix (as Hairer's RODAS with IMAS = 1):
+    /// (M/(hγ) - J) U_i = F(t0 + c_i h, x0 + Σ a_ij U_j) + M Σ (C_ij/h) U_j + h d_i F_t.
+    /// Returns (y1, ŷ1) = (x0 + Σ m_j U_j, y1 - U_8).
+    fn dae_step(t0: f64, x0: &DVector<f64>, h: f64) -> (DVector<f64>, DVector<f64>) {
+        let mass = DVector::from_column_slice(&[1.0, 1.0, 0.0]);
+        let mut w = -dae_jac(x0);
+        for i in 0..3 {
+            w[(i, i)] += mass[i] / (h * GAMMA);
+        }
+        let lu = w.lu();
+        let ft = dae_ft(t0);
+        let mut u: Vec<DVector<f64>> = Vec::new();
+        for s in 0..STAGES {
+            let mut y = x0.clone();
+            let mut cu = DVector::zeros(3);
+            for j in 0..s {
+                y += &u[j] * rodas5p::A[s][j];
+                cu += &u[j] * (rodas5p::C[s][j] / h);
+            }
+            let rhs = dae_f(t0 + C_NODES[s] * h, &y) + mass.component_mul(&cu) + &ft * (h * D[s]);
+            u.push(lu.solve(&rhs).expect("regular"));
+        }
+        let mut y1 = x0.clone();
+        for j in 0..STAGES {
+            y1 += &u[j] * rodas5p::M[j];
+        }
+        let yhat = &y1 - &u[STAGES - 1];
+        (y1, yhat)
+    }
+
+    /// Exact solution of the test DAE, its first and second derivatives.
+    fn dae_exact(t: f64) -> [DVector<f64>; 3] {
+        [
+            DVector::from_column_slice(&[1.0 + t.sin(), (-t).exp(), 0.5 + 0.3 * (2.0 * t).cos()]),
+            DVector::from_column_slice(&[t.cos(), -(-t).exp(), -0.6 * (2.0 * t).sin()]),
+            DVector::from_column_slice(&[-t.sin(), (-t).exp(), -1.2 * (2.0 * t).cos()]),
+        ]
+    }
+
+    /// Autonomous, nonlinear part G(x) (g_z = 1 + 0.6 z² ≠ 0: index 1).
+    fn dae_g(x: &DVector<f64>) -> DVector<f64> {
+        let (y1, y2, z) = (x[0], x[1], x[2]);
+        DVector::from_column_slice(&[
+            -y2 + z.sin() + 0.5 * y1,
+            y1 * z - 0.3 * y2 * y2,
+            z + 0.2 * z * z * z - y1 * y2 - y1.cos(),
+        ])
+    }
+
+    #[rustfmt::skip]
+    fn dae_jac(x: &DVector<f64>) -> DMatrix<f64> {
+        let (y1, y2, z) = (x[0], x[1], x[2]);
+        DMatrix::from_row_slice(
+            3,
+            3,
+            &[
+                0.5, -1.0, z.cos(),
+                z, -0.6 * y2, y1,
+                -y2 + y1.sin(), -y1, 1.0 + 0.6 * z * z,
+            ],
+        )
+    }
+
+    /// F(t, x) = G(x) + r(t) with r(t) = M x*'(t) - G(x*(t)), so that x* is the solution.
+    fn dae_f(t: f64, x: &DVector<f64>) -> DVector<f64> {
+        let [xs, dxs, _] = dae_exact(t);
+        let mut r = -dae_g(&xs);
+        r[0] += dxs[0];
+        r[1] += dxs[1];
+        dae_g(x) + r
+    }
+
+    /// ∂F/∂t = r'(t) = M x*'' - G_x(x*) x*'.
+    fn dae_ft(t: f64) -> DVector<f64> {
+        let [xs, dxs, ddxs] = dae_exact(t);
+        let mut r = -(dae_jac(&xs) * &dxs);
+        r[0] += ddxs[0];
+        r[1] += ddxs[1];
+        r
+    }
+
+    /// Index-1 DAE orders, measured: local error of y1 O(h^6) in the differential and
+    /// O(h^5) (at least) in the algebraic component, i.e. DAE order 5; the embedded ŷ1 has
+    /// DAE order 4. Exercises A, C, c, d, m and γ together on a non-autonomous nonlinear DAE
+    /// (the index-1 conditions of Hairer & Wanner VI.3 beyond the ODE trees).
+    #[test]
+    fn rodas5p_index1_dae_orders() {
+        let t0 = 0.3;
+        let x0 = dae_exact(t0)[0].clone();
+        let hs = [0.1, 0.05, 0.025, 0.0125];
+        let mut e = Vec::new();
+        for &h in &hs {
+            let (y1, yhat) = dae_step(t0, &x0, h);
+            let x = &dae_exact(t0 + h)[0];
+            let ey = (y1[0] - x[0]).abs().max((y1[1] - x[1]).abs());
+            let ez = (y1[2] - x[2]).abs();
+            let ehy = (yhat[0] - x[0]).abs().max((yhat[1] - x[1]).abs());
+            let ehz = (yhat[2] - x[2]).abs();
+            e.push([ey, ez, ehy, ehz]);
+        }
+        let ord = |c: usize| (e[0][c] / e[3][c]).log2() / 3.0;
+        eprintln!("DAE local errors [y, z, ŷ, ẑ]: {e:?}");
+        eprintln!(
+            "orders: y {:.2}, z {:.2}, ŷ {:.2}, ẑ {:.2}",
+            ord(0),
+            ord(1),
+            ord(2),
+            ord(3)
+        );
+        assert!(
+            ord(0) > 5.7,
+            "differential component: local order {:.2}",
+            ord(0)
+        );
+        assert!(
+            ord(1) > 4.7,
+            "algebraic component: local order {:.2}",
+            ord(1)
+        );
+        assert!(
+            ord(2) > 4.5 && ord(2) < 5.5,
+            "embedded y: local order {:.2}",
+            ord(2)
+        );
+        assert!(ord(3) > 4.3, "embedded z: local order {:.2}", ord(3));
+    }
 }
