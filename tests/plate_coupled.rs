@@ -20,9 +20,7 @@ fn system(sets: &[(&str, &str)]) -> (Parameters, Assembled) {
 
 fn peaks(sets: &[(&str, &str)], input: &str, output: &str) -> Vec<f64> {
     let (_, s) = system(sets);
-    let lin = s
-        .compiled()
-        .linearize(&s.initial_state(), s.inputs());
+    let lin = s.compiled().linearize(&s.initial_state(), s.inputs());
     let h = frequency_response(&lin, input, output, 0.5, 120.0, 2000).unwrap();
     h.peaks.iter().map(|p| p.0).collect()
 }
@@ -65,7 +63,11 @@ fn locked_hub_frf_from_f1_against_the_experiment() {
     for (got, want) in p.iter().zip([1.1207, 7.0233, 19.6653]) {
         assert!((got - want).abs() <= 2e-3 * want, "{got} vs {want}");
     }
-    let pc = peaks(&[("plate.root", "2"), ("plate.formulation", "2")], "F1", "acc[11]");
+    let pc = peaks(
+        &[("plate.root", "2"), ("plate.formulation", "2")],
+        "F1",
+        "acc[11]",
+    );
     println!("consistent, hub locked, F1 -> acc[11]: {pc:.3?}");
 }
 
@@ -113,8 +115,14 @@ fn consistent_free_vibration_conserves_energy() {
 #[test]
 fn power_balance_with_damping_and_forcing() {
     for sets in [
-        vec![("plate.formulation", "2"), ("hydraulics.motor_coupled", "true")],
-        vec![("plate.formulation", "1"), ("hydraulics.motor_coupled", "true")],
+        vec![
+            ("plate.formulation", "2"),
+            ("hydraulics.motor_coupled", "true"),
+        ],
+        vec![
+            ("plate.formulation", "1"),
+            ("hydraulics.motor_coupled", "true"),
+        ],
         vec![("plate.formulation", "2")],
         vec![("plate.formulation", "2"), ("plate.root", "2")],
     ] {
@@ -133,8 +141,15 @@ fn power_balance_with_damping_and_forcing() {
         let u = [0.8, 3.0, -2.0];
         let pb = m.power_balance(&x, &u);
         let scale = pb.source_power.abs() + pb.dissipated_power.abs() + pb.stored_rate.abs();
-        println!("{sets:?}: {pb:?}", pb = (pb.stored_rate, pb.source_power, pb.dissipated_power));
+        println!(
+            "{sets:?}: {pb:?}",
+            pb = (pb.stored_rate, pb.source_power, pb.dissipated_power)
+        );
         assert!(pb.dissipated_power > 0.0 && pb.source_power != 0.0);
-        assert!(pb.residual.abs() <= 1e-12 * scale, "residual {} of {scale}", pb.residual);
+        assert!(
+            pb.residual.abs() <= 1e-12 * scale,
+            "residual {} of {scale}",
+            pb.residual
+        );
     }
 }

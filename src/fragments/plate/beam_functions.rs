@@ -57,13 +57,16 @@ pub struct BeamFunction {
     norm: f64,
 }
 
+/// A residual `g(beta)` with its derivative.
+type Residual = fn(f64) -> (f64, f64);
+
 /// The `k`-th root (1-based) of the characteristic equation of an elastic family. For
 /// [`BeamKind::FreeFree`] `k` counts the elastic functions (`k = 1` is the third function).
 pub fn characteristic_root(kind: BeamKind, k: usize) -> f64 {
     assert!(k >= 1, "roots are numbered from 1");
     let kf = k as f64;
     // Starting guesses and the residual g(beta) with derivative.
-    let (mut x, g): (f64, fn(f64) -> (f64, f64)) = match kind {
+    let (mut x, g): (f64, Residual) = match kind {
         BeamKind::PinnedFree => ((kf + 0.25) * PI, |b| {
             let t = b.tanh();
             let sech2 = 1.0 - t * t;
@@ -173,8 +176,8 @@ impl BeamFunction {
         }
         let b = self.beta;
         let u = b * xi;
-        let hyper =
-            self.p * (u - b).exp() + if k % 2 == 0 { 1.0 } else { -1.0 } * self.q * (-u).exp();
+        let hyper = self.p * (u - b).exp()
+            + if k.is_multiple_of(2) { 1.0 } else { -1.0 } * self.q * (-u).exp();
         let (su, cu) = u.sin_cos();
         // d^k/du^k of c cos u + s sin u
         let trig = match k % 4 {
