@@ -8,6 +8,13 @@
 //!
 //! * [`loes`]: the low-order equivalent system of the hydraulic loop (Fig. 3, eq. 1).
 //! * [`controller`]: the analog position controller (potentiometer, error and power amplifiers).
+//! * [`torsion_bar`]: the bar between the motor shaft and the hub.
+//! * [`hub`]: the hub inertia on its gas bearing.
+//! * [`plate`]: the flexible plate (assumed modes, eqs. 7-22): beam functions, the paper's and a
+//!   consistent formulation, natural frequencies, the plate fragment.
 
 pub mod controller;
+pub mod hub;
 pub mod loes;
+pub mod plate;
+pub mod torsion_bar;

@@ -6,20 +6,93 @@ use nalgebra::DMatrix;
 
 use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmi2::Values;
-use crate::fragments::loes;
+use crate::fragments::plate::modes::{natural_modes, NaturalMode};
+use crate::fragments::plate::{self, PlateModel};
+use crate::fragments::{controller, hub, loes, torsion_bar};
 use crate::solver::OdeSystem;
 
 use super::parameters::{HydraulicsModel, Parameters};
 use super::variables::{idx, VARIABLES};
 
 /// The bond graph of the whole model for a parameter set.
+///
+/// Always: the reference `r`, the LOES (Fig. 3) with the analog controller, the shaker forces
+/// `F1`, `F2` and the plate (with its hub unless the root is locked). With
+/// `hydraulics.motor_coupled` the LOES rotor drives the hub through the torsion bar (Fig. 8);
+/// without it the motor runs alone, as in the paper's identification, and the plate is driven by
+/// F1 and F2 only (hub free on its gas bearing, or locked).
 pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
-    match (p.hydraulics, p.motor_coupled) {
-        (HydraulicsModel::Loes, false) => Ok(loes::build_loop(&p.loes, &p.controller)),
-        (_, true) => Err(
-            "hydraulics.motor_coupled = true needs the hub, torsion bar and plate fragments, which this version does not have yet; use false (the motor alone, as in the paper's identification)".into(),
-        ),
+    let HydraulicsModel::Loes = p.hydraulics;
+    let model = PlateModel::new(&p.plate)?;
+    let mut g = BondGraph::new("hydraulic_slewing_plate");
+    let r = g.add_input("r");
+    let f1 = g.add_input("F1");
+    let f2 = g.add_input("F2");
+    let l = loes::add_loes(&mut g, "loes", &p.loes);
+    let c = controller::add_controller(&mut g, "controller", &p.controller, r, l.theta);
+    g.connect_signal_port(l.valve_command, c.command);
+    let bar = p
+        .motor_coupled
+        .then(|| torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, l.rotor));
+    let hub = model
+        .hub
+        .then(|| hub::add_hub(&mut g, "hub", model.hub_one_port()));
+    let plate = plate::add_plate(
+        &mut g,
+        "plate",
+        &model,
+        hub.as_ref(),
+        bar.map(|b| b.node),
+        [f1, f2],
+    );
+    g.add_output("y_pot", c.y_pot);
+    g.add_output("theta_motor", l.theta);
+    g.add_output("omega_motor", l.omega);
+    g.add_output("p_load", l.p_load);
+    g.add_output("q_valve", l.q_valve);
+    let (theta, omega) = match &hub {
+        Some(h) => (h.theta, h.omega),
+        None => {
+            let zero = g.add_constant("hub.locked", 0.0);
+            (zero, zero)
+        }
+    };
+    g.add_output("theta_hub", theta);
+    g.add_output("omega_hub", omega);
+    let torque = match &bar {
+        Some(b) => b.torque,
+        None => g.add_constant("torsion_bar.uncoupled", 0.0),
+    };
+    g.add_output("torsion_bar.torque", torque);
+    g.add_output("w_tip", plate.w_tip);
+    g.add_output("acc_tip", plate.acc_tip);
+    for (k, &a) in plate.acc.iter().enumerate() {
+        g.add_output(format!("acc[{}]", k + 1), a);
     }
+    Ok(g)
+}
+
+/// The natural frequencies of the plate model of a parameter set (eq. 14; the chosen
+/// formulation and root condition, hub free, rigid mode left out), ascending.
+pub fn plate_modes(p: &Parameters) -> Result<Vec<NaturalMode>, String> {
+    Ok(natural_modes(&PlateModel::new(&p.plate)?))
+}
+
+/// Number of calculated frequency parameters `plate.f[1]` ... `plate.f[20]`.
+pub const PLATE_FREQUENCIES: usize = 20;
+
+/// Writes `plate.f[i]` (0 where the model has fewer modes).
+pub fn write_plate_frequencies(p: &Parameters, values: &mut Values) -> Result<(), String> {
+    let modes = plate_modes(p)?;
+    for i in 0..PLATE_FREQUENCIES {
+        let name = format!("plate.f[{}]", i + 1);
+        let index = VARIABLES
+            .iter()
+            .position(|v| v.name == name)
+            .ok_or_else(|| format!("{name} is not an FMU variable"))?;
+        values.set_real(index, modes.get(i).map_or(0.0, |m| m.f_hz));
+    }
+    Ok(())
 }
 
 /// The compiled model, its held inputs, and where its inputs and outputs live among the FMU's
@@ -121,12 +194,19 @@ impl Assembled {
 }
 
 /// A typical magnitude of a state, by the element it belongs to: the rotor angle in radians, a
-/// momentum at 10 rad/s, a displaced volume at 100 bar. Tolerances are relative to these.
+/// momentum at 10 rad/s, a displaced volume at 100 bar, plate modes at 1 mm and 0.1 m/s. Tolerances are relative to these.
 fn nominal(state: &str, p: &Parameters) -> f64 {
     let element = state.rsplit_once('.').map_or(state, |(e, _)| e);
+    let plate_momentum = p.plate.areal_mass() * p.plate.a * p.plate.b * 0.1;
     match element {
         "loes.I_b" => p.loes.i_b * 10.0,
         "loes.C3" => p.loes.c3 * 1e7,
+        // bar twist 0.01 rad; hub momentum at 1 rad/s; plate: 1 mm, 0.1 m/s
+        "torsion_bar.k" => 1e-2,
+        "hub.I" => p.plate.hub_total_inertia(),
+        e if e.starts_with("plate.C[") => 1e-3,
+        e if e.starts_with("plate.I[") => plate_momentum,
+        "plate.inertia" => plate_momentum.max(1e-3 * p.plate.hub_total_inertia()),
         _ => 1.0,
     }
 }

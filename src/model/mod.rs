@@ -6,9 +6,11 @@
 //! - [`parameters`]: the typed parameter set read from the FMU's values, and `--set NAME=VALUE`.
 //! - [`assembly`]: which fragments make up the model for a parameter set, and the resulting
 //!   [`OdeSystem`](crate::solver::OdeSystem).
+//! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`](crate::fmi2::FmuModel) the C ABI exports.
 
 pub mod assembly;
+pub mod frf;
 pub mod parameters;
 pub mod variables;
 
@@ -101,6 +103,7 @@ impl FmuModel for HydraulicSlewingPlate {
             return Err("the model was not built".into());
         };
         system.set_inputs(values);
+        assembly::write_plate_frequencies(parameters, values)?;
         let integrator = Integrator::new(
             parameters.solver_options(system),
             experiment.start_time,

@@ -5,6 +5,7 @@ use crate::fmi2::variables::{check_value, Value, Values};
 use crate::fmi2::{Experiment, Kind};
 use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
+use crate::fragments::plate::{Formulation, PlateParameters, Root};
 use crate::solver::{Atol, Method, SolverOptions};
 
 use super::assembly::Assembled;
@@ -25,6 +26,10 @@ pub struct Parameters {
     pub motor_coupled: bool,
     pub loes: LoesParameters,
     pub controller: ControllerParameters,
+    /// The plate and hub (`plate.*`, `hub.I_H`).
+    pub plate: PlateParameters,
+    /// Torsion-bar stiffness \[N m/rad\] (`torsion_bar.k`).
+    pub torsion_bar_k: f64,
     pub method: Method,
     pub rtol: f64,
     /// Absolute tolerance as a fraction of each state's nominal value.
@@ -44,6 +49,12 @@ const POSITIVE: &[usize] = &[
     idx::SOLVER_RTOL,
     idx::SOLVER_ATOL,
     idx::SOLVER_MAX_STEP,
+    idx::PLATE_E,
+    idx::PLATE_RHO,
+    idx::PLATE_A,
+    idx::PLATE_B,
+    idx::PLATE_H,
+    idx::TORSION_BAR_K,
 ];
 
 /// The model-specific check of a value being set (type and range are checked before).
@@ -91,6 +102,51 @@ impl Parameters {
                 "solver.max_steps: must be at least 1, got {max_steps}"
             ));
         }
+        let formulation = match values.integer(idx::PLATE_FORMULATION) {
+            1 => Formulation::Paper,
+            2 => Formulation::Consistent,
+            other => {
+                return Err(format!(
+                    "plate.formulation: {other} is not a formulation (1 = paper, 2 = consistent)"
+                ))
+            }
+        };
+        let root = match values.integer(idx::PLATE_ROOT) {
+            1 => Root::Hub,
+            2 => Root::Locked,
+            other => {
+                return Err(format!(
+                    "plate.root: {other} is not a root condition (1 = hub, 2 = locked)"
+                ))
+            }
+        };
+        let count = |i: usize, name: &str| -> Result<usize, String> {
+            let v = values.integer(i);
+            if (1..=12).contains(&v) {
+                Ok(v as usize)
+            } else {
+                Err(format!("{name}: must be in 1..=12, got {v}"))
+            }
+        };
+        let plate = PlateParameters {
+            formulation,
+            root,
+            n: count(idx::PLATE_N, "plate.N")?,
+            m: count(idx::PLATE_M, "plate.M")?,
+            e: values.real(idx::PLATE_E),
+            rho: values.real(idx::PLATE_RHO),
+            a: values.real(idx::PLATE_A),
+            b: values.real(idx::PLATE_B),
+            h: values.real(idx::PLATE_H),
+            nu: values.real(idx::PLATE_NU),
+            zeta: values.real(idx::PLATE_ZETA),
+            i_h: values.real(idx::HUB_I_H),
+            x1: values.real(idx::PLATE_X1),
+            y1: values.real(idx::PLATE_Y1),
+            x2: values.real(idx::PLATE_X2),
+            y2: values.real(idx::PLATE_Y2),
+        };
+        plate.validate()?;
         Ok(Parameters {
             hydraulics,
             motor_coupled: values.boolean(idx::HYDRAULICS_MOTOR_COUPLED),
@@ -106,6 +162,8 @@ impl Parameters {
                 a2: values.real(idx::CONTROLLER_A2),
                 k_pot: values.real(idx::CONTROLLER_K_POT),
             },
+            plate,
+            torsion_bar_k: values.real(idx::TORSION_BAR_K),
             method,
             rtol: experiment
                 .tolerance

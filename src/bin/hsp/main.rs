@@ -5,6 +5,9 @@
 //!   (a step in the reference `r`), prints a summary and writes the results as CSV.
 //! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest.
 //! - `hsp graph [--set ...]`: the model's bond graph as Graphviz DOT, with causal strokes.
+//! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14).
+//! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
+//!   response of the linearised model and its resonance peaks.
 
 mod loader;
 mod package;
@@ -14,7 +17,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use hydraulic_slewing_plate::fmi2::{Experiment, Values};
-use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};
+use hydraulic_slewing_plate::model::assembly::{bond_graph, plate_modes, Assembled};
+use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
@@ -50,6 +54,37 @@ enum Command {
     },
     /// Print the model's bond graph as Graphviz DOT
     Graph {
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+    },
+    /// Natural frequencies of the plate model (eq. 14): {"f_hz": [...], "labels": ["(n,m)", ...]}
+    Modes {
+        /// Print JSON (the only format)
+        #[arg(long)]
+        json: bool,
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+    },
+    /// Frequency response of the linearised model, with its resonance peaks
+    Frf {
+        /// Input name (r, F1, F2)
+        #[arg(long, default_value = "r")]
+        input: String,
+        /// Output name (acc_tip, w_tip, acc[k], theta_hub, y_pot, ...)
+        #[arg(long, default_value = "acc_tip")]
+        output: String,
+        /// Lowest frequency, Hz
+        #[arg(long, default_value_t = 0.5)]
+        from: f64,
+        /// Highest frequency, Hz
+        #[arg(long, default_value_t = 120.0)]
+        to: f64,
+        /// Number of log-spaced frequencies
+        #[arg(long, default_value_t = 2000)]
+        points: usize,
+        /// Print JSON (frequencies, magnitude, phase, peaks) instead of the peak table
+        #[arg(long)]
+        json: bool,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
     },
@@ -96,6 +131,50 @@ fn graph(sets: &[String]) -> Result<String, String> {
     Ok(bond_graph(&parameters)?.to_dot())
 }
 
+fn modes(sets: &[String]) -> Result<String, String> {
+    let values = values_with(sets)?;
+    let parameters = Parameters::from_values(&values, &Experiment::default())?;
+    let modes = plate_modes(&parameters)?;
+    let json = serde_json::json!({
+        "f_hz": modes.iter().map(|m| m.f_hz).collect::<Vec<_>>(),
+        "labels": modes.iter().map(|m| format!("({},{})", m.label.0, m.label.1)).collect::<Vec<_>>(),
+    });
+    Ok(json.to_string())
+}
+
+struct FrfArgs<'a> {
+    input: &'a str,
+    output: &'a str,
+    from: f64,
+    to: f64,
+    points: usize,
+    json: bool,
+}
+
+fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
+    let values = values_with(sets)?;
+    let parameters = Parameters::from_values(&values, &Experiment::default())?;
+    let system = Assembled::new(&parameters)?;
+    let x = system.initial_state();
+    let lin = system.compiled().linearize(&x, system.inputs());
+    let h = frequency_response(&lin, a.input, a.output, a.from, a.to, a.points)?;
+    if a.json {
+        return serde_json::to_string(&h).map_err(|e| e.to_string());
+    }
+    let mut s = format!(
+        "FRF {} -> {}, {} to {} Hz: {} resonance peaks\n    f [Hz]        |H|\n",
+        h.input,
+        h.output,
+        a.from,
+        a.to,
+        h.peaks.len()
+    );
+    for (f, m) in &h.peaks {
+        s.push_str(&format!("{f:10.4} {m:12.5e}\n"));
+    }
+    Ok(s.trim_end().to_string())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -105,6 +184,27 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Linearize { json: _, set } => linearize(&set).map(|s| println!("{s}")),
         Command::Graph { set } => graph(&set).map(|s| println!("{s}")),
+        Command::Modes { json: _, set } => modes(&set).map(|s| println!("{s}")),
+        Command::Frf {
+            input,
+            output,
+            from,
+            to,
+            points,
+            json,
+            set,
+        } => frf(
+            &FrfArgs {
+                input: &input,
+                output: &output,
+                from,
+                to,
+                points,
+                json,
+            },
+            &set,
+        )
+        .map(|s| println!("{s}")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -142,12 +142,21 @@ from which the state equations are derived.</p>
 <p>The hydraulic position loop as the low-order equivalent system (LOES) of the paper's Fig. 3 and
 eq. 1: a valve-flow source <code>k_sv A1 A2 (r - k_pot theta_a)</code> into the actuator chambers
 (capacitance <code>C3</code>, leakage <code>R7</code>), the vane motor (<code>D_m</code>) and the
-rotor inertia <code>I_b</code>, with the motor uncoupled from the torsion bar, as in the paper's
-identification. The default parameters fit the identified direct path
+rotor inertia <code>I_b</code>. The default parameters fit the identified direct path
 <code>G(s) = 2.25e6 / (s (s + 65) (s + 753))</code> of eq. 2 exactly: the paper's printed
 <code>R7 = 3.8e7</code> does not (it puts the poles at 135 and 364 rad/s), so
 <code>R7 = 1/(818 C3)</code>; <code>D_m</code> and <code>k_sv</code>, which the paper does not print,
 follow from the same fit with a potentiometer of 10 V over 150 degrees.</p>
+<p>The flexible plate (sections 2.2 to 4 of the paper): assumed modes (beam functions, any
+<code>plate.N</code> x <code>plate.M</code>, default 3 x 5) in the paper's formulation (eqs. 18-21
+with errata fixed; reproduces eq. 16) or a consistent Lagrangian one (<code>plate.formulation</code>),
+on the hub (<code>hub.I_H</code>) or with the hub locked (<code>plate.root</code>), excited by the
+shaker forces <code>F1</code>, <code>F2</code> and, with <code>hydraulics.motor_coupled = true</code>,
+by the motor through the torsion bar (<code>torsion_bar.k</code>). With
+<code>motor_coupled = false</code> (default) the motor runs alone, as in the paper's identification.
+Outputs: hub angle and speed, bar torque, tip deflection and acceleration (eq. 22), twelve
+accelerometers; the natural frequencies of the plate model are the calculated parameters
+<code>plate.f[1]</code> ... <code>plate.f[20]</code>.</p>
 <h2>Solver</h2>
 <p>An internal stiff one-step integrator, Rodas5P (default) or Radau IIA of order 5, with relative
 tolerance <code>solver.rtol</code> (or the tolerance of <code>fmi2SetupExperiment</code>) and absolute

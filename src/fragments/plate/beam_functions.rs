@@ -1,0 +1,306 @@
+//! Euler-Bernoulli beam functions, the assumed modes of eq. 7 of the paper, on the unit interval
+//! `xi in [0, 1]` (`xi = x / a` along the plate, `xi = y / b` across it).
+//!
+//! * [`BeamKind::PinnedFree`]: eq. 8 (written there in `(a - x) / a`), pinned at the hub
+//!   (`xi = 0`: `phi = phi'' = 0`, eq. 9a) and free at the tip (`phi'' = phi''' = 0`, eq. 9b).
+//!   `phi = sin(beta xi) + sigma sinh(beta xi)`, `sigma = sin beta / sinh beta`, roots of
+//!   `tan beta = tanh beta`: 3.9266, 7.0686, 10.2102, 13.3518, ... (MODEL_NOTES item 6).
+//! * [`BeamKind::ClampedFree`]: clamped at the hub (`phi = phi' = 0`), free at the tip;
+//!   `phi = cosh - cos - sigma (sinh - sin)`, roots of `cos beta cosh beta = -1`: 1.8751,
+//!   4.6941, 7.8548, ... Used for the locked hub and by the consistent formulation (shapes
+//!   clamped at the root in the hub frame).
+//! * [`BeamKind::FreeFree`]: eq. 11 and eq. 12 read as MODEL_NOTES item 4 (free at both edges,
+//!   `psi'' = psi''' = 0` at `y = 0` and `y = b`): `m = 1` the rigid translation `psi = 1`,
+//!   `m = 2` the rigid rotation `psi = sqrt(12) (xi - 1/2)` (eq. 11's `A_2y (y - b/2)`), `m >= 3`
+//!   `psi = cosh + cos - sigma (sinh + sin)`, roots of `cos beta cosh beta = 1`: 4.7300,
+//!   7.8532, 10.9956, ... (eq. 11 prints the negative of this shape; the sign of a shape is
+//!   immaterial).
+//!
+//! Every function is normalised so that `int_0^1 phi^2 dxi = 1`, i.e. `int_0^a phi^2 dx = a`
+//! (eq. 10) and `int_0^b psi^2 dy = b` (eq. 13). Values and derivatives are evaluated in a form
+//! free of the `cosh - sinh` cancellation (the growing exponential is taken with its exactly
+//! computed coefficient), so high modes keep full precision. Roots are found by Newton's method
+//! on `cos beta -/+ 1 / cosh beta` (or `sin beta - cos beta tanh beta`) to machine precision;
+//! integrals use composite Gauss-Legendre quadrature (16 panels of 20 nodes, exact to rounding
+//! for these entire functions up to the mode counts used here).
+
+use std::f64::consts::PI;
+use std::sync::OnceLock;
+
+/// Boundary conditions of a beam-function family (left end, right end).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BeamKind {
+    /// Pinned at `xi = 0`, free at `xi = 1` (eq. 8, 9).
+    PinnedFree,
+    /// Clamped at `xi = 0`, free at `xi = 1`.
+    ClampedFree,
+    /// Free at both ends, with the two rigid functions first (eq. 11, 12).
+    FreeFree,
+}
+
+/// One beam function: `phi(xi) = P e^(u - beta) + Q e^(-u) + c cos u + s sin u` with
+/// `u = beta xi`, times the normalisation, or one of the rigid functions (`beta = 0`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BeamFunction {
+    /// Family.
+    pub kind: BeamKind,
+    /// Index, 1-based (for [`BeamKind::FreeFree`], 1 and 2 are the rigid functions).
+    pub index: usize,
+    /// Characteristic root `beta` (0 for the rigid functions).
+    pub beta: f64,
+    p: f64,
+    q: f64,
+    c: f64,
+    s: f64,
+    /// 0: elastic, 1: constant, 2: linear `sqrt(12) (xi - 1/2)`.
+    rigid: u8,
+    norm: f64,
+}
+
+/// A residual `g(beta)` with its derivative.
+type Residual = fn(f64) -> (f64, f64);
+
+/// The `k`-th root (1-based) of the characteristic equation of an elastic family. For
+/// [`BeamKind::FreeFree`] `k` counts the elastic functions (`k = 1` is the third function).
+pub fn characteristic_root(kind: BeamKind, k: usize) -> f64 {
+    assert!(k >= 1, "roots are numbered from 1");
+    let kf = k as f64;
+    // Starting guesses and the residual g(beta) with derivative.
+    let (mut x, g): (f64, Residual) = match kind {
+        BeamKind::PinnedFree => ((kf + 0.25) * PI, |b| {
+            let t = b.tanh();
+            let sech2 = 1.0 - t * t;
+            (
+                b.sin() - b.cos() * t,
+                b.cos() + b.sin() * t - b.cos() * sech2,
+            )
+        }),
+        BeamKind::ClampedFree => (if k == 1 { 1.875 } else { (kf - 0.5) * PI }, |b| {
+            let sech = 1.0 / b.cosh();
+            (b.cos() + sech, -b.sin() - sech * b.tanh())
+        }),
+        BeamKind::FreeFree => ((kf + 0.5) * PI, |b| {
+            let sech = 1.0 / b.cosh();
+            (b.cos() - sech, -b.sin() + sech * b.tanh())
+        }),
+    };
+    for _ in 0..100 {
+        let (r, d) = g(x);
+        let dx = r / d;
+        x -= dx;
+        if dx.abs() <= 4.0 * f64::EPSILON * x {
+            break;
+        }
+    }
+    x
+}
+
+impl BeamFunction {
+    /// The `index`-th function (1-based) of a family, normalised to `int_0^1 phi^2 = 1`.
+    pub fn new(kind: BeamKind, index: usize) -> Self {
+        assert!(index >= 1, "beam functions are numbered from 1");
+        let mut f = BeamFunction {
+            kind,
+            index,
+            beta: 0.0,
+            p: 0.0,
+            q: 0.0,
+            c: 0.0,
+            s: 0.0,
+            rigid: 0,
+            norm: 1.0,
+        };
+        if kind == BeamKind::FreeFree && index <= 2 {
+            f.rigid = index as u8;
+            return f;
+        }
+        let k = if kind == BeamKind::FreeFree {
+            index - 2
+        } else {
+            index
+        };
+        let b = characteristic_root(kind, k);
+        let em = (-b).exp();
+        let (sb, cb) = b.sin_cos();
+        f.beta = b;
+        match kind {
+            BeamKind::PinnedFree => {
+                // sin u + sigma sinh u, sigma = sin b / sinh b
+                let sigma = 2.0 * sb * em / (1.0 - em * em);
+                f.p = sb / (1.0 - em * em);
+                f.q = -sigma / 2.0;
+                f.s = 1.0;
+            }
+            BeamKind::ClampedFree => {
+                // cosh u - cos u - sigma (sinh u - sin u)
+                let den = 1.0 - em * em + 2.0 * sb * em;
+                let sigma = (1.0 + em * em + 2.0 * cb * em) / den;
+                f.p = (sb - cb - em) / den;
+                f.q = (1.0 + sigma) / 2.0;
+                f.c = -1.0;
+                f.s = sigma;
+            }
+            BeamKind::FreeFree => {
+                // cosh u + cos u - sigma (sinh u + sin u)
+                let den = 1.0 - em * em - 2.0 * sb * em;
+                let sigma = (1.0 + em * em - 2.0 * cb * em) / den;
+                f.p = (cb - sb - em) / den;
+                f.q = (1.0 + sigma) / 2.0;
+                f.c = 1.0;
+                f.s = -sigma;
+            }
+        }
+        let n2 = integrate(|x| f.derivative(0, x).powi(2));
+        f.norm = 1.0 / n2.sqrt();
+        f
+    }
+
+    /// The first `n` functions of a family.
+    pub fn family(kind: BeamKind, n: usize) -> Vec<BeamFunction> {
+        (1..=n).map(|i| BeamFunction::new(kind, i)).collect()
+    }
+
+    /// `d^k phi / d xi^k` at `xi` (any `k`; the functions are entire).
+    pub fn derivative(&self, k: u32, xi: f64) -> f64 {
+        match self.rigid {
+            1 => return if k == 0 { 1.0 } else { 0.0 },
+            2 => {
+                let r12 = 12f64.sqrt();
+                return match k {
+                    0 => r12 * (xi - 0.5),
+                    1 => r12,
+                    _ => 0.0,
+                };
+            }
+            _ => {}
+        }
+        let b = self.beta;
+        let u = b * xi;
+        let hyper = self.p * (u - b).exp()
+            + if k.is_multiple_of(2) { 1.0 } else { -1.0 } * self.q * (-u).exp();
+        let (su, cu) = u.sin_cos();
+        // d^k/du^k of c cos u + s sin u
+        let trig = match k % 4 {
+            0 => self.c * cu + self.s * su,
+            1 => -self.c * su + self.s * cu,
+            2 => -self.c * cu - self.s * su,
+            _ => self.c * su - self.s * cu,
+        };
+        self.norm * b.powi(k as i32) * (hyper + trig)
+    }
+
+    /// `phi(xi)`.
+    pub fn value(&self, xi: f64) -> f64 {
+        self.derivative(0, xi)
+    }
+
+    /// Whether this is one of the rigid functions of eq. 11 (`m = 1, 2` of the free-free family).
+    pub fn is_rigid(&self) -> bool {
+        self.rigid != 0
+    }
+}
+
+/// `int_0^1 phi_i^(ki) phi_j^(kj) dxi` (derivatives with respect to `xi`).
+pub fn product_integral(fi: &BeamFunction, ki: u32, fj: &BeamFunction, kj: u32) -> f64 {
+    integrate(|x| fi.derivative(ki, x) * fj.derivative(kj, x))
+}
+
+/// `int_0^1 xi^power phi(xi) dxi`.
+pub fn moment_integral(f: &BeamFunction, power: i32) -> f64 {
+    integrate(|x| x.powi(power) * f.value(x))
+}
+
+const PANELS: usize = 16;
+const NODES: usize = 20;
+
+/// Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
+fn gauss_legendre() -> &'static [(f64, f64)] {
+    static GL: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    GL.get_or_init(|| {
+        let n = NODES;
+        let mut out = Vec::with_capacity(n);
+        for i in 0..n {
+            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 0.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let kf = k as f64;
+                    let p2 = ((2.0 * kf - 1.0) * x * p1 - (kf - 1.0) * p0) / kf;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() < 1e-16 {
+                    break;
+                }
+            }
+            out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
+        }
+        out
+    })
+}
+
+/// `int_0^1 f(xi) dxi` by composite Gauss-Legendre quadrature.
+pub fn integrate(f: impl Fn(f64) -> f64) -> f64 {
+    let gl = gauss_legendre();
+    let h = 1.0 / PANELS as f64;
+    let mut sum = 0.0;
+    for p in 0..PANELS {
+        let mid = (p as f64 + 0.5) * h;
+        let mut s = 0.0;
+        for &(x, w) in gl {
+            s += w * f(mid + 0.5 * h * x);
+        }
+        sum += 0.5 * h * s;
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roots_match_the_tables() {
+        let pf = [3.926602312047919, 7.068582745628732, 10.21017612281303];
+        for (k, r) in pf.iter().enumerate() {
+            assert!((characteristic_root(BeamKind::PinnedFree, k + 1) - r).abs() < 1e-13);
+        }
+        let cf = [1.875104068711961, 4.694091132974175, 7.854757438237613];
+        for (k, r) in cf.iter().enumerate() {
+            assert!((characteristic_root(BeamKind::ClampedFree, k + 1) - r).abs() < 1e-13);
+        }
+        let ff = [4.730040744862704, 7.853204624095838, 10.99560783800167];
+        for (k, r) in ff.iter().enumerate() {
+            assert!((characteristic_root(BeamKind::FreeFree, k + 1) - r).abs() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn boundary_conditions_hold() {
+        for i in 1..=8 {
+            let f = BeamFunction::new(BeamKind::PinnedFree, i);
+            let s = f.beta.powi(3);
+            assert!(f.value(0.0).abs() < 1e-12 && f.derivative(2, 0.0).abs() < 1e-12 * s);
+            assert!(
+                f.derivative(2, 1.0).abs() < 1e-11 * s && f.derivative(3, 1.0).abs() < 1e-11 * s
+            );
+            let f = BeamFunction::new(BeamKind::ClampedFree, i);
+            let s = f.beta.powi(3);
+            assert!(f.value(0.0).abs() < 1e-12 && f.derivative(1, 0.0).abs() < 1e-12 * s);
+            assert!(
+                f.derivative(2, 1.0).abs() < 1e-11 * s && f.derivative(3, 1.0).abs() < 1e-11 * s
+            );
+            let f = BeamFunction::new(BeamKind::FreeFree, i + 2);
+            let s = f.beta.powi(3);
+            for xi in [0.0, 1.0] {
+                assert!(
+                    f.derivative(2, xi).abs() < 1e-11 * s && f.derivative(3, xi).abs() < 1e-11 * s
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,174 @@
+//! The consistent plate model: the Lagrangian of hub and plate (eqs. 3-5 in full), MODEL_NOTES
+//! sections 2 item 2 and 4.
+//!
+//! In the hub frame the deflection is `w = sum phi_n(x) psi_m(y) eta_nm` with clamped-free
+//! functions along `x` (the root is clamped to the hub) and the free-free family across; the
+//! absolute displacement is `x theta + w`. For the two arms moving antisymmetrically,
+//!
+//! * kinetic energy (eq. 4): `T = (I_H + 2 I_P) theta'^2 / 2 + 2 theta' int int m x w' + int int m
+//!   w'^2` (both arms), so the hub and the plate are coupled through `int int m x phi_n psi_m`;
+//! * strain energy (eq. 5), Kirchhoff with Poisson and twist terms:
+//!   `K = D [X22 Y00 + X00 Y22 + nu (X20 Y02 + X02 Y20) + 2 (1 - nu) X11 Y11]` (times two arms),
+//!   `Xij = int phi^(i) phi^(j) dx`, `Yij = int psi^(i) psi^(j) dy`: a full (coupled) matrix;
+//!   the Poisson term couples `m = 1` and `m = 3` (MODEL_NOTES item 9);
+//! * the mass matrix of the plate alone is `2 m a b` times the identity (the functions are
+//!   orthogonal), so the plate part is first diagonalised exactly: the coordinates of the model
+//!   are the natural modes of the clamped plate (eigenvectors of the Ritz problem), with an R
+//!   per mode (`2 zeta omega` modal damping of the clamped plate). The mass matrix then couples
+//!   the hub angle to these modes; with the hub, the fragment is an I-field.
+//!
+//! Without damping the model conserves energy exactly (a Hamiltonian system), and as a
+//! Rayleigh-Ritz model its frequencies converge from above as `N x M` grows. It does not
+//! reproduce eq. 16 and must not be tuned to (MODEL_NOTES item 10).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::beam_functions::{moment_integral, product_integral, BeamFunction, BeamKind};
+use super::{PlateModel, PlateParameters, Root};
+
+/// Number of arms described by the coordinates (antisymmetric motion of the symmetric plate).
+pub const ARMS: f64 = 2.0;
+
+/// The Ritz matrices of the plate alone (both arms) in the assumed-mode coordinates
+/// `j = N (m - 1) + n`: `(M, K)`, `M = 2 m a b I`.
+pub fn ritz_matrices(p: &PlateParameters) -> (DMatrix<f64>, DMatrix<f64>) {
+    let phis = BeamFunction::family(BeamKind::ClampedFree, p.n);
+    let psis = BeamFunction::family(BeamKind::FreeFree, p.m);
+    let (a, b, d, nu) = (p.a, p.b, p.rigidity(), p.nu);
+    let table = |f: &[BeamFunction], len: f64, i: u32, j: u32| {
+        DMatrix::from_fn(f.len(), f.len(), |r, c| {
+            product_integral(&f[r], i, &f[c], j) * len.powi(1 - i as i32 - j as i32)
+        })
+    };
+    let (x00, x11, x20, x22) = (
+        table(&phis, a, 0, 0),
+        table(&phis, a, 1, 1),
+        table(&phis, a, 2, 0),
+        table(&phis, a, 2, 2),
+    );
+    let (y00, y11, y20, y22) = (
+        table(&psis, b, 0, 0),
+        table(&psis, b, 1, 1),
+        table(&psis, b, 2, 0),
+        table(&psis, b, 2, 2),
+    );
+    let nm = p.n * p.m;
+    let idx = |j: usize| (j % p.n, j / p.n);
+    let mut k = DMatrix::zeros(nm, nm);
+    let mut m = DMatrix::zeros(nm, nm);
+    for r in 0..nm {
+        let (n1, m1) = idx(r);
+        for c in 0..nm {
+            let (n2, m2) = idx(c);
+            k[(r, c)] = ARMS
+                * d
+                * (x22[(n1, n2)] * y00[(m1, m2)]
+                    + x00[(n1, n2)] * y22[(m1, m2)]
+                    + nu * (x20[(n1, n2)] * y20[(m2, m1)] + x20[(n2, n1)] * y20[(m1, m2)])
+                    + 2.0 * (1.0 - nu) * x11[(n1, n2)] * y11[(m1, m2)]);
+            m[(r, c)] = ARMS * p.areal_mass() * x00[(n1, n2)] * y00[(m1, m2)];
+        }
+    }
+    // symmetrise rounding
+    let k = (&k + k.transpose()) * 0.5;
+    let m = (&m + m.transpose()) * 0.5;
+    (m, k)
+}
+
+/// Builds the consistent formulation.
+pub fn build(p: &PlateParameters) -> PlateModel {
+    let phis = BeamFunction::family(BeamKind::ClampedFree, p.n);
+    let psis = BeamFunction::family(BeamKind::FreeFree, p.m);
+    let (a, b, mu) = (p.a, p.b, p.areal_mass());
+    let nm = p.n * p.m;
+    let (_, kr) = ritz_matrices(p);
+    let modal_mass = ARMS * mu * a * b;
+    // M = modal_mass I: the plate modes are the eigenvectors of K
+    let eig = kr.symmetric_eigen();
+    let mut order: Vec<usize> = (0..nm).collect();
+    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let mut phi_mat = DMatrix::zeros(nm, nm);
+    let mut lambdas = Vec::with_capacity(nm);
+    for (c, &i) in order.iter().enumerate() {
+        let mut v = eig.eigenvectors.column(i).into_owned();
+        let imax = v.iamax();
+        if v[imax] < 0.0 {
+            v = -v;
+        }
+        phi_mat.set_column(c, &v);
+        lambdas.push(eig.eigenvalues[i]);
+    }
+    let shape = |x: f64, y: f64| {
+        DVector::from_fn(nm, |j, _| {
+            phis[j % p.n].value(x / a) * psis[j / p.n].value(y / b)
+        })
+    };
+    let hub = p.root == Root::Hub;
+    let first = usize::from(hub);
+    let n = first + nm;
+    let mut mass = DMatrix::zeros(n, n);
+    let mut stiffness = DMatrix::zeros(n, n);
+    let mut damping = Vec::with_capacity(nm);
+    let mut labels = Vec::with_capacity(nm);
+    for c in 0..nm {
+        mass[(first + c, first + c)] = modal_mass;
+        stiffness[(first + c, first + c)] = lambdas[c];
+        damping.push(2.0 * p.zeta * (lambdas[c] * modal_mass).sqrt());
+        let j = phi_mat.column(c).iamax();
+        labels.push((j % p.n + 1, j / p.n + 1));
+    }
+    let mut torque = DVector::zeros(n);
+    let points = p.accelerometer_points();
+    let mut accelerometers = Vec::new();
+    let modal = |v: DVector<f64>| phi_mat.transpose() * v;
+    let embed = |hub_part: f64, plate: DVector<f64>| {
+        let mut v = DVector::zeros(n);
+        if hub {
+            v[0] = hub_part;
+        }
+        v.rows_mut(first, nm).copy_from(&plate);
+        v
+    };
+    if hub {
+        mass[(0, 0)] = p.i_h + ARMS * p.i_p();
+        // int int m x phi_n psi_m dx dy, both arms
+        let coupling = DVector::from_fn(nm, |j, _| {
+            ARMS * mu
+                * a
+                * a
+                * moment_integral(&phis[j % p.n], 1)
+                * b
+                * moment_integral(&psis[j / p.n], 0)
+        });
+        let c = modal(coupling);
+        for i in 0..nm {
+            let v = if c[i].abs() > 1e-13 * mass[(0, 0)] {
+                c[i]
+            } else {
+                0.0
+            };
+            mass[(0, first + i)] = v;
+            mass[(first + i, 0)] = v;
+        }
+        torque[0] = 1.0;
+    }
+    for &(x, y) in &points {
+        accelerometers.push(embed(x, modal(shape(x, y))));
+    }
+    let forces = [
+        embed(p.x1, modal(shape(p.x1, p.y1))),
+        embed(p.x2, modal(shape(p.x2, p.y2))),
+    ];
+    let tip = embed(0.0, modal(shape(a, b / 2.0)));
+    PlateModel {
+        hub,
+        labels,
+        mass,
+        stiffness,
+        damping,
+        torque,
+        forces,
+        tip,
+        accelerometers,
+    }
+}

@@ -1,0 +1,407 @@
+//! The slewing flexible plate: sections 2.2, 3, 3.1 and 4 of the paper.
+//!
+//! A thin aluminium plate (Kirchhoff theory) fixed to a rigid hub on a gas bearing, deflection
+//! written as the assumed-modes series of eq. 7, `w(x, y, t) = sum phi_n(x) psi_m(y) eta_nm(t)`,
+//! with the beam functions of [`beam_functions`]. Two formulations share one representation,
+//! [`PlateModel`] (generalised coordinates with mass and stiffness matrices and the vectors that
+//! map the hub torque, the shaker forces and the sensors onto them):
+//!
+//! * [`paper`]: eqs. 18-21 of the paper with the errata of MODEL_NOTES section 2 fixed.
+//! * [`consistent`]: the Lagrangian of hub and plate (eq. 4 and eq. 5 in full).
+//!
+//! [`modes`] solves eq. 14 (natural frequencies) with a symmetric generalised eigen-solver;
+//! [`add_plate`] turns a [`PlateModel`] into bond-graph fragments (modal I, C, R per coordinate,
+//! or an I-field where the mass matrix couples the hub and the plate; TFs from the root-torque
+//! junction and from the shaker-force junctions to the coordinates).
+//!
+//! Scope: the structure is symmetric, one arm on each side of the hub; the model keeps the
+//! antisymmetric motion that a hub torque excites (both arms described by one set of
+//! coordinates). A shaker force on one arm is projected onto that motion.
+
+pub mod beam_functions;
+pub mod consistent;
+pub mod modes;
+pub mod paper;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+
+use super::hub::HubPorts;
+
+/// Which plate model (`plate.formulation`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Formulation {
+    /// Eqs. 18-21 of the paper (errata fixed): reproduces eq. 16.
+    Paper,
+    /// The consistent Lagrangian of hub and plate: energy-conserving, Kirchhoff energy in full.
+    Consistent,
+}
+
+/// Root condition (`plate.root`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Root {
+    /// The plate root moves with the hub, which is free on its gas bearing or driven through the
+    /// torsion bar.
+    Hub,
+    /// The hub is locked (clamped root), as in the modal test of Fig. 10.
+    Locked,
+}
+
+/// Number of accelerometer grid points along the plate (`x`).
+pub const GRID_X: usize = 4;
+/// Number of accelerometer grid points across the plate (`y`).
+pub const GRID_Y: usize = 3;
+
+/// Parameters of the plate and hub (SI units).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PlateParameters {
+    pub formulation: Formulation,
+    pub root: Root,
+    /// Number of beam functions along the plate (`n`, bending).
+    pub n: usize,
+    /// Number of beam functions across the plate (`m`, "torsion" in the paper).
+    pub m: usize,
+    /// Young's modulus \[Pa\] (paper: 6.89e10).
+    pub e: f64,
+    /// Density \[kg/m^3\] (paper: 2795).
+    pub rho: f64,
+    /// Length from the hub axis to the tip \[m\] (paper: 1.41).
+    pub a: f64,
+    /// Width \[m\] (paper's table: 0.4685, MODEL_NOTES item 1).
+    pub b: f64,
+    /// Thickness \[m\] (paper: 2.65e-3).
+    pub h: f64,
+    /// Poisson's ratio (not in the paper; 0.3 reproduces eq. 16, MODEL_NOTES item 1).
+    pub nu: f64,
+    /// Modal damping ratio (not in the paper; 1 %).
+    pub zeta: f64,
+    /// Hub inertia `I_H` \[kg m^2\] (paper: 3.5).
+    pub i_h: f64,
+    /// Shaker force points `(x1, y1)`, `(x2, y2)` \[m\].
+    pub x1: f64,
+    pub y1: f64,
+    pub x2: f64,
+    pub y2: f64,
+}
+
+impl Default for PlateParameters {
+    fn default() -> Self {
+        PlateParameters {
+            formulation: Formulation::Paper,
+            root: Root::Hub,
+            n: 3,
+            m: 5,
+            e: 6.89e10,
+            rho: 2795.0,
+            a: 1.41,
+            b: 0.4685,
+            h: 2.65e-3,
+            nu: 0.3,
+            zeta: 0.01,
+            i_h: 3.5,
+            x1: 1.3,
+            y1: 0.1,
+            x2: 0.7,
+            y2: 0.35,
+        }
+    }
+}
+
+impl PlateParameters {
+    /// Flexural rigidity `D = E h^3 / (12 (1 - nu^2))` \[N m\].
+    pub fn rigidity(&self) -> f64 {
+        self.e * self.h.powi(3) / (12.0 * (1.0 - self.nu * self.nu))
+    }
+    /// Mass per unit area `m = rho h` \[kg/m^2\].
+    pub fn areal_mass(&self) -> f64 {
+        self.rho * self.h
+    }
+    /// `I_P = int int m x^2 dx dy` of one arm about the hub axis \[kg m^2\].
+    pub fn i_p(&self) -> f64 {
+        self.areal_mass() * self.b * self.a.powi(3) / 3.0
+    }
+    /// `I = I_H + 2 I_P` (section 3).
+    pub fn hub_total_inertia(&self) -> f64 {
+        self.i_h + 2.0 * self.i_p()
+    }
+    /// The 4 x 3 accelerometer grid over one arm, numbered along `y` first: point `k = 3 (i - 1)
+    /// + j` is at `x = i a / 4`, `y = (2 j - 1) b / 6` (so `acc[11]` is the tip centre of eq. 22).
+    pub fn accelerometer_points(&self) -> Vec<(f64, f64)> {
+        let mut v = Vec::new();
+        for i in 1..=GRID_X {
+            for j in 1..=GRID_Y {
+                v.push((
+                    i as f64 * self.a / GRID_X as f64,
+                    (2 * j - 1) as f64 * self.b / (2 * GRID_Y) as f64,
+                ));
+            }
+        }
+        v
+    }
+
+    /// Checks the values a model can be built from.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("plate.E", self.e),
+            ("plate.rho", self.rho),
+            ("plate.a", self.a),
+            ("plate.b", self.b),
+            ("plate.h", self.h),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!("{name}: must be positive, got {v}"));
+            }
+        }
+        if !(0.0..0.5).contains(&self.nu) {
+            return Err(format!("plate.nu: must be in [0, 0.5), got {}", self.nu));
+        }
+        if !(self.zeta >= 0.0 && self.zeta.is_finite()) {
+            return Err(format!(
+                "plate.zeta: must be non-negative, got {}",
+                self.zeta
+            ));
+        }
+        if !(self.i_h >= 0.0 && self.i_h.is_finite()) {
+            return Err(format!("hub.I_H: must be non-negative, got {}", self.i_h));
+        }
+        if self.n < 1 || self.m < 1 || self.n > 12 || self.m > 12 {
+            return Err(format!(
+                "plate.N and plate.M must be in 1..=12, got {} and {}",
+                self.n, self.m
+            ));
+        }
+        for (k, x, y) in [(1, self.x1, self.y1), (2, self.x2, self.y2)] {
+            if !(0.0..=self.a).contains(&x) || !(0.0..=self.b).contains(&y) {
+                return Err(format!(
+                    "plate.x{k}, plate.y{k}: the point ({x}, {y}) is not on the plate (0..{}, 0..{})",
+                    self.a, self.b
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A plate model in generalised coordinates `q`: the hub angle first when the root is the hub,
+/// then the plate coordinates. Kinetic energy `q' M q / 2`, strain energy `q' K q / 2`.
+#[derive(Clone, Debug)]
+pub struct PlateModel {
+    /// Whether coordinate 0 is the hub angle `theta` \[rad\].
+    pub hub: bool,
+    /// Label `(n, m)` of each plate coordinate (the dominant beam-function product).
+    pub labels: Vec<(usize, usize)>,
+    /// Mass matrix (over all coordinates).
+    pub mass: DMatrix<f64>,
+    /// Stiffness matrix (over all coordinates; the hub row and column are zero).
+    pub stiffness: DMatrix<f64>,
+    /// Damping resistance of each plate coordinate (an R per mode).
+    pub damping: Vec<f64>,
+    /// Generalised force per unit root torque (the torsion-bar torque on the hub).
+    pub torque: DVector<f64>,
+    /// Generalised forces per unit shaker force F1, F2.
+    pub forces: [DVector<f64>; 2],
+    /// `w_tip` per unit coordinate: the deflection at `x = a`, `y = b/2` relative to the hub
+    /// frame (eq. 22).
+    pub tip: DVector<f64>,
+    /// Displacement of each accelerometer point per unit coordinate, including the rigid
+    /// rotation `x theta` (what an accelerometer on the slewing plate measures).
+    pub accelerometers: Vec<DVector<f64>>,
+}
+
+impl PlateModel {
+    /// The model of a parameter set.
+    pub fn new(p: &PlateParameters) -> Result<Self, String> {
+        p.validate()?;
+        Ok(match p.formulation {
+            Formulation::Paper => paper::build(p),
+            Formulation::Consistent => consistent::build(p),
+        })
+    }
+
+    /// Number of coordinates.
+    pub fn dim(&self) -> usize {
+        self.mass.nrows()
+    }
+
+    /// Index of the first plate coordinate (1 with a hub, 0 without).
+    pub fn first_plate(&self) -> usize {
+        usize::from(self.hub)
+    }
+
+    /// Whether the mass matrix is diagonal (one-port inertias suffice).
+    pub fn diagonal_mass(&self) -> bool {
+        let n = self.dim();
+        (0..n).all(|i| (0..n).all(|j| i == j || self.mass[(i, j)] == 0.0))
+    }
+
+    /// The hub inertia as a one-port I, when the mass matrix does not couple it to the plate.
+    pub fn hub_one_port(&self) -> Option<f64> {
+        (self.hub && self.diagonal_mass()).then(|| self.mass[(0, 0)])
+    }
+}
+
+/// Handles into the plate fragment.
+#[derive(Clone, Debug)]
+pub struct PlatePorts {
+    /// The 1-junction of each plate coordinate (common flow `d eta / dt`).
+    pub junctions: Vec<ElementId>,
+    /// `w_tip` \[m\] (eq. 22).
+    pub w_tip: SignalId,
+    /// `acc_tip` \[m/s^2\], the second derivative of `w_tip`.
+    pub acc_tip: SignalId,
+    /// The accelerometers \[m/s^2\].
+    pub acc: Vec<SignalId>,
+}
+
+fn combination(g: &mut BondGraph, name: String, terms: Vec<(f64, SignalId)>) -> SignalId {
+    if terms.is_empty() {
+        g.add_constant(name, 0.0)
+    } else {
+        g.add_sum(name, &terms)
+    }
+}
+
+/// Adds the plate under `prefix`.
+///
+/// * `hub`: the hub fragment (`None` when the root is locked). If the model's mass matrix is
+///   not diagonal, the hub was created without a one-port inertia and the plate's I-field
+///   (`<prefix>.inertia`, hub first) is bonded to the hub junction here.
+/// * `root`: the 0-junction whose common effort is the root torque (the torsion bar), if any;
+///   it is bonded to the hub junction and, through TFs of modulus `torque[j]`, to each plate
+///   coordinate that the torque drives directly (the paper formulation).
+/// * `forces`: the shaker force signals F1, F2 (MSe into 0-junctions, TFs to the coordinates).
+pub fn add_plate(
+    g: &mut BondGraph,
+    prefix: &str,
+    model: &PlateModel,
+    hub: Option<&HubPorts>,
+    root: Option<ElementId>,
+    forces: [SignalId; 2],
+) -> PlatePorts {
+    assert_eq!(model.hub, hub.is_some(), "hub fragment and model disagree");
+    let n = model.dim();
+    let first = model.first_plate();
+    let np = n - first;
+    // coordinate junctions: hub junction, then one per plate coordinate
+    let mut coord = Vec::with_capacity(n);
+    if let Some(h) = hub {
+        coord.push(h.junction);
+    }
+    for j in 0..np {
+        coord.push(g.add_one(format!("{prefix}.mode[{}]", j + 1)));
+    }
+    // inertias: bond per coordinate whose effort is d p / dt
+    let mut inertia_bonds: Vec<BondId> = Vec::with_capacity(n);
+    if model.diagonal_mass() {
+        if let Some(h) = hub {
+            inertia_bonds.push(h.inertia_bond.expect("hub with a one-port inertia"));
+        }
+        for j in 0..np {
+            let i = g.add_i(
+                format!("{prefix}.I[{}]", j + 1),
+                model.mass[(first + j, first + j)],
+            );
+            inertia_bonds.push(g.bond(coord[first + j], i));
+        }
+    } else {
+        let field = g.add_i_field(format!("{prefix}.inertia"), model.mass.clone());
+        for (k, &c) in coord.iter().enumerate() {
+            let b = g.bond(c, field);
+            if k == 0 {
+                if let Some(h) = hub {
+                    super::hub::connect_inertia(g, h, b);
+                }
+            }
+            inertia_bonds.push(b);
+        }
+    }
+    // stiffness and damping per plate coordinate
+    let mut c_elems = Vec::with_capacity(np);
+    for j in 0..np {
+        let k = model.stiffness[(first + j, first + j)];
+        for i in 0..n {
+            assert!(
+                i == first + j || model.stiffness[(i, first + j)] == 0.0,
+                "plate stiffness must be diagonal in the model's coordinates"
+            );
+        }
+        let c = g.add_c(format!("{prefix}.C[{}]", j + 1), 1.0 / k);
+        g.bond(coord[first + j], c);
+        c_elems.push(c);
+        if model.damping[j] > 0.0 {
+            let r = g.add_r(format!("{prefix}.R[{}]", j + 1), model.damping[j]);
+            g.bond(coord[first + j], r);
+        }
+    }
+    // root torque
+    if let Some(node) = root {
+        for (i, &c) in coord.iter().enumerate() {
+            let t = model.torque[i];
+            if i == 0 && model.hub && t == 1.0 {
+                g.bond(node, c);
+            } else if t != 0.0 {
+                let tf = g.add_tf(format!("{prefix}.root_tf[{}]", i), t);
+                g.bond(node, tf);
+                g.bond(tf, c);
+            }
+        }
+    }
+    // shaker forces
+    for (k, (&f, s)) in forces.iter().zip(&model.forces).enumerate() {
+        let se = g.add_se(format!("{prefix}.F{}", k + 1), f);
+        let node = g.add_zero(format!("{prefix}.F{}.point", k + 1));
+        g.bond(se, node);
+        for (i, &c) in coord.iter().enumerate() {
+            if s[i] != 0.0 {
+                let tf = g.add_tf(format!("{prefix}.F{}_tf[{}]", k + 1, i), s[i]);
+                g.bond(node, tf);
+                g.bond(tf, c);
+            }
+        }
+    }
+    // sensors: accelerations from the efforts on the inertia bonds (q'' = M^-1 e), displacements
+    // from the C states and the hub angle
+    let minv = model
+        .mass
+        .clone()
+        .cholesky()
+        .expect("the mass matrix is positive definite")
+        .inverse();
+    let efforts: Vec<SignalId> = inertia_bonds
+        .iter()
+        .enumerate()
+        .map(|(i, &b)| g.add_effort_sensor(format!("{prefix}.dp[{i}]"), b))
+        .collect();
+    let qs: Vec<SignalId> = c_elems
+        .iter()
+        .enumerate()
+        .map(|(j, &c)| g.add_state_sensor(format!("{prefix}.eta[{}]", j + 1), c))
+        .collect();
+    let acc_of = |g: &mut BondGraph, name: String, s: &DVector<f64>| {
+        let w = &minv * s;
+        let terms = (0..n)
+            .filter(|&i| w[i] != 0.0)
+            .map(|i| (w[i], efforts[i]))
+            .collect();
+        combination(g, name, terms)
+    };
+    let acc_tip = acc_of(g, format!("{prefix}.acc_tip"), &model.tip);
+    let acc = model
+        .accelerometers
+        .iter()
+        .enumerate()
+        .map(|(k, s)| acc_of(g, format!("{prefix}.acc[{}]", k + 1), s))
+        .collect();
+    let terms = (0..np)
+        .filter(|&j| model.tip[first + j] != 0.0)
+        .map(|j| (model.tip[first + j], qs[j]))
+        .collect();
+    let w_tip = combination(g, format!("{prefix}.w_tip"), terms);
+    PlatePorts {
+        junctions: coord[first..].to_vec(),
+        w_tip,
+        acc_tip,
+        acc,
+    }
+}

@@ -1,0 +1,131 @@
+//! Natural frequencies of the plate models (eq. 14) against eq. 16 and MODEL_NOTES section 2.
+
+use hydraulic_slewing_plate::fragments::plate::beam_functions::{
+    product_integral, BeamFunction, BeamKind,
+};
+use hydraulic_slewing_plate::fragments::plate::modes::natural_modes;
+use hydraulic_slewing_plate::fragments::plate::{Formulation, PlateModel, PlateParameters, Root};
+
+fn freq_of(p: &PlateParameters, label: (usize, usize)) -> f64 {
+    let model = PlateModel::new(p).unwrap();
+    natural_modes(&model)
+        .iter()
+        .find(|m| m.label == label)
+        .unwrap_or_else(|| panic!("no mode {label:?}"))
+        .f_hz
+}
+
+#[test]
+fn paper_formulation_reproduces_eq16() {
+    // Eq. 16 with nu = 0.3, b = 0.4685 m, 3 x 5 modes (MODEL_NOTES item 1). Tolerance 0.1 %
+    // (the issue's); the paper prints 3-4 digits and the values below agree to every one of
+    // them. The paper's 56.8 Hz is not an eq. 21 frequency (MODEL_NOTES item 2) and is not
+    // asserted here.
+    let p = PlateParameters::default();
+    let model = PlateModel::new(&p).unwrap();
+    let modes = natural_modes(&model);
+    for m in &modes {
+        println!("{:?} {:.4} Hz", m.label, m.f_hz);
+    }
+    for (label, want) in [
+        ((1, 1), 4.914),
+        ((2, 1), 15.926),
+        ((3, 1), 33.228),
+        ((1, 3), 66.761),
+        ((2, 3), 73.465),
+        ((3, 3), 86.1),
+    ] {
+        let got = freq_of(&p, label);
+        assert!(
+            (got - want).abs() <= 1e-3 * want,
+            "{label:?}: {got} Hz, eq. 16 {want} Hz"
+        );
+    }
+    // 15 plate coordinates, the hub's rigid rotation left out
+    assert_eq!(modes.len(), 15);
+}
+
+#[test]
+fn consistent_formulation_matches_model_notes_item_10() {
+    // Bending only (M = 1), hub + two arms, clamped-root shapes: 4.914 / 15.926 / 33.236 with
+    // I_H = 0; 1.842 / 7.188 / 19.72 with I_H = 3.5; 1.121 / 7.023 / 19.665 locked.
+    let base = PlateParameters {
+        formulation: Formulation::Consistent,
+        n: 6,
+        m: 1,
+        ..PlateParameters::default()
+    };
+    let cases = [
+        (0.0, Root::Hub, [4.914, 15.926, 33.236]),
+        (3.5, Root::Hub, [1.842, 7.188, 19.72]),
+        (3.5, Root::Locked, [1.121, 7.023, 19.665]),
+    ];
+    for (i_h, root, want) in cases {
+        let p = PlateParameters {
+            i_h,
+            root,
+            ..base.clone()
+        };
+        let modes = natural_modes(&PlateModel::new(&p).unwrap());
+        for (m, w) in modes.iter().zip(want) {
+            println!(
+                "I_H {i_h} {root:?}: {:?} {:.4} (notes {w})",
+                m.label, m.f_hz
+            );
+            // 6 shapes converge to the notes' 4 digits for the first three modes
+            assert!((m.f_hz - w).abs() <= 1e-3 * w, "{} vs {w}", m.f_hz);
+        }
+    }
+}
+
+#[test]
+fn beam_functions_are_orthogonal_and_normalised() {
+    for kind in [
+        BeamKind::PinnedFree,
+        BeamKind::ClampedFree,
+        BeamKind::FreeFree,
+    ] {
+        let f = BeamFunction::family(kind, 8);
+        for i in 0..8 {
+            for j in 0..8 {
+                let v = product_integral(&f[i], 0, &f[j], 0);
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((v - want).abs() < 1e-12, "{kind:?} {i} {j}: {v}");
+                // and phi'''' = beta^4 phi, so the fourth-derivative products are diagonal too
+                let v4 = product_integral(&f[i], 4, &f[j], 0);
+                let want4 = if i == j { f[i].beta.powi(4) } else { 0.0 };
+                assert!(
+                    (v4 - want4).abs() < 1e-12 * f[i].beta.powi(4).max(1.0),
+                    "{kind:?} {i} {j}: {v4}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn consistent_ritz_frequencies_converge_from_above() {
+    // Rayleigh-Ritz: adding functions can only lower each frequency (the bases are nested).
+    let mut previous: Option<Vec<f64>> = None;
+    for (n, m) in [(2, 2), (3, 3), (4, 4), (5, 5), (6, 6)] {
+        let p = PlateParameters {
+            formulation: Formulation::Consistent,
+            root: Root::Locked,
+            n,
+            m,
+            ..PlateParameters::default()
+        };
+        let f: Vec<f64> = natural_modes(&PlateModel::new(&p).unwrap())
+            .iter()
+            .map(|m| m.f_hz)
+            .take(4)
+            .collect();
+        println!("{n} x {m}: {f:?}");
+        if let Some(prev) = &previous {
+            for (a, b) in f.iter().zip(prev) {
+                assert!(*a <= b * (1.0 + 1e-12), "{a} > {b}");
+            }
+        }
+        previous = Some(f);
+    }
+}
