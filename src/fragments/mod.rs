@@ -8,6 +8,13 @@
 //!
 //! * [`loes`]: the low-order equivalent system of the hydraulic loop (Fig. 3, eq. 1).
 //! * [`controller`]: the analog position controller (potentiometer, error and power amplifiers).
+//! * The full servo actuator of Fig. 2b: [`torque_motor`] (BG1), [`flapper_nozzle`] (BG2),
+//!   [`vane_motor`] (BG3), with the regularised [`orifice`] law, composed by [`servo_valve`].
 
 pub mod controller;
+pub mod flapper_nozzle;
 pub mod loes;
+pub mod orifice;
+pub mod servo_valve;
+pub mod torque_motor;
+pub mod vane_motor;

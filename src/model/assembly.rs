@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 
 use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmi2::Values;
-use crate::fragments::loes;
+use crate::fragments::{loes, servo_valve};
 use crate::solver::OdeSystem;
 
 use super::parameters::{HydraulicsModel, Parameters};
@@ -16,6 +16,9 @@ use super::variables::{idx, VARIABLES};
 pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     match (p.hydraulics, p.motor_coupled) {
         (HydraulicsModel::Loes, false) => Ok(loes::build_loop(&p.loes, &p.controller)),
+        (HydraulicsModel::ServoValve, false) => {
+            servo_valve::build_loop(&p.servo_valve, &p.controller)
+        }
         (_, true) => Err(
             "hydraulics.motor_coupled = true needs the hub, torsion bar and plate fragments, which this version does not have yet; use false (the motor alone, as in the paper's identification)".into(),
         ),
@@ -35,6 +38,8 @@ pub struct Assembled {
     output_index: Vec<Option<usize>>,
     /// A typical magnitude of each state, scaling the absolute tolerance.
     nominal: Vec<f64>,
+    /// The state at rest (all zero for the LOES; null pressures for the full servo valve).
+    rest: Vec<f64>,
 }
 
 impl Assembled {
@@ -59,8 +64,16 @@ impl Assembled {
             .iter()
             .map(|n| nominal(n, p))
             .collect();
+        let inputs = vec![0.0; input_index.len()];
+        let rest = match p.hydraulics {
+            HydraulicsModel::Loes => vec![0.0; compiled.n_states()],
+            HydraulicsModel::ServoValve => {
+                servo_valve::rest_state(&compiled, &inputs, "servo_valve", &p.servo_valve)?
+            }
+        };
         Ok(Assembled {
-            inputs: vec![0.0; input_index.len()],
+            inputs,
+            rest,
             compiled,
             input_index,
             output_index,
@@ -84,9 +97,10 @@ impl Assembled {
         &self.inputs
     }
 
-    /// The state at rest, where the simulation starts.
+    /// The state at rest with zero inputs, where the simulation starts (for the full servo valve
+    /// the null pressures, found by Newton's method when the model is built).
     pub fn initial_state(&self) -> Vec<f64> {
-        vec![0.0; self.dim()]
+        self.rest.clone()
     }
 
     /// Takes the inputs from the FMU's values; true if any changed.
@@ -121,8 +135,13 @@ impl Assembled {
 }
 
 /// A typical magnitude of a state, by the element it belongs to: the rotor angle in radians, a
-/// momentum at 10 rad/s, a displaced volume at 100 bar. Tolerances are relative to these.
+/// momentum at 10 rad/s, a displaced volume at 100 bar; for the full servo valve see
+/// [`servo_valve::ServoValveParameters::nominal`] (its states span some 15 decades). Tolerances
+/// are relative to these.
 fn nominal(state: &str, p: &Parameters) -> f64 {
+    if let Some(n) = p.servo_valve.nominal("servo_valve", state) {
+        return n;
+    }
     let element = state.rsplit_once('.').map_or(state, |(e, _)| e);
     match element {
         "loes.I_b" => p.loes.i_b * 10.0,
