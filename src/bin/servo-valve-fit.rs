@@ -32,7 +32,9 @@ fn main() {
     let freqs = [
         0.5, 1.0, 2.0, 5.0, 8.68, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 80.0, 100.0,
     ];
-    println!("| f (Hz) | full (dB) | G_est (dB) | diff (dB) | full (deg) | G_est (deg) | diff (deg) |");
+    println!(
+        "| f (Hz) | full (dB) | G_est (dB) | diff (dB) | full (deg) | G_est (deg) | diff (deg) |"
+    );
     println!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     for q in compare_with_g_est(&p, &ctrl, &freqs).expect("comparison") {
         println!(

@@ -173,11 +173,7 @@ pub fn add_spring_field(
     x_f: SignalId,
     x_v: SignalId,
 ) -> ElementId {
-    let k = DMatrix::from_row_slice(
-        2,
-        2,
-        &[p.k_f + p.k_w, p.k_w, p.k_w, p.k_v + p.k_w],
-    );
+    let k = DMatrix::from_row_slice(2, 2, &[p.k_f + p.k_w, p.k_w, p.k_w, p.k_v + p.k_w]);
     let field = g.add_c_field(format!("{prefix}.springs"), k);
     g.bond(flapper, field);
     g.bond(spool, field);

@@ -124,7 +124,8 @@ mod tests {
         for &dp in &[-1e7, -3e5, -1e3, -10.0, 0.0, 7.0, 2e3, 4e5, 2e7] {
             let (_, d) = regularised_sqrt(dp, 5e3);
             let h = 1e-6 * (dp.abs() + 5e3);
-            let fd = (regularised_sqrt(dp + h, 5e3).0 - regularised_sqrt(dp - h, 5e3).0) / (2.0 * h);
+            let fd =
+                (regularised_sqrt(dp + h, 5e3).0 - regularised_sqrt(dp - h, 5e3).0) / (2.0 * h);
             assert!((d - fd).abs() <= 1e-6 * d.abs(), "dp {dp}: {d} vs {fd}");
         }
         for &x in &[-1e-3, -1e-6, 0.0, 2e-6, 1e-3] {

@@ -668,7 +668,10 @@ fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], step: f64, iters: usize) -
                 }
             }
         }
-        let spread = simplex.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max)
+        let spread = simplex
+            .iter()
+            .map(|s| s.1)
+            .fold(f64::NEG_INFINITY, f64::max)
             - simplex.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
         if spread < 1e-10 {
             break;
