@@ -29,6 +29,39 @@ fn main() {
     for e in ev {
         println!("  {:12.1} {:+12.1}j", e.re, e.im);
     }
+    // Static spool position per volt of valve command: the DC solution of the linearisation with
+    // the rotor held (its angle and momentum pinned to zero); the spool does not feel the load.
+    let mut a = lin.a.clone();
+    let mut b = lin.b.column(0).clone_owned();
+    for (i, name) in lin.state_names.iter().enumerate() {
+        if name.ends_with("theta_a") || name.ends_with("I_m.p") {
+            a.row_mut(i).fill(0.0);
+            a[(i, i)] = 1.0;
+            b[i] = 0.0;
+        }
+    }
+    let x = a.lu().solve(&(-b)).expect("DC solve");
+    let ixv = lin
+        .state_names
+        .iter()
+        .position(|n| n.ends_with("springs.q[2]"))
+        .expect("x_v state");
+    let a12 = ctrl.a1 * ctrl.a2;
+    let xv_per_volt = x[ixv] / a12; // input e is the error; the valve sees A1 A2 e
+    println!(
+        "static spool position {:.4e} m/V of valve command ({:.3} mm at 10 V), flow gain K_q {:.4} m^2/s, \
+         k_sv = {:.4e} m^3/(s V) ({:.1} L/min at 10 V), k_sv/D_m = {:.4} (LOES {:.4})",
+        xv_per_volt,
+        xv_per_volt * 10.0 * 1e3,
+        p.flow_gain(),
+        xv_per_volt * p.flow_gain(),
+        xv_per_volt * p.flow_gain() * 10.0 * 60_000.0,
+        xv_per_volt * p.flow_gain() / p.d_m,
+        {
+            let l = hydraulic_slewing_plate::fragments::loes::LoesParameters::default();
+            l.k_sv / l.d_m
+        }
+    );
     let freqs = [
         0.5, 1.0, 2.0, 5.0, 8.68, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 80.0, 100.0,
     ];

@@ -23,7 +23,7 @@
 //! The paper's LOES damping `1/(R7 C3)` = 818 1/s cannot be leakage: `R7` = 2.3e7 N s/m^5 means
 //! 260 L/min per bar. A viscous rotor friction gives the same characteristic polynomial
 //! (`s^2 + (b/I) s + D^2/(C I)`) and the same DC gain, so the full model takes its damping from
-//! the rotor friction `b_m` (about 2 N m s/rad, vane seals) and keeps a realistic internal
+//! the rotor friction `b_m` (4.65 N m s/rad after the fit: vane seals) and keeps a realistic internal
 //! leakage (`R_leak`: 1 L/min at 100 bar).
 
 use nalgebra::{Complex, DMatrix, DVector};
@@ -59,15 +59,23 @@ pub struct ServoValveParameters {
     pub r_bob: f64,
     /// Coil inductance \[H\] (`L_bob`): 0.1, bottom of the 0.1-1 range; `R/L` = 2000 1/s.
     pub l_bob: f64,
-    /// Torque-motor force constant at the nozzle \[N/A\] (`k_phi`): fitted (sets the flow gain).
+    /// Torque-motor force constant at the nozzle \[N/A\] (`k_phi`): fitted to `G_est` (it sets the
+    /// loop gain): 14.9 N/A, i.e. 0.75 N at the 50 mA of 10 V; the spool then moves 0.595 mm per
+    /// 10 V and the valve passes 43.7 L/min at 10 V without load (30.9 L/min at 70 bar valve drop).
     pub k_phi: f64,
-    /// Effective armature-flapper mass at the nozzle \[kg\] (`m_f`).
+    /// Effective armature-flapper mass at the nozzle \[kg\] (`m_f`): 0.08 g, so that with
+    /// `k_f + k_w` = 1550 N/m the flapper alone is at 700 Hz (torque motors: 500-1000 Hz); coupled
+    /// to the pilot pressures and the coil the mode sits at 1040 Hz, zeta 0.46.
     pub m_f: f64,
-    /// Flapper viscous friction \[N s/m\] (`b_f`).
+    /// Flapper viscous friction \[N s/m\] (`b_f`): 0.5, damping ratio about 0.45 with the coil's
+    /// back-EMF (`k_phi^2 / R_bob` = 1.1 N s/m acts at low frequency). At 0.05 the flapper-spool
+    /// loop is unstable (a pair at +574 +- 5665j 1/s): a real valve damps its armature too.
     pub b_f: f64,
-    /// Flapper pivot (flexure tube) stiffness at the nozzle \[N/m\] (`k_f`).
+    /// Flapper pivot (flexure tube) stiffness at the nozzle \[N/m\] (`k_f`): 300; small against
+    /// the wire, so that the spool loop is fast (`K_qp k_w / (A_s (k_f + k_w))` ~ 4000 1/s).
     pub k_f: f64,
-    /// Feedback-wire stiffness \[N/m\] (`k_w`).
+    /// Feedback-wire stiffness \[N/m\] (`k_w`): 1250; with `k_phi` it sets the spool position per
+    /// current (about `k_phi i / k_w` plus the pilot's share).
     pub k_w: f64,
     /// Inlet orifice diameter, R1 = R2 \[m\] (`d_0`): 0.25 mm.
     pub d_0: f64,
@@ -82,7 +90,7 @@ pub struct ServoValveParameters {
     pub d_s: f64,
     /// Spool mass \[kg\] (`m_v`): 3 g.
     pub m_v: f64,
-    /// Spool viscous friction \[N s/m\] (`b_v`).
+    /// Spool viscous friction \[N s/m\] (`b_v`): 1 (oil film on a 5 mm spool).
     pub b_v: f64,
     /// Spool centring spring \[N/m\] (`k_v`): weak; the feedback wire positions the spool.
     pub k_v: f64,
@@ -94,11 +102,13 @@ pub struct ServoValveParameters {
     pub v_1: f64,
     /// Internal leakage resistance of the vane motor \[N s/m^5\] (`R_leak`): 1 L/min at 100 bar.
     pub r_leak: f64,
-    /// Vane motor displacement \[m^3/rad\] (`D_m`): fitted.
+    /// Vane motor displacement \[m^3/rad\] (`D_m`): fitted to `G_est`, 1.207e-4 (the LOES has
+    /// 8.04e-5: the full model's valve lags move its hydraulic poles to 61 and 1800 1/s).
     pub d_m: f64,
     /// Rotor inertia \[kg m^2\] (`I_m`): the paper's `I_b`.
     pub i_m: f64,
-    /// Rotor viscous friction \[N m s/rad\] (`b_m`): fitted.
+    /// Rotor viscous friction \[N m s/rad\] (`b_m`): fitted to `G_est`, 4.65 (it carries the
+    /// damping that the LOES puts into `R7`).
     pub b_m: f64,
 }
 
@@ -661,8 +671,8 @@ fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], step: f64, iters: usize) -
             } else {
                 let best = simplex[0].0.clone();
                 for s in simplex.iter_mut().skip(1) {
-                    for j in 0..n {
-                        s.0[j] = best[j] + 0.5 * (s.0[j] - best[j]);
+                    for (xj, bj) in s.0.iter_mut().zip(&best) {
+                        *xj = bj + 0.5 * (*xj - bj);
                     }
                     s.1 = f(&s.0);
                 }
