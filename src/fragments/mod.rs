@@ -12,9 +12,16 @@
 //! * [`hub`]: the hub inertia on its gas bearing.
 //! * [`plate`]: the flexible plate (assumed modes, eqs. 7-22): beam functions, the paper's and a
 //!   consistent formulation, natural frequencies, the plate fragment.
+//! * The full servo actuator of Fig. 2b: [`torque_motor`] (BG1), [`flapper_nozzle`] (BG2),
+//!   [`vane_motor`] (BG3), with the regularised [`orifice`] law, composed by [`servo_valve`].
 
 pub mod controller;
+pub mod flapper_nozzle;
 pub mod hub;
 pub mod loes;
+pub mod orifice;
 pub mod plate;
+pub mod servo_valve;
+pub mod torque_motor;
 pub mod torsion_bar;
+pub mod vane_motor;

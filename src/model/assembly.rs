@@ -8,7 +8,7 @@ use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmi2::Values;
 use crate::fragments::plate::modes::{natural_modes, NaturalMode};
 use crate::fragments::plate::{self, PlateModel};
-use crate::fragments::{controller, hub, loes, torsion_bar};
+use crate::fragments::{controller, hub, loes, servo_valve, torsion_bar};
 use crate::solver::OdeSystem;
 
 use super::parameters::{HydraulicsModel, Parameters};
@@ -16,24 +16,41 @@ use super::variables::{idx, VARIABLES};
 
 /// The bond graph of the whole model for a parameter set.
 ///
-/// Always: the reference `r`, the LOES (Fig. 3) with the analog controller, the shaker forces
-/// `F1`, `F2` and the plate (with its hub unless the root is locked). With
-/// `hydraulics.motor_coupled` the LOES rotor drives the hub through the torsion bar (Fig. 8);
+/// Always: the reference `r`, the position loop (the LOES of Fig. 3, or the full servo valve of
+/// Fig. 2b, per `hydraulics.model`) with the analog controller, the shaker forces `F1`, `F2` and
+/// the plate (with its hub unless the root is locked). With `hydraulics.motor_coupled` the motor
+/// rotor drives the hub through the torsion bar (Fig. 8);
 /// without it the motor runs alone, as in the paper's identification, and the plate is driven by
 /// F1 and F2 only (hub free on its gas bearing, or locked).
 pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
-    let HydraulicsModel::Loes = p.hydraulics;
     let model = PlateModel::new(&p.plate)?;
     let mut g = BondGraph::new("hydraulic_slewing_plate");
     let r = g.add_input("r");
     let f1 = g.add_input("F1");
     let f2 = g.add_input("F2");
-    let l = loes::add_loes(&mut g, "loes", &p.loes);
-    let c = controller::add_controller(&mut g, "controller", &p.controller, r, l.theta);
-    g.connect_signal_port(l.valve_command, c.command);
+    // The position loop: either hydraulic model, closed by the analog controller.
+    let (rotor, y_pot, theta, omega, p_load, q_valve) = match p.hydraulics {
+        HydraulicsModel::Loes => {
+            let l = loes::add_loes(&mut g, "loes", &p.loes);
+            let c = controller::add_controller(&mut g, "controller", &p.controller, r, l.theta);
+            g.connect_signal_port(l.valve_command, c.command);
+            (l.rotor, c.y_pot, l.theta, l.omega, l.p_load, l.q_valve)
+        }
+        HydraulicsModel::ServoValve => {
+            let (sv, y_pot) = servo_valve::add_servo_valve_loop(
+                &mut g,
+                "servo_valve",
+                &p.servo_valve,
+                &p.controller,
+                r,
+            )?;
+            servo_valve::add_valve_outputs(&mut g, &sv);
+            (sv.rotor, y_pot, sv.theta, sv.omega, sv.p_load, sv.q_valve)
+        }
+    };
     let bar = p
         .motor_coupled
-        .then(|| torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, l.rotor));
+        .then(|| torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, rotor));
     let hub = model
         .hub
         .then(|| hub::add_hub(&mut g, "hub", model.hub_one_port()));
@@ -45,20 +62,20 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
         bar.map(|b| b.node),
         [f1, f2],
     );
-    g.add_output("y_pot", c.y_pot);
-    g.add_output("theta_motor", l.theta);
-    g.add_output("omega_motor", l.omega);
-    g.add_output("p_load", l.p_load);
-    g.add_output("q_valve", l.q_valve);
-    let (theta, omega) = match &hub {
+    g.add_output("y_pot", y_pot);
+    g.add_output("theta_motor", theta);
+    g.add_output("omega_motor", omega);
+    g.add_output("p_load", p_load);
+    g.add_output("q_valve", q_valve);
+    let (theta_hub, omega_hub) = match &hub {
         Some(h) => (h.theta, h.omega),
         None => {
             let zero = g.add_constant("hub.locked", 0.0);
             (zero, zero)
         }
     };
-    g.add_output("theta_hub", theta);
-    g.add_output("omega_hub", omega);
+    g.add_output("theta_hub", theta_hub);
+    g.add_output("omega_hub", omega_hub);
     let torque = match &bar {
         Some(b) => b.torque,
         None => g.add_constant("torsion_bar.uncoupled", 0.0),
@@ -108,6 +125,8 @@ pub struct Assembled {
     output_index: Vec<Option<usize>>,
     /// A typical magnitude of each state, scaling the absolute tolerance.
     nominal: Vec<f64>,
+    /// The state at rest (all zero for the LOES; null pressures for the full servo valve).
+    rest: Vec<f64>,
 }
 
 impl Assembled {
@@ -132,8 +151,16 @@ impl Assembled {
             .iter()
             .map(|n| nominal(n, p))
             .collect();
+        let inputs = vec![0.0; input_index.len()];
+        let rest = match p.hydraulics {
+            HydraulicsModel::Loes => vec![0.0; compiled.n_states()],
+            HydraulicsModel::ServoValve => {
+                servo_valve::rest_state(&compiled, &inputs, "servo_valve", &p.servo_valve)?
+            }
+        };
         Ok(Assembled {
-            inputs: vec![0.0; input_index.len()],
+            inputs,
+            rest,
             compiled,
             input_index,
             output_index,
@@ -157,9 +184,10 @@ impl Assembled {
         &self.inputs
     }
 
-    /// The state at rest, where the simulation starts.
+    /// The state at rest with zero inputs, where the simulation starts (for the full servo valve
+    /// the null pressures, found by Newton's method when the model is built).
     pub fn initial_state(&self) -> Vec<f64> {
-        vec![0.0; self.dim()]
+        self.rest.clone()
     }
 
     /// Takes the inputs from the FMU's values; true if any changed.
@@ -194,8 +222,13 @@ impl Assembled {
 }
 
 /// A typical magnitude of a state, by the element it belongs to: the rotor angle in radians, a
-/// momentum at 10 rad/s, a displaced volume at 100 bar, plate modes at 1 mm and 0.1 m/s. Tolerances are relative to these.
+/// momentum at 10 rad/s, a displaced volume at 100 bar, plate modes at 1 mm and 0.1 m/s; for the
+/// full servo valve see [`servo_valve::ServoValveParameters::nominal`] (its states span some 15
+/// decades). Tolerances are relative to these.
 fn nominal(state: &str, p: &Parameters) -> f64 {
+    if let Some(n) = p.servo_valve.nominal("servo_valve", state) {
+        return n;
+    }
     let element = state.rsplit_once('.').map_or(state, |(e, _)| e);
     let plate_momentum = p.plate.areal_mass() * p.plate.a * p.plate.b * 0.1;
     match element {

@@ -6,6 +6,7 @@ use crate::fmi2::{Experiment, Kind};
 use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
 use crate::fragments::plate::{Formulation, PlateParameters, Root};
+use crate::fragments::servo_valve::ServoValveParameters;
 use crate::solver::{Atol, Method, SolverOptions};
 
 use super::assembly::Assembled;
@@ -14,8 +15,10 @@ use super::variables::{idx, VARIABLES};
 /// Which hydraulic model drives the rotor (`hydraulics.model`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HydraulicsModel {
-    /// The low-order equivalent system of Fig. 3 and eq. 1.
+    /// The low-order equivalent system of Fig. 3 and eq. 1 (`hydraulics.model = 1`).
     Loes,
+    /// The full servo valve of Fig. 2b, BG1-BG3 (`hydraulics.model = 2`).
+    ServoValve,
 }
 
 /// Every parameter of the FMU, typed.
@@ -25,6 +28,7 @@ pub struct Parameters {
     /// Whether the motor drives the hub through the torsion bar (`hydraulics.motor_coupled`).
     pub motor_coupled: bool,
     pub loes: LoesParameters,
+    pub servo_valve: ServoValveParameters,
     pub controller: ControllerParameters,
     /// The plate and hub (`plate.*`, `hub.I_H`).
     pub plate: PlateParameters,
@@ -46,6 +50,33 @@ const POSITIVE: &[usize] = &[
     idx::LOES_D_M,
     idx::LOES_K_SV,
     idx::CONTROLLER_K_POT,
+    idx::SERVO_VALVE_P_SUPPLY,
+    idx::SERVO_VALVE_RHO,
+    idx::SERVO_VALVE_BETA,
+    idx::SERVO_VALVE_CD,
+    idx::SERVO_VALVE_DP_CR,
+    idx::SERVO_VALVE_R_BOB,
+    idx::SERVO_VALVE_L_BOB,
+    idx::SERVO_VALVE_K_PHI,
+    idx::SERVO_VALVE_M_F,
+    idx::SERVO_VALVE_B_F,
+    idx::SERVO_VALVE_K_F,
+    idx::SERVO_VALVE_K_W,
+    idx::SERVO_VALVE_D_0,
+    idx::SERVO_VALVE_D_N,
+    idx::SERVO_VALVE_X_F0,
+    idx::SERVO_VALVE_V_H,
+    idx::SERVO_VALVE_D_S,
+    idx::SERVO_VALVE_M_V,
+    idx::SERVO_VALVE_B_V,
+    idx::SERVO_VALVE_K_V,
+    idx::SERVO_VALVE_W,
+    idx::SERVO_VALVE_C_R,
+    idx::SERVO_VALVE_V_1,
+    idx::SERVO_VALVE_R_LEAK,
+    idx::SERVO_VALVE_D_M,
+    idx::SERVO_VALVE_I_M,
+    idx::SERVO_VALVE_B_M,
     idx::SOLVER_RTOL,
     idx::SOLVER_ATOL,
     idx::SOLVER_MAX_STEP,
@@ -81,9 +112,10 @@ impl Parameters {
         }
         let hydraulics = match values.integer(idx::HYDRAULICS_MODEL) {
             1 => HydraulicsModel::Loes,
+            2 => HydraulicsModel::ServoValve,
             other => {
                 return Err(format!(
-                    "hydraulics.model: {other} is not a hydraulic model (1 = LOES)"
+                    "hydraulics.model: {other} is not a hydraulic model (1 = LOES, 2 = full servo valve)"
                 ))
             }
         };
@@ -156,6 +188,36 @@ impl Parameters {
                 r7: values.real(idx::LOES_R7),
                 d_m: values.real(idx::LOES_D_M),
                 k_sv: values.real(idx::LOES_K_SV),
+            },
+            servo_valve: ServoValveParameters {
+                p_supply: values.real(idx::SERVO_VALVE_P_SUPPLY),
+                p_tank: values.real(idx::SERVO_VALVE_P_TANK),
+                rho: values.real(idx::SERVO_VALVE_RHO),
+                beta: values.real(idx::SERVO_VALVE_BETA),
+                cd: values.real(idx::SERVO_VALVE_CD),
+                dp_cr: values.real(idx::SERVO_VALVE_DP_CR),
+                r_bob: values.real(idx::SERVO_VALVE_R_BOB),
+                l_bob: values.real(idx::SERVO_VALVE_L_BOB),
+                k_phi: values.real(idx::SERVO_VALVE_K_PHI),
+                m_f: values.real(idx::SERVO_VALVE_M_F),
+                b_f: values.real(idx::SERVO_VALVE_B_F),
+                k_f: values.real(idx::SERVO_VALVE_K_F),
+                k_w: values.real(idx::SERVO_VALVE_K_W),
+                d_0: values.real(idx::SERVO_VALVE_D_0),
+                d_n: values.real(idx::SERVO_VALVE_D_N),
+                x_f0: values.real(idx::SERVO_VALVE_X_F0),
+                v_h: values.real(idx::SERVO_VALVE_V_H),
+                d_s: values.real(idx::SERVO_VALVE_D_S),
+                m_v: values.real(idx::SERVO_VALVE_M_V),
+                b_v: values.real(idx::SERVO_VALVE_B_V),
+                k_v: values.real(idx::SERVO_VALVE_K_V),
+                w: values.real(idx::SERVO_VALVE_W),
+                c_r: values.real(idx::SERVO_VALVE_C_R),
+                v_1: values.real(idx::SERVO_VALVE_V_1),
+                r_leak: values.real(idx::SERVO_VALVE_R_LEAK),
+                d_m: values.real(idx::SERVO_VALVE_D_M),
+                i_m: values.real(idx::SERVO_VALVE_I_M),
+                b_m: values.real(idx::SERVO_VALVE_B_M),
             },
             controller: ControllerParameters {
                 a1: values.real(idx::CONTROLLER_A1),

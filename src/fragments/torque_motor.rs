@@ -1,0 +1,90 @@
+//! BG1 of the paper (Fig. 2b): the torque motor of the servo valve, a voice coil driving the
+//! flapper.
+//!
+//! ```text
+//!   MSe e_in ---> 1 (coil current i) ---> GY k_phi ---> 1 (flapper velocity v_f)
+//!                 |        |                            |        |        |
+//!                 v        v                            v        v        v
+//!               R_bob    I L_bob                      I m_f    R b_f    C 1/k_f
+//! ```
+//!
+//! * `MSe` `<prefix>.amplifier`: the power amplifier voltage `e_in` \[V\] (the controller's
+//!   command signal);
+//! * 1-junction `<prefix>.coil`: coil current `i` \[A\]; `R_bob` \[ohm\] in series with `L_bob`
+//!   \[H\] (state `<prefix>.L_bob.p` = flux linkage `L_bob i` \[Wb\]);
+//! * GY `<prefix>.k_phi` \[N/A = V s/m\]: force on the flapper `F = k_phi i`, back-EMF
+//!   `k_phi v_f`;
+//! * 1-junction `<prefix>.flapper`: flapper velocity `v_f` \[m/s\]; inertia `m_f` \[kg\] (effective
+//!   armature-flapper mass referred to the nozzle), viscous friction `b_f` \[N s/m\]. The pivot
+//!   (flexure tube) stiffness `k_f` \[N/m\] is not a one-port C here: the flapper, the spool and the
+//!   feedback wire between them are three springs on two coordinates, which as three C elements
+//!   would give dependent states (a singular Jacobian). They form one 2-port C-field,
+//!   [`super::flapper_nozzle::add_spring_field`], whose first state is the flapper displacement
+//!   `x_f` \[m\], positive towards nozzle A. The signal [`TorqueMotorPorts::x_f`] is a port that
+//!   field connects.
+//!
+//! The flapper displacement is a signal ([`TorqueMotorPorts::x_f`]) that modulates the nozzle
+//! restrictions of BG2: as in the paper, the fragments are coupled through control signals; the
+//! nozzle jet reaction force on the flapper is not modelled. The feedback wire from the spool
+//! (see [`super::flapper_nozzle::add_feedback_wire`]) bonds onto the flapper junction.
+//!
+//! Sign conventions: a positive amplifier voltage drives a positive current, a positive force and
+//! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).
+
+use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+
+use super::servo_valve::ServoValveParameters;
+
+/// Handles into the torque motor fragment.
+#[derive(Clone, Copy, Debug)]
+pub struct TorqueMotorPorts {
+    /// The flapper 1-junction `<prefix>.flapper` (common flow: flapper velocity).
+    pub flapper: ElementId,
+    /// The coil 1-junction `<prefix>.coil` (common flow: coil current).
+    pub coil: ElementId,
+    /// Input signal port `<prefix>.e_in`: amplifier voltage \[V\], to be connected.
+    pub command: SignalId,
+    /// Coil current \[A\] (`<prefix>.i_coil`).
+    pub current: SignalId,
+    /// Flapper displacement \[m\] (signal port `<prefix>.x_f`, connected by the spring field).
+    pub x_f: SignalId,
+    /// Bond coil -> L_bob (its flow is the coil current).
+    pub coil_bond: BondId,
+}
+
+/// Adds BG1 under `prefix` (e.g. "servo_valve"): element names `<prefix>.R_bob`, `.L_bob`,
+/// `.k_phi`, `.m_f`, `.b_f`. The flapper stiffness `k_f` is added with the spring field.
+pub fn add_torque_motor(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &ServoValveParameters,
+) -> TorqueMotorPorts {
+    let command = g.add_signal_port(format!("{prefix}.e_in"));
+    let amp = g.add_se(format!("{prefix}.amplifier"), command);
+    let coil = g.add_one(format!("{prefix}.coil"));
+    let r_bob = g.add_r(format!("{prefix}.R_bob"), p.r_bob);
+    let l_bob = g.add_i(format!("{prefix}.L_bob"), p.l_bob);
+    let gy = g.add_gy(format!("{prefix}.k_phi"), p.k_phi);
+    let flapper = g.add_one(format!("{prefix}.flapper"));
+    let m_f = g.add_i(format!("{prefix}.m_f"), p.m_f);
+    let b_f = g.add_r(format!("{prefix}.b_f"), p.b_f);
+
+    g.bond(amp, coil);
+    g.bond(coil, r_bob);
+    let coil_bond = g.bond(coil, l_bob);
+    g.bond(coil, gy);
+    g.bond(gy, flapper);
+    g.bond(flapper, m_f);
+    g.bond(flapper, b_f);
+
+    let current = g.add_flow_sensor(format!("{prefix}.i_coil"), coil_bond);
+    let x_f = g.add_signal_port(format!("{prefix}.x_f"));
+    TorqueMotorPorts {
+        flapper,
+        coil,
+        command,
+        current,
+        x_f,
+        coil_bond,
+    }
+}

@@ -1,0 +1,127 @@
+//! BG3 of the paper (Fig. 2b): the power stage of the servo valve and the rotary vane actuator.
+//!
+//! ```text
+//!   supply 0 --> 1 PA(x_v) --> 0 p_1 --> 1 AT(x_v) --> 0 tank
+//!   supply 0 --> 1 PB(x_v) --> 0 p_2 --> 1 BT(x_v) --> 0 tank
+//!   0 p_1 --> 1 leak --> 0 p_2        (R_leak, laminar internal leakage)
+//!   0 p_1 --> 1 load --> 0 p_2 ;  1 load --> TF D_m --> 1 rotor (omega) --> I I_m, R b_m
+//! ```
+//!
+//! * Four-way critical-centre spool: edges P->A and B->T open for `x_v > 0`, P->B and A->T for
+//!   `x_v < 0`, each of area `w ramp(+-x_v, c_r)` with area gradient `w` and radial clearance
+//!   `c_r` ([`super::orifice::smooth_ramp`]), through the regularised orifice law.
+//! * Actuator chambers `<prefix>.chamber_1`, `<prefix>.chamber_2` (0-junctions) with
+//!   compressibility `C = V_1 / beta` (states `<prefix>.C_1.q`, `<prefix>.C_2.q`).
+//! * Internal leakage across the vanes `<prefix>.R_leak` \[N s/m^5\] (laminar).
+//! * The vane motor: TF `<prefix>.D_m` from the load 1-junction (pressure `p_1 - p_2`, flow
+//!   through the motor) to the rotor 1-junction `<prefix>.rotor` (speed `omega`): torque
+//!   `D_m (p_1 - p_2)`, swept flow `D_m omega`.
+//! * Rotor inertia `I_m` (state `<prefix>.I_m.p` = angular momentum) and viscous friction `b_m`
+//!   \[N m s/rad\].
+//!
+//! The supply (`Se p_s`) and tank (`Se p_t`) are the 0-junctions passed in; they are shared with
+//! the pilot stage (BG2). The torsion bar of the coupled model bonds onto the rotor junction.
+//!
+//! Sign conventions: `x_v > 0` fills chamber 1, `p_1 > p_2` turns the rotor positive; the metered
+//! flow `q_valve` is the net flow into chamber 1 (P->A minus A->T).
+
+use crate::bond_graph::{BondGraph, BondId, ElementId, Law, SignalId};
+
+use super::flapper_nozzle::restriction;
+use super::orifice::variable_orifice;
+use super::servo_valve::ServoValveParameters;
+
+/// Handles into the power stage and vane motor fragment.
+#[derive(Clone, Copy, Debug)]
+pub struct VaneMotorPorts {
+    /// The rotor 1-junction `<prefix>.rotor` (common flow: rotor speed).
+    pub rotor: ElementId,
+    /// Chamber 1 0-junction (pressure `p_1`).
+    pub chamber_1: ElementId,
+    /// Chamber 2 0-junction (pressure `p_2`).
+    pub chamber_2: ElementId,
+    /// The rotor inertia `<prefix>.I_m`.
+    pub i_m: ElementId,
+    /// Bond rotor -> I_m (its flow is the rotor speed).
+    pub i_m_bond: BondId,
+    /// Chamber pressure `p_1` \[Pa\] (`<prefix>.p_1`).
+    pub p_1: SignalId,
+    /// Chamber pressure `p_2` \[Pa\] (`<prefix>.p_2`).
+    pub p_2: SignalId,
+    /// Load pressure `p_1 - p_2` \[Pa\] (`<prefix>.p_load`).
+    pub p_load: SignalId,
+    /// Net metered flow into chamber 1 \[m^3/s\] (`<prefix>.q_valve`).
+    pub q_valve: SignalId,
+    /// Rotor speed \[rad/s\] (`<prefix>.omega`).
+    pub omega: SignalId,
+    /// Bonds supply -> P->A and supply -> P->B junctions (main-stage supply flows).
+    pub supply_bonds: [BondId; 2],
+}
+
+/// Adds BG3 under `prefix`, between `supply` and `tank`, with the spool position `x_v`.
+pub fn add_vane_motor(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &ServoValveParameters,
+    supply: ElementId,
+    tank: ElementId,
+    x_v: SignalId,
+) -> VaneMotorPorts {
+    let fluid = p.fluid();
+    let c = p.v_1 / p.beta;
+    let chamber_1 = g.add_zero(format!("{prefix}.chamber_1"));
+    let chamber_2 = g.add_zero(format!("{prefix}.chamber_2"));
+    let c_1 = g.add_c(format!("{prefix}.C_1"), c);
+    let c_2 = g.add_c(format!("{prefix}.C_2"), c);
+    let c1_bond = g.bond(chamber_1, c_1);
+    let c2_bond = g.bond(chamber_2, c_2);
+
+    let edge = |g: &mut BondGraph, name: &str, sign: f64| -> ElementId {
+        let law = variable_orifice(name, p.w, 0.0, sign, p.c_r, fluid);
+        g.add_r_modulated(format!("{prefix}.{name}"), law, x_v)
+    };
+    let pa = edge(g, "R_PA", 1.0);
+    let at = edge(g, "R_AT", -1.0);
+    let pb = edge(g, "R_PB", -1.0);
+    let bt = edge(g, "R_BT", 1.0);
+    let (_, pa_bond) = restriction(g, &format!("{prefix}.R_PA"), supply, chamber_1, pa);
+    let (_, at_bond) = restriction(g, &format!("{prefix}.R_AT"), chamber_1, tank, at);
+    let (_, pb_bond) = restriction(g, &format!("{prefix}.R_PB"), supply, chamber_2, pb);
+    restriction(g, &format!("{prefix}.R_BT"), chamber_2, tank, bt);
+
+    let r_leak = g.add_r(format!("{prefix}.R_leak"), p.r_leak);
+    restriction(g, &format!("{prefix}.R_leak"), chamber_1, chamber_2, r_leak);
+
+    let load = g.add_one(format!("{prefix}.load"));
+    g.bond(chamber_1, load);
+    g.bond(load, chamber_2);
+    let d_m = g.add_tf(format!("{prefix}.D_m"), p.d_m);
+    let rotor = g.add_one(format!("{prefix}.rotor"));
+    g.bond(load, d_m);
+    g.bond(d_m, rotor);
+    let i_m = g.add_i(format!("{prefix}.I_m"), Law::Linear(p.i_m));
+    let b_m = g.add_r(format!("{prefix}.b_m"), p.b_m);
+    let i_m_bond = g.bond(rotor, i_m);
+    g.bond(rotor, b_m);
+
+    let p_1 = g.add_effort_sensor(format!("{prefix}.p_1"), c1_bond);
+    let p_2 = g.add_effort_sensor(format!("{prefix}.p_2"), c2_bond);
+    let p_load = g.add_sum(format!("{prefix}.p_load"), &[(1.0, p_1), (-1.0, p_2)]);
+    let q_pa = g.add_flow_sensor(format!("{prefix}.q_PA"), pa_bond);
+    let q_at = g.add_flow_sensor(format!("{prefix}.q_AT"), at_bond);
+    let q_valve = g.add_sum(format!("{prefix}.q_valve"), &[(1.0, q_pa), (-1.0, q_at)]);
+    let omega = g.add_flow_sensor(format!("{prefix}.omega"), i_m_bond);
+    VaneMotorPorts {
+        rotor,
+        chamber_1,
+        chamber_2,
+        i_m,
+        i_m_bond,
+        p_1,
+        p_2,
+        p_load,
+        q_valve,
+        omega,
+        supply_bonds: [pa_bond, pb_bond],
+    }
+}
