@@ -7,6 +7,8 @@
 //! with |t| <= p, where γ(t) is the tree's density.
 
 // Wrapped in a module so that `cargo test solver` selects these tests by name.
+// Index loops over stages mirror the formulas they implement.
+#[allow(clippy::needless_range_loop)]
 mod solver_rodas5p_tableau {
     use hydraulic_slewing_plate::solver::rodas5p::{
         self, classical_form, C_NODES, D, GAMMA, STAGES,
