@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release --bin servo-valve-fit            # compare the defaults
 //! cargo run --release --bin servo-valve-fit -- --fit   # fit, print the new constants as JSON
+//! cargo run --release --bin servo-valve-fit -- --r-leak 4e8 --fit   # refit with a bypass
 //! ```
 
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
@@ -14,11 +15,20 @@ use hydraulic_slewing_plate::fragments::servo_valve::{
 fn main() {
     let ctrl = ControllerParameters::default();
     let mut p = ServoValveParameters::default();
-    if std::env::args().any(|a| a == "--fit") {
+    let args: Vec<String> = std::env::args().collect();
+    // `--r-leak VALUE`: start from another cross-port resistance (N s/m^5), to study the
+    // trade-off between the bypass and the fit.
+    if let Some(i) = args.iter().position(|a| a == "--r-leak") {
+        p.r_leak = args
+            .get(i + 1)
+            .and_then(|v| v.parse().ok())
+            .expect("--r-leak needs a number");
+    }
+    if args.iter().any(|a| a == "--fit") {
         p = fit_to_g_est(&p, &ctrl).expect("fit");
         println!(
             "{}",
-            serde_json::json!({"d_m": p.d_m, "b_m": p.b_m, "k_phi": p.k_phi})
+            serde_json::json!({"r_leak": p.r_leak, "d_m": p.d_m, "b_m": p.b_m, "k_phi": p.k_phi})
         );
     }
     let lin = open_loop_linearization(&p, &ctrl).expect("linearisation");
