@@ -20,8 +20,7 @@ mod loader;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use hydraulic_slewing_plate::fmi2::Kind;
-use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
+use hydraulic_slewing_plate::model::variables::vr;
 use loader::Fmu;
 
 const STOP: f64 = 10.0;
@@ -34,40 +33,13 @@ struct Run {
     y_end: f64,
 }
 
-fn apply_set(inst: &loader::Instance<'_>, s: &str) -> Result<(), String> {
-    let (name, text) = s
-        .split_once('=')
-        .ok_or_else(|| format!("--set '{s}': expected NAME=VALUE"))?;
-    let (name, text) = (name.trim(), text.trim());
-    let var = VARIABLES
-        .iter()
-        .find(|v| v.name == name)
-        .ok_or_else(|| format!("--set: unknown variable '{name}'"))?;
-    let bad = || format!("--set {name}: '{text}' is not a {}", var.kind.type_name());
-    match var.kind {
-        Kind::Real { .. } => inst.set_real(var.value_reference, text.parse().map_err(|_| bad())?),
-        Kind::Integer { .. } => {
-            inst.set_integer(var.value_reference, text.parse().map_err(|_| bad())?)
-        }
-        Kind::Boolean { .. } => inst.set_boolean(
-            var.value_reference,
-            match text {
-                "true" | "1" => true,
-                "false" | "0" => false,
-                _ => return Err(bad()),
-            },
-        ),
-        Kind::String { .. } => Err(format!("--set {name}: String variables cannot be set")),
-    }
-}
-
 fn run_once(fmu: &Fmu, method: i32, sets: &[String]) -> Result<Run, String> {
     let inst = fmu.instantiate("bench-servo-valve")?;
     inst.setup(Some(RTOL), 0.0, STOP)?;
     inst.set_integer(vr::HYDRAULICS_MODEL, 2)?;
     inst.set_integer(vr::SOLVER_METHOD, method)?;
     for s in sets {
-        apply_set(&inst, s)?;
+        inst.set_from_text(s)?;
     }
     inst.set_real(vr::R, 0.1)?;
     inst.enter_initialization()?;
@@ -81,13 +53,7 @@ fn run_once(fmu: &Fmu, method: i32, sets: &[String]) -> Result<Run, String> {
         inst.do_step(t, STEP)?;
     }
     let wall = start.elapsed().as_secs_f64();
-    let stats = inst.get_integers(&[
-        vr::SOLVER_STEPS,
-        vr::SOLVER_REJECTED,
-        vr::SOLVER_F_EVALS,
-        vr::SOLVER_JAC_EVALS,
-        vr::SOLVER_LU,
-    ])?;
+    let stats = inst.solver_stats()?;
     let y_end = inst.get_reals(&[vr::Y_POT])?[0];
     inst.terminate()?;
     Ok(Run { wall, stats, y_end })

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use hydraulic_slewing_plate::fmi2::ffi::{
     Fmi2CallbackFunctions, Fmi2Component, Fmi2Status, FMI2_CO_SIMULATION, FMI2_FALSE, FMI2_TRUE,
 };
-use hydraulic_slewing_plate::model::variables::{GUID, MODEL_IDENTIFIER};
+use hydraulic_slewing_plate::fmi2::Kind;
+use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
 
 type Instantiate = unsafe extern "C" fn(
     *const c_char,
@@ -262,6 +263,41 @@ impl Instance<'_> {
             "fmi2SetBoolean",
         )
     }
+    /// Sets a variable from a command line's `NAME=VALUE`, by its type in the variable table.
+    pub fn set_from_text(&self, assignment: &str) -> Result<(), String> {
+        let (name, text) = assignment
+            .split_once('=')
+            .ok_or_else(|| format!("--set '{assignment}': expected NAME=VALUE"))?;
+        let (name, text) = (name.trim(), text.trim());
+        let var = VARIABLES
+            .iter()
+            .find(|v| v.name == name)
+            .ok_or_else(|| format!("--set: unknown variable '{name}'"))?;
+        let bad = || format!("--set {name}: '{text}' is not a {}", var.kind.type_name());
+        let vr = var.value_reference;
+        match var.kind {
+            Kind::Real { .. } => self.set_real(vr, text.parse().map_err(|_| bad())?),
+            Kind::Integer { .. } => self.set_integer(vr, text.parse().map_err(|_| bad())?),
+            Kind::Boolean { .. } => match text {
+                "true" | "1" => self.set_boolean(vr, true),
+                "false" | "0" => self.set_boolean(vr, false),
+                _ => Err(bad()),
+            },
+            Kind::String { .. } => Err(format!("--set {name}: String variables cannot be set")),
+        }
+    }
+
+    /// The solver statistics: steps, rejected, f evaluations, Jacobians, LU factorisations.
+    pub fn solver_stats(&self) -> Result<Vec<i32>, String> {
+        self.get_integers(&[
+            vr::SOLVER_STEPS,
+            vr::SOLVER_REJECTED,
+            vr::SOLVER_F_EVALS,
+            vr::SOLVER_JAC_EVALS,
+            vr::SOLVER_LU,
+        ])
+    }
+
     pub fn do_step(&self, t: f64, h: f64) -> Result<(), String> {
         check(
             unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) },

@@ -7,8 +7,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use hydraulic_slewing_plate::fmi2::Kind;
-use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
+use hydraulic_slewing_plate::model::variables::vr;
 
 use super::loader::Fmu;
 use super::package;
@@ -67,34 +66,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     let inst = fmu.instantiate("hsp-run")?;
     inst.setup(args.tolerance, 0.0, args.stop)?;
     for s in &args.set {
-        let (name, text) = s
-            .split_once('=')
-            .ok_or_else(|| format!("--set '{s}': expected NAME=VALUE"))?;
-        let var = VARIABLES
-            .iter()
-            .find(|v| v.name == name.trim())
-            .ok_or_else(|| format!("--set: unknown variable '{name}'"))?;
-        let text = text.trim();
-        let bad = || format!("--set {name}: '{text}' is not a {}", var.kind.type_name());
-        match var.kind {
-            Kind::Real { .. } => {
-                inst.set_real(var.value_reference, text.parse().map_err(|_| bad())?)?
-            }
-            Kind::Integer { .. } => {
-                inst.set_integer(var.value_reference, text.parse().map_err(|_| bad())?)?
-            }
-            Kind::Boolean { .. } => inst.set_boolean(
-                var.value_reference,
-                match text {
-                    "true" | "1" => true,
-                    "false" | "0" => false,
-                    _ => return Err(bad()),
-                },
-            )?,
-            Kind::String { .. } => {
-                return Err(format!("--set {name}: String variables cannot be set"))
-            }
-        }
+        inst.set_from_text(s)?;
     }
     inst.set_real(vr::R, args.r)?;
     inst.enter_initialization()?;
@@ -117,13 +89,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         rows.push((t_next, inst.get_reals(&vrs)?));
     }
     let seconds = wall.elapsed().as_secs_f64();
-    let stats = inst.get_integers(&[
-        vr::SOLVER_STEPS,
-        vr::SOLVER_REJECTED,
-        vr::SOLVER_F_EVALS,
-        vr::SOLVER_JAC_EVALS,
-        vr::SOLVER_LU,
-    ])?;
+    let stats = inst.solver_stats()?;
     inst.terminate()?;
 
     // CSV
