@@ -19,14 +19,10 @@ pub unsafe fn with_instance<M: FmuModel>(
     function: &str,
     f: impl FnOnce(&mut Instance<M>) -> Fmi2Status,
 ) -> Fmi2Status {
-    if c.is_null() {
+    let ptr = c as *mut Instance<M>;
+    if c.is_null() || !Instance::is_instance(ptr) {
         return Fmi2Status::Error;
     }
-    let inst = &mut *(c as *mut Instance<M>);
-    if !inst.is_valid() {
-        return Fmi2Status::Error;
-    }
-    let ptr = inst as *mut Instance<M>;
     match catch_unwind(AssertUnwindSafe(|| f(&mut *ptr))) {
         Ok(status) => status,
         Err(panic) => {
@@ -121,8 +117,8 @@ pub unsafe fn free_instance<M: FmuModel>(c: Fmi2Component) {
         return;
     }
     let _ = catch_unwind(AssertUnwindSafe(|| {
-        let inst = &mut *(c as *mut Instance<M>);
-        if inst.is_valid() {
+        if Instance::is_instance(c as *const Instance<M>) {
+            let inst = &mut *(c as *mut Instance<M>);
             inst.log_call(|| "fmi2FreeInstance()".into());
             inst.invalidate();
             drop(Box::from_raw(c as *mut Instance<M>));

@@ -194,7 +194,9 @@ impl<S: Serialize + for<'de> Deserialize<'de>> SavedState<S> {
     }
 }
 
-/// One FMU instance.
+/// One FMU instance. `repr(C)` puts the magic number first, so that a pointer can be checked
+/// before a reference to the whole instance is made.
+#[repr(C)]
 pub struct Instance<M: FmuModel> {
     magic: u64,
     pub logger: Logger,
@@ -254,9 +256,13 @@ impl<M: FmuModel> Instance<M> {
         })
     }
 
-    /// Whether this looks like an instance made by [`Instance::new`] and not yet freed.
-    pub fn is_valid(&self) -> bool {
-        self.magic == INSTANCE_MAGIC
+    /// Whether `ptr` looks like an instance made by [`Instance::new`] and not yet freed. Reads only
+    /// the leading magic number, without making a reference to the rest.
+    ///
+    /// # Safety
+    /// `ptr` is non-null and points to at least 8 readable bytes.
+    pub unsafe fn is_instance(ptr: *const Self) -> bool {
+        std::ptr::addr_of!((*ptr).magic).read_unaligned() == INSTANCE_MAGIC
     }
 
     /// Marks the instance freed so that a dangling use is caught while the memory is still ours.
