@@ -135,32 +135,7 @@ fn logged(needle: &str) -> bool {
 }
 
 fn instantiate(name: &std::ffi::CStr) -> Fmi2Component {
-    let callbacks = Fmi2CallbackFunctions {
-        // SAFETY: the layer passes its message as the format with no variadic arguments.
-        logger: Some(unsafe {
-            std::mem::transmute::<
-                unsafe extern "C" fn(
-                    *mut c_void,
-                    *const c_char,
-                    Fmi2Status,
-                    *const c_char,
-                    *const c_char,
-                ),
-                unsafe extern "C" fn(
-                    *mut c_void,
-                    *const c_char,
-                    Fmi2Status,
-                    *const c_char,
-                    *const c_char,
-                    ...
-                ),
-            >(logger)
-        }),
-        allocate_memory: None,
-        free_memory: None,
-        step_finished: None,
-        component_environment: std::ptr::null_mut(),
-    };
+    let callbacks = Fmi2CallbackFunctions::with_plain_logger(logger, std::ptr::null_mut());
     let c = unsafe {
         x::instantiate::<Decay>(
             name.as_ptr(),

@@ -75,24 +75,7 @@ unsafe extern "C" fn logger(
 }
 
 fn callbacks() -> Fmi2CallbackFunctions {
-    type Five =
-        unsafe extern "C" fn(*mut c_void, *const c_char, Fmi2Status, *const c_char, *const c_char);
-    type Variadic = unsafe extern "C" fn(
-        *mut c_void,
-        *const c_char,
-        Fmi2Status,
-        *const c_char,
-        *const c_char,
-        ...
-    );
-    Fmi2CallbackFunctions {
-        // SAFETY: see `logger`: the FMU passes no variadic arguments.
-        logger: Some(unsafe { std::mem::transmute::<Five, Variadic>(logger) }),
-        allocate_memory: None,
-        free_memory: None,
-        step_finished: None,
-        component_environment: std::ptr::null_mut(),
-    }
+    Fmi2CallbackFunctions::with_plain_logger(logger, std::ptr::null_mut())
 }
 
 fn ok(status: Fmi2Status, what: &str) {

@@ -68,3 +68,36 @@ pub struct Fmi2CallbackFunctions {
     pub step_finished: Fmi2StepFinished,
     pub component_environment: Fmi2ComponentEnvironment,
 }
+
+/// A logger for importing this crate's FMUs from Rust. FMI's logger is variadic, which stable Rust
+/// cannot define; this crate's FMUs pass each message as the format (with '%' doubled) and no
+/// further arguments, so a five-argument function receives all of it.
+pub type Fmi2PlainLogger =
+    unsafe extern "C" fn(Fmi2ComponentEnvironment, Fmi2String, Fmi2Status, Fmi2String, Fmi2String);
+
+impl Fmi2CallbackFunctions {
+    /// Callbacks with a [`Fmi2PlainLogger`], for calling this crate's FMUs from Rust (the
+    /// memory callbacks are unused: `canNotUseMemoryManagementFunctions` is true).
+    pub fn with_plain_logger(
+        logger: Fmi2PlainLogger,
+        environment: Fmi2ComponentEnvironment,
+    ) -> Self {
+        type Variadic = unsafe extern "C" fn(
+            Fmi2ComponentEnvironment,
+            Fmi2String,
+            Fmi2Status,
+            Fmi2String,
+            Fmi2String,
+            ...
+        );
+        Fmi2CallbackFunctions {
+            // SAFETY: the callee reads only the five fixed arguments, and the FMU passes no
+            // variadic ones (see `Logger::log` in `instance.rs`).
+            logger: Some(unsafe { std::mem::transmute::<Fmi2PlainLogger, Variadic>(logger) }),
+            allocate_memory: None,
+            free_memory: None,
+            step_finished: None,
+            component_environment: environment,
+        }
+    }
+}

@@ -131,32 +131,7 @@ impl Fmu {
 
     /// Instantiates a co-simulation slave.
     pub fn instantiate(&self, name: &str) -> Result<Instance<'_>, String> {
-        let callbacks = Fmi2CallbackFunctions {
-            // SAFETY: see `logger`: the FMU passes no variadic arguments.
-            logger: Some(unsafe {
-                std::mem::transmute::<
-                    unsafe extern "C" fn(
-                        *mut c_void,
-                        *const c_char,
-                        Fmi2Status,
-                        *const c_char,
-                        *const c_char,
-                    ),
-                    unsafe extern "C" fn(
-                        *mut c_void,
-                        *const c_char,
-                        Fmi2Status,
-                        *const c_char,
-                        *const c_char,
-                        ...
-                    ),
-                >(logger)
-            }),
-            allocate_memory: None,
-            free_memory: None,
-            step_finished: None,
-            component_environment: std::ptr::null_mut(),
-        };
+        let callbacks = Fmi2CallbackFunctions::with_plain_logger(logger, std::ptr::null_mut());
         let name = CString::new(name).map_err(|e| e.to_string())?;
         let guid = CString::new(GUID).map_err(|e| e.to_string())?;
         let resources = CString::new(format!("file://{}/resources", self.dir.display()))
