@@ -15,45 +15,12 @@ use std::sync::Barrier;
 use hydraulic_slewing_plate::fmi2::ffi::*;
 use hydraulic_slewing_plate::model::variables::{vr, GUID};
 
-// The `#[no_mangle]` entry points of the library, linked from its rlib: calling them through
-// these declarations goes through the real C ABI, as an importing tool does.
-#[allow(non_snake_case)]
-extern "C" {
-    fn fmi2Instantiate(
-        name: Fmi2String,
-        kind: Fmi2Type,
-        guid: Fmi2String,
-        res: Fmi2String,
-        f: *const Fmi2CallbackFunctions,
-        visible: Fmi2Boolean,
-        logging: Fmi2Boolean,
-    ) -> Fmi2Component;
-    fn fmi2FreeInstance(c: Fmi2Component);
-    fn fmi2SetupExperiment(
-        c: Fmi2Component,
-        tol_def: Fmi2Boolean,
-        tol: Fmi2Real,
-        start: Fmi2Real,
-        stop_def: Fmi2Boolean,
-        stop: Fmi2Real,
-    ) -> Fmi2Status;
-    fn fmi2EnterInitializationMode(c: Fmi2Component) -> Fmi2Status;
-    fn fmi2ExitInitializationMode(c: Fmi2Component) -> Fmi2Status;
-    fn fmi2Terminate(c: Fmi2Component) -> Fmi2Status;
-    fn fmi2GetReal(
-        c: Fmi2Component,
-        vr: *const Fmi2ValueReference,
-        n: usize,
-        v: *mut Fmi2Real,
-    ) -> Fmi2Status;
-    fn fmi2SetReal(
-        c: Fmi2Component,
-        vr: *const Fmi2ValueReference,
-        n: usize,
-        v: *const Fmi2Real,
-    ) -> Fmi2Status;
-    fn fmi2DoStep(c: Fmi2Component, t: Fmi2Real, h: Fmi2Real, no_prior: Fmi2Boolean) -> Fmi2Status;
-}
+// The library's exported `fmi2*` entry points (`#[no_mangle] extern "C"`), called as an importer
+// that has loaded the library would.
+use hydraulic_slewing_plate::fmi2_exports::{
+    fmi2DoStep, fmi2EnterInitializationMode, fmi2ExitInitializationMode, fmi2FreeInstance,
+    fmi2GetReal, fmi2Instantiate, fmi2SetReal, fmi2SetupExperiment, fmi2Terminate,
+};
 
 /// Communication step and number of steps: 0.2 s in 1 ms steps.
 const H: f64 = 1e-3;
