@@ -280,7 +280,8 @@ pub struct Linearization {
     pub u0: Vec<f64>,
 }
 
-fn matrix_json(m: &DMatrix<f64>) -> serde_json::Value {
+/// A matrix as a JSON array of rows.
+pub fn matrix_json(m: &DMatrix<f64>) -> serde_json::Value {
     serde_json::Value::Array(
         (0..m.nrows())
             .map(|i| serde_json::json!((0..m.ncols()).map(|j| m[(i, j)]).collect::<Vec<_>>()))

@@ -91,7 +91,7 @@ mod error;
 mod graph;
 mod validate;
 
-pub use compile::{CompiledModel, Linearization, PowerBalance};
+pub use compile::{matrix_json, CompiledModel, Linearization, PowerBalance};
 pub use element::{
     Bond, BondId, Element, ElementId, ElementKind, Law, LawFn, Modulus, NonlinearLaw, OutputDef,
     OutputSource, Quantity, SignalBlock, SignalId, SignalKind, SourceValue,

@@ -271,9 +271,5 @@ pub fn build_open_loop(loes: &LoesParameters, ctrl: &ControllerParameters) -> Bo
 }
 
 fn add_standard_outputs(g: &mut BondGraph, l: &LoesPorts, y_pot: SignalId) {
-    g.add_output("y_pot", y_pot);
-    g.add_output("theta_motor", l.theta);
-    g.add_output("omega_motor", l.omega);
-    g.add_output("p_load", l.p_load);
-    g.add_output("q_valve", l.q_valve);
+    super::add_loop_outputs(g, y_pot, l.theta, l.omega, l.p_load, l.q_valve);
 }

@@ -25,3 +25,22 @@ pub mod servo_valve;
 pub mod torque_motor;
 pub mod torsion_bar;
 pub mod vane_motor;
+
+use crate::bond_graph::{BondGraph, SignalId};
+
+/// Adds the position loop's outputs under the names of the FMU's variables: `y_pot`,
+/// `theta_motor`, `omega_motor`, `p_load`, `q_valve`. Either hydraulic model provides them.
+pub fn add_loop_outputs(
+    g: &mut BondGraph,
+    y_pot: SignalId,
+    theta: SignalId,
+    omega: SignalId,
+    p_load: SignalId,
+    q_valve: SignalId,
+) {
+    g.add_output("y_pot", y_pot);
+    g.add_output("theta_motor", theta);
+    g.add_output("omega_motor", omega);
+    g.add_output("p_load", p_load);
+    g.add_output("q_valve", q_valve);
+}

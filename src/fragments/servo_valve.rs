@@ -417,11 +417,7 @@ pub fn build_open_loop(
 }
 
 fn add_standard_outputs(g: &mut BondGraph, sv: &ServoValvePorts, y_pot: SignalId) {
-    g.add_output("y_pot", y_pot);
-    g.add_output("theta_motor", sv.theta);
-    g.add_output("omega_motor", sv.omega);
-    g.add_output("p_load", sv.p_load);
-    g.add_output("q_valve", sv.q_valve);
+    super::add_loop_outputs(g, y_pot, sv.theta, sv.omega, sv.p_load, sv.q_valve);
     add_valve_outputs(g, sv);
 }
 

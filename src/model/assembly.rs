@@ -8,7 +8,7 @@ use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmi2::Values;
 use crate::fragments::plate::modes::{natural_modes, NaturalMode};
 use crate::fragments::plate::{self, PlateModel};
-use crate::fragments::{controller, hub, loes, servo_valve, torsion_bar};
+use crate::fragments::{self, controller, hub, loes, servo_valve, torsion_bar};
 use crate::solver::OdeSystem;
 
 use super::parameters::{HydraulicsModel, Parameters};
@@ -62,11 +62,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
         bar.map(|b| b.node),
         [f1, f2],
     );
-    g.add_output("y_pot", y_pot);
-    g.add_output("theta_motor", theta);
-    g.add_output("omega_motor", omega);
-    g.add_output("p_load", p_load);
-    g.add_output("q_valve", q_valve);
+    fragments::add_loop_outputs(&mut g, y_pot, theta, omega, p_load, q_valve);
     let (theta_hub, omega_hub) = match &hub {
         Some(h) => (h.theta, h.omega),
         None => {

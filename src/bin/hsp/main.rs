@@ -16,6 +16,7 @@ mod run;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use hydraulic_slewing_plate::bond_graph::matrix_json;
 use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, plate_modes, Assembled};
 use hydraulic_slewing_plate::model::frf::frequency_response;
@@ -108,19 +109,14 @@ fn linearize(sets: &[String]) -> Result<String, String> {
     let system = Assembled::new(&parameters)?;
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
-    let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {
-        (0..m.nrows())
-            .map(|i| m.row(i).iter().copied().collect())
-            .collect()
-    };
     let json = serde_json::json!({
         "states": lin.state_names,
         "inputs": lin.input_names,
         "outputs": lin.output_names,
-        "A": rows(&lin.a),
-        "B": rows(&lin.b),
-        "C": rows(&lin.c),
-        "D": rows(&lin.d),
+        "A": matrix_json(&lin.a),
+        "B": matrix_json(&lin.b),
+        "C": matrix_json(&lin.c),
+        "D": matrix_json(&lin.d),
     });
     Ok(json.to_string())
 }
