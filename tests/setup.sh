@@ -6,7 +6,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if ! ls /usr/lib/llvm-*/lib/libclang*.so* >/dev/null 2>&1 && ! ldconfig -p 2>/dev/null | grep -q libclang; then
+# bindgen (through clang-sys) dlopens libclang.so, libclang-N.so or libclang.so.N; test for exactly
+# those names. libclang-cpp.so (the C++ interface, present on many machines) is a different library
+# and must not pass for it: that mistake once skipped the install on a fresh machine.
+have_libclang() {
+    find /usr/lib /usr/local/lib -maxdepth 4 -regextype posix-extended \
+        -regex '.*/libclang(-[0-9.]+)?\.so(\.[0-9]+)*' -print -quit 2>/dev/null | grep -q .
+}
+if ! have_libclang; then
     echo "setup: installing libclang-dev (apt)"
     SUDO=""
     [ "$(id -u)" -ne 0 ] && SUDO="sudo"
