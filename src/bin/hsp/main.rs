@@ -7,10 +7,12 @@
 //! - `hsp graph [--set ...]`: the model's bond graph as Graphviz DOT, with causal strokes.
 //! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14).
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
-//!   response of the linearised model and its resonance peaks.
+//!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
 
 mod loader;
 mod package;
+mod plot;
+mod progress;
 mod run;
 
 use std::process::ExitCode;
@@ -86,6 +88,9 @@ enum Command {
         /// Print JSON (frequencies, magnitude, phase, peaks) instead of the peak table
         #[arg(long)]
         json: bool,
+        /// Also draw the Bode plot into FILE.png and FILE.svg (a .png/.svg extension is dropped)
+        #[arg(long, value_name = "FILE")]
+        plot: Option<String>,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
     },
@@ -145,6 +150,12 @@ struct FrfArgs<'a> {
     to: f64,
     points: usize,
     json: bool,
+    plot: Option<&'a str>,
+}
+
+/// Whether an output is a plate signal (its FRF from r is the paper's Fig. 9b, Table 1).
+fn is_plate_signal(output: &str) -> bool {
+    output.starts_with("acc") || output.starts_with("w_tip") || output.starts_with("plate.")
 }
 
 fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
@@ -154,6 +165,22 @@ fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
     let h = frequency_response(&lin, a.input, a.output, a.from, a.to, a.points)?;
+    let mut written = Vec::new();
+    if let Some(file) = a.plot {
+        let reference = (a.input == "r" && is_plate_signal(a.output))
+            .then_some(("Table 1 of the paper (Fig. 9b)", &plot::TABLE1_FRF_HZ[..]));
+        written = plot::bode(
+            &plot::stem_of(file),
+            &plot::Bode {
+                title: format!("Frequency response {} -> {}", h.input, h.output),
+                f_hz: &h.f_hz,
+                magnitude: &h.magnitude,
+                phase_deg: &h.phase_deg,
+                peaks: &h.peaks,
+                reference,
+            },
+        )?;
+    }
     if a.json {
         return serde_json::to_string(&h).map_err(|e| e.to_string());
     }
@@ -167,6 +194,9 @@ fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
     );
     for (f, m) in &h.peaks {
         s.push_str(&format!("{f:10.4} {m:12.5e}\n"));
+    }
+    for p in written {
+        s.push_str(&format!("wrote {}\n", p.display()));
     }
     Ok(s.trim_end().to_string())
 }
@@ -188,6 +218,7 @@ fn main() -> ExitCode {
             to,
             points,
             json,
+            plot,
             set,
         } => frf(
             &FrfArgs {
@@ -197,6 +228,7 @@ fn main() -> ExitCode {
                 to,
                 points,
                 json,
+                plot: plot.as_deref(),
             },
             &set,
         )

@@ -38,6 +38,8 @@ pub struct RunArgs {
     /// Where to write the results
     #[arg(long, default_value = "results/default_experiment.csv")]
     csv: String,
+    #[command(flatten)]
+    plot: super::plot::PlotArgs,
 }
 
 /// The outputs recorded, with a display scale and unit for the summary.
@@ -77,6 +79,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     let mut rows: Vec<(f64, Vec<f64>)> = Vec::with_capacity(n + 1);
     rows.push((0.0, inst.get_reals(&vrs)?));
     let wall = Instant::now();
+    let mut progress = super::progress::Progress::new("hsp run");
     for i in 0..n {
         // Communication points computed from the index, not summed, so the grid does not drift.
         let t = i as f64 * args.step;
@@ -87,7 +90,9 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         };
         inst.do_step(t, t_next - t)?;
         rows.push((t_next, inst.get_reals(&vrs)?));
+        progress.update(t_next / args.stop);
     }
+    drop(progress);
     let seconds = wall.elapsed().as_secs_f64();
     let stats = inst.solver_stats()?;
     inst.terminate()?;
@@ -121,7 +126,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
             &csv_path.display().to_string()
         )
     );
-    Ok(())
+    super::plot::after_run(&csv_path, &args.plot)
 }
 
 /// Step-response figures of y_pot against the reference r.
