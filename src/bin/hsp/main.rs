@@ -9,6 +9,7 @@
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
 //!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
 
+mod docpage;
 mod loader;
 mod package;
 mod plot;
