@@ -21,7 +21,8 @@ if ! have_libclang; then
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libclang-dev >/dev/null
 fi
 
-if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest" 2>/dev/null; then
+command -v chromium >/dev/null || { echo "setup: installing chromium (apt), for tests/python/test_docs.py"; S=""; [ "$(id -u)" -ne 0 ] && S=sudo; $S apt-get update -qq && DEBIAN_FRONTEND=noninteractive $S apt-get install -y -qq chromium >/dev/null; }
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, distributed, matplotlib" 2>/dev/null; then
     echo "setup: creating the Python virtual environment .venv"
     python3 -m venv .venv
     .venv/bin/pip install --quiet --upgrade pip

@@ -1,0 +1,148 @@
+"""The FMU's documentation page: it holds the figures, every file it references is in the FMU, the
+figures are real pictures, the tables print numbers short, the FMU still validates, and a real
+browser (headless Chromium) renders it with every image loaded and no request leaving the
+machine."""
+
+import html
+import html.parser
+import json
+import pathlib
+import re
+import shutil
+import subprocess
+import zipfile
+
+import pytest
+from fmpy.validation import validate_fmu
+
+from figures import assert_png, assert_svg
+
+FIGURES = ["sketch.svg", "bond_graph.svg", "default_experiment.svg", "bode.svg"]
+
+
+class References(html.parser.HTMLParser):
+    """Every src and href of a page."""
+
+    def __init__(self):
+        super().__init__()
+        self.refs = []
+
+    def handle_starttag(self, tag, attrs):
+        for k, v in attrs:
+            if k in ("src", "href") and v is not None:
+                self.refs.append((tag, v))
+
+
+@pytest.fixture(scope="module")
+def archive(fmu_path):
+    with zipfile.ZipFile(fmu_path) as z:
+        return {name: z.read(name) for name in z.namelist()}
+
+
+@pytest.fixture(scope="module")
+def page(archive):
+    return archive["documentation/index.html"].decode()
+
+
+def test_the_page_holds_the_figures_and_every_reference_is_in_the_fmu(archive, page):
+    parser = References()
+    parser.feed(page)
+    refs = [v for _, v in parser.refs]
+    for figure in FIGURES:
+        assert figure in refs, figure
+    for ref in refs:
+        assert not re.match(r"^[a-z]+:", ref), f"external reference {ref}"
+        assert f"documentation/{ref}" in archive, f"{ref} is referenced but not in the FMU"
+    # Nothing loaded from elsewhere by CSS either.
+    assert "url(" not in page and "@import" not in page
+
+
+def test_figures_are_real_pictures(archive):
+    for name in FIGURES:
+        assert_svg(archive[f"documentation/{name}"], min_texts=5)
+    assert_png(archive["documentation/default_experiment.png"], min_width=800)
+    assert_png(archive["documentation/bode.png"], min_width=800)
+
+
+def test_bond_graph_shows_the_models_elements(archive):
+    svg = archive["documentation/bond_graph.svg"].decode()
+    # The elements of the hub and of the plate modes, named as in the model.
+    for name in ("hub.I", "plate.I[1]", "plate.C[1]", "plate.R[1]"):
+        assert name in svg, name
+
+
+def test_page_content(page, md):
+    # How to use, expected result with numbers, FMI interfaces, platforms, version, full reference.
+    for text in ("How to use", "fmpy", "Simulink", "Modelica", "Expected result", "Co-Simulation",
+                 "linux64", "FMU version", md.version, "Barbosa", "CONEM", "2002",
+                 "before initialisation only", "read-only"):
+        assert text in page, text
+    assert re.search(r"final\s+\S+\s*=\s*-?\d", page), "no numbers of the expected result"
+    # Every parameter and output is in a table, with its unit and display unit.
+    for v in md.modelVariables:
+        assert f"<code>{v.name}</code>" in page.replace("&quot;", '"'), v.name
+    assert "bar" in page and "deg" in page
+    # Values printed short: no long float reprs in the tables.
+    assert not re.search(r"\d\.\d{8,}", page), re.search(r".{40}\d\.\d{8,}.{20}", page)
+    # The reader has neither this repository nor its notes.
+    assert "README" not in page and "MODEL_NOTES" not in page
+
+
+def test_fmu_still_validates(fmu_path):
+    assert validate_fmu(fmu_path) == []
+
+
+CHECK = """<script>
+window.addEventListener("load", () => {
+  const images = [...document.images].map(i =>
+    i.getAttribute("src") + "=" + (i.complete && i.naturalWidth > 0 ? "ok" : "broken"));
+  document.body.setAttribute("data-check",
+    JSON.stringify({images, height: document.body.scrollHeight}));
+});
+</script></body>"""
+
+
+def page_requests(net_log):
+    """The URLs the page itself requested over the network, from Chromium's net log: requests
+    whose network isolation key is the page's (file://) site; the browser's own background
+    requests carry none. (Checked by hand: an <img> pointing at an https address shows up here.)"""
+    events = json.loads(pathlib.Path(net_log).read_text())["events"]
+    urls, from_page = {}, set()
+    for e in events:
+        p, source = e.get("params", {}), e.get("source", {}).get("id")
+        if "url" in p:
+            urls.setdefault(source, p["url"])
+        if "file://" in str(p.get("network_isolation_key", "")):
+            from_page.add(source)
+    return sorted({urls[s] for s in from_page if s in urls})
+
+
+def test_chromium_renders_every_image_and_requests_nothing_outside(archive, tmp_path):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    assert chromium, "headless Chromium is needed (tests/setup.sh installs Debian's chromium)"
+    doc = tmp_path / "documentation"
+    doc.mkdir()
+    for name, data in archive.items():
+        if name.startswith("documentation/"):
+            (tmp_path / name).write_bytes(data)
+    page = (doc / "index.html").read_text()
+    assert page.count("</body>") == 1
+    (doc / "check.html").write_text(page.replace("</body>", CHECK))
+    flags = [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+             "--disable-component-update", "--disable-sync", "--no-first-run",
+             f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=10000"]
+    net_log = tmp_path / "net.json"
+    dom = subprocess.run(flags + [f"--log-net-log={net_log}", "--dump-dom", (doc / "check.html").as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    m = re.search(r'data-check="([^"]*)"', dom)
+    assert m, dom[-2000:]
+    check = json.loads(html.unescape(m.group(1)))
+    assert sorted(i.split("=")[0] for i in check["images"]) == sorted(FIGURES), check["images"]
+    assert all(i.endswith("=ok") for i in check["images"]), check["images"]
+    assert page_requests(net_log) == []
+    assert check["height"] > 3000, check["height"]  # figures and tables laid out, not an empty page
+    # And a screenshot of the top of the page: a real picture.
+    shot = tmp_path / "page.png"
+    subprocess.run(flags + [f"--screenshot={shot}", "--window-size=1200,2400",
+                            (doc / "index.html").as_uri()], capture_output=True, timeout=120)
+    assert_png(shot.read_bytes(), min_width=1200, min_height=2400, min_bytes=50_000)
