@@ -239,7 +239,7 @@ fn paper_printed_open_loop_poles() {
     let e = sorted_eigs(&m.linearize(&[0.0; 3], &[0.0]).a);
     println!("paper-printed open-loop poles: {e:?}");
     // s^2 + s/(R7 C3) + D_m^2/(C3 I_b) = s^2 + 498.4 s + 48945: about -364 and -135
-    // (MODEL_NOTES section 2 item 7)
+    // (docs/model-notes.md, item 7)
     assert!((e[0].re + 364.0).abs() < 1.0 && (e[1].re + 135.0).abs() < 1.0);
 }
 

@@ -10,7 +10,7 @@ use crate::bond_graph::{BondGraph, SignalId};
 
 /// Potentiometer full-scale voltage assumed for the default `k_POT` \[V\].
 pub const POT_FULL_SCALE_VOLTS: f64 = 10.0;
-/// Potentiometer angle span for that voltage \[deg\] (MODEL_NOTES section 2 item 7).
+/// Potentiometer angle span for that voltage \[deg\] (docs/model-notes.md, item 7).
 pub const POT_SPAN_DEG: f64 = 150.0;
 
 /// Controller gains.
@@ -21,7 +21,7 @@ pub struct ControllerParameters {
     /// Power amplifier gain `A2` \[V/V\] (paper: 10).
     pub a2: f64,
     /// Potentiometer gain `k_POT` \[V/rad\]. The paper does not give it; default 10 V over 150 deg
-    /// = 3.8197 V/rad (MODEL_NOTES section 2 item 7).
+    /// = 3.8197 V/rad (docs/model-notes.md, item 7).
     pub k_pot: f64,
 }
 

@@ -7,7 +7,7 @@
 //! - [`assembly`]: which fragments make up the model for a parameter set, and the resulting
 //!   [`OdeSystem`](crate::solver::OdeSystem).
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
-//! - [`HydraulicSlewingPlate`]: the [`FmuModel`](crate::fmi2::FmuModel) the C ABI exports.
+//! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
 pub mod assembly;
 pub mod frf;

@@ -92,7 +92,7 @@ def slave_factory(md, unzipped):
             pass
 
 
-# The LOES default parameters (MODEL_NOTES.md section 2 item 7): the printed C3 and I_b, the rest
+# The LOES default parameters (docs/model-notes.md, item 7): the printed C3 and I_b, the rest
 # fitted to G_est(s) = 2.25e6 / (s (s + 65) (s + 753)) of eq. 2.
 C3, I_B, A1, A2 = 5.28e-11, 0.0025, 2.0, 10.0
 R7 = 1 / (818 * C3)

@@ -9,6 +9,7 @@
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
 //!   response of the linearised model and its resonance peaks.
 
+mod binaries;
 mod loader;
 mod package;
 mod run;
@@ -41,6 +42,10 @@ enum Command {
         /// Where to write the FMU
         #[arg(long, default_value = package::DEFAULT_FMU)]
         output: String,
+        /// Fail unless the glibc-2.17 Linux binary and the Windows binary are both built (without
+        /// it, a missing toolchain gives a warning and a binary for this machine only)
+        #[arg(long)]
+        require_portable: bool,
     },
     /// Run the default experiment through the FMU's C ABI and summarise it
     Run(run::RunArgs),
@@ -71,7 +76,7 @@ enum Command {
         /// Input name (r, F1, F2)
         #[arg(long, default_value = "r")]
         input: String,
-        /// Output name (acc_tip, w_tip, acc[k], theta_hub, y_pot, ...)
+        /// Output name (acc_tip, w_tip, `acc[k]`, theta_hub, y_pot, ...)
         #[arg(long, default_value = "acc_tip")]
         output: String,
         /// Lowest frequency, Hz
@@ -174,7 +179,10 @@ fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Package { output } => package::package(&output).map(|path| {
+        Command::Package {
+            output,
+            require_portable,
+        } => package::package_with(&output, require_portable).map(|path| {
             println!("wrote {path}");
         }),
         Command::Run(args) => run::run(&args),
