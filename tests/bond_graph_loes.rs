@@ -111,14 +111,14 @@ fn check_eq1(p: &LoesParameters, c: &ControllerParameters) {
 
 #[test]
 fn loes_graph_gives_eq1_default() {
-    check_eq1(&LoesParameters::default(), &ControllerParameters::default());
+    check_eq1(&LoesParameters::default(), &ControllerParameters::linear());
 }
 
 #[test]
 fn loes_graph_gives_eq1_paper_printed() {
     check_eq1(
         &LoesParameters::paper_printed(),
-        &ControllerParameters::default(),
+        &ControllerParameters::linear(),
     );
 }
 
@@ -145,6 +145,7 @@ fn loes_graph_gives_eq1_random_parameters() {
             a1: f(2.0),
             a2: f(10.0),
             k_pot: f(3.8),
+            ..ControllerParameters::linear()
         };
         check_eq1(&p, &c);
     }
@@ -162,7 +163,7 @@ fn sorted_eigs(a: &DMatrix<f64>) -> Vec<Complex<f64>> {
 
 #[test]
 fn default_open_loop_is_g_est() {
-    let m = loes::build_open_loop(&LoesParameters::default(), &ControllerParameters::default())
+    let m = loes::build_open_loop(&LoesParameters::default(), &ControllerParameters::linear())
         .compile()
         .unwrap();
     let lin = m.linearize(&[0.0; 3], &[0.0]);
@@ -207,7 +208,7 @@ fn default_open_loop_is_g_est() {
 
 #[test]
 fn default_closed_loop_poles() {
-    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::linear());
     let lin = m.linearize(&[0.0; 3], &[0.0]);
     let e = sorted_eigs(&lin.a);
     println!("closed-loop poles: {e:?}");
@@ -232,21 +233,21 @@ fn default_closed_loop_poles() {
 fn paper_printed_open_loop_poles() {
     let m = loes::build_open_loop(
         &LoesParameters::paper_printed(),
-        &ControllerParameters::default(),
+        &ControllerParameters::linear(),
     )
     .compile()
     .unwrap();
     let e = sorted_eigs(&m.linearize(&[0.0; 3], &[0.0]).a);
     println!("paper-printed open-loop poles: {e:?}");
     // s^2 + s/(R7 C3) + D_m^2/(C3 I_b) = s^2 + 498.4 s + 48945: about -364 and -135
-    // (MODEL_NOTES section 2 item 7)
+    // (docs/model-notes.md, item 7)
     assert!((e[0].re + 364.0).abs() < 1.0 && (e[1].re + 135.0).abs() < 1.0);
 }
 
 #[test]
 fn default_parameters_match_model_notes() {
     let p = LoesParameters::default();
-    let c = ControllerParameters::default();
+    let c = ControllerParameters::linear();
     assert!((p.r7 - 2.315e7).abs() < 1e-3 * 2.315e7, "{}", p.r7);
     assert!((p.d_m - 8.038e-5).abs() < 1e-3 * 8.038e-5, "{}", p.d_m);
     assert!((p.k_sv - 4.84e-5).abs() < 1e-3 * 4.84e-5, "{}", p.k_sv);
@@ -261,7 +262,7 @@ fn default_parameters_match_model_notes() {
 
 #[test]
 fn loes_power_balance_and_jacobian() {
-    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::linear());
     let mut s: u64 = 0xDEAD_BEEF_CAFE_F00D;
     let mut rnd = move || {
         s ^= s << 13;
@@ -309,7 +310,7 @@ fn loes_rotor_junction_accepts_a_torsion_bar_and_hub() {
     let c = controller::add_controller(
         &mut g,
         "controller",
-        &ControllerParameters::default(),
+        &ControllerParameters::linear(),
         r,
         l.theta,
     );
@@ -344,7 +345,7 @@ fn loes_rotor_junction_accepts_a_torsion_bar_and_hub() {
 
 #[test]
 fn loes_dot_export() {
-    let g = loes::build_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let g = loes::build_loop(&LoesParameters::default(), &ControllerParameters::linear());
     let dot = g.to_dot();
     for n in [
         "C: loes.C3",
@@ -362,7 +363,7 @@ fn loes_dot_export() {
 
 #[test]
 fn loes_plan_listing_reads_like_eq1() {
-    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::default());
+    let m = compile_loop(&LoesParameters::default(), &ControllerParameters::linear());
     let text = m.plan_listing();
     println!("{text}");
     for line in [
@@ -381,7 +382,7 @@ fn loes_bad_parameter_is_named() {
         c3: -1e-11,
         ..LoesParameters::default()
     };
-    let err = loes::build_loop(&p, &ControllerParameters::default())
+    let err = loes::build_loop(&p, &ControllerParameters::linear())
         .compile()
         .unwrap_err();
     assert_eq!(
@@ -392,7 +393,7 @@ fn loes_bad_parameter_is_named() {
         i_b: f64::INFINITY,
         ..LoesParameters::default()
     };
-    let err = loes::build_loop(&p, &ControllerParameters::default())
+    let err = loes::build_loop(&p, &ControllerParameters::linear())
         .compile()
         .unwrap_err();
     assert_eq!(

@@ -46,17 +46,17 @@ fn coupled_paper_frf_peaks_against_table_1() {
     for (got, want) in w.iter().zip(&TABLE1_FRF[..3]) {
         assert!((got - want).abs() <= 0.05 * want, "{got} vs {want}");
     }
-    // Not reproduced (MODEL_NOTES item 9): the (n,3) peaks 66, 73, 84 Hz. In eqs. 18-21 the hub
-    // torque cannot excite m >= 3 (int psi_m dy = 0), so this FRF has no peak above 40 Hz.
+    // Not reproduced (docs/model-notes.md, item 9): the (n,3) peaks 66, 73, 84 Hz. In eqs. 18-21
+    // the hub torque cannot excite m >= 3 (int psi_m dy = 0), so this FRF has no peak above 40 Hz.
     assert!(acc.iter().all(|&f| f < 40.0));
 }
 
 #[test]
 fn locked_hub_frf_from_f1_against_the_experiment() {
     // Fig. 10: hub locked, shaker; the experiment's peaks 5.0, 19.0, 33.0 Hz. A clamped root
-    // puts the bending modes at 1.12, 7.02, 19.67 Hz (both formulations, MODEL_NOTES item 10):
-    // only 19.0 has a neighbour (19.7). Reported, not asserted against the experiment; the
-    // clamped-plate values are asserted.
+    // puts the bending modes at 1.12, 7.02, 19.67 Hz (both formulations, docs/model-notes.md,
+    // item 10): only 19.0 has a neighbour (19.7). Reported, not asserted against the experiment;
+    // the clamped-plate values are asserted.
     let locked = [("plate.root", "2")];
     let p = peaks(&locked, "F1", "acc[11]");
     println!("paper, hub locked, F1 -> acc[11]: {p:.3?} (experiment 5.0, 19.0, 33.0)");

@@ -1,4 +1,5 @@
-//! Natural frequencies of the plate models (eq. 14) against eq. 16 and MODEL_NOTES section 2.
+//! Natural frequencies of the plate models (eq. 14) against eq. 16 and docs/model-notes.md,
+//! items 1, 2 and 10.
 
 use hydraulic_slewing_plate::fragments::plate::beam_functions::{
     product_integral, BeamFunction, BeamKind,
@@ -17,9 +18,9 @@ fn freq_of(p: &PlateParameters, label: (usize, usize)) -> f64 {
 
 #[test]
 fn paper_formulation_reproduces_eq16() {
-    // Eq. 16 with nu = 0.3, b = 0.4685 m, 3 x 5 modes (MODEL_NOTES item 1). Tolerance 0.1 %
-    // (the issue's); the paper prints 3-4 digits and the values below agree to every one of
-    // them. The paper's 56.8 Hz is not an eq. 21 frequency (MODEL_NOTES item 2) and is not
+    // Eq. 16 with nu = 0.3, b = 0.4685 m, 3 x 5 modes (docs/model-notes.md, item 1). Tolerance
+    // 0.1 % (the issue's); the paper prints 3-4 digits and the values below agree to every one of
+    // them. The paper's 56.8 Hz is not an eq. 21 frequency (docs/model-notes.md, item 2) and is not
     // asserted here.
     let p = PlateParameters::default();
     let model = PlateModel::new(&p).unwrap();

@@ -1,10 +1,21 @@
 #!/usr/bin/env bash
-# Installs what the tests need on a fresh Debian machine: libclang (for the `fmi` crate's
-# bindings, a dev-dependency) and a Python virtual environment in .venv (ignored by git) with
-# fmpy, libcosimpy, fmu_manipulation_toolbox, scipy and pytest. Safe to run again: it only
-# installs what is missing.
+# Installs what the build and the tests need on a fresh Debian machine that has a Rust toolchain
+# (rustup) and Python 3. Safe to run again: it tests for the exact file each consumer loads or runs
+# and installs only what is missing.
+#
+#   apt      libclang-dev          libclang.so, which bindgen dlopens (the `fmi` dev-dependency)
+#            gcc-mingw-w64-x86-64  x86_64-w64-mingw32-gcc, the linker of binaries/win64 and the
+#                                  compiler of the Wine test's driver (tests/portable/)
+#            wine, wine64          /usr/bin/wine and /usr/lib/wine/wine64: run that test's driver
+#            binutils              objdump, which reads the Linux binary's glibc symbol versions
+#            python3-venv          only where python3 lacks the venv/ensurepip modules
+#   rustup   x86_64-pc-windows-gnu  the Rust standard library for binaries/win64
+#   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, and
+#            the build tools ziglang and cargo-zigbuild (binaries/linux64 against glibc 2.17)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+WINDOWS_TARGET=x86_64-pc-windows-gnu
 
 # bindgen (through clang-sys) dlopens libclang.so, libclang-N.so or libclang.so.N; test for exactly
 # those names. libclang-cpp.so (the C++ interface, present on many machines) is a different library
@@ -13,18 +24,44 @@ have_libclang() {
     find /usr/lib /usr/local/lib -maxdepth 4 -regextype posix-extended \
         -regex '.*/libclang(-[0-9.]+)?\.so(\.[0-9]+)*' -print -quit 2>/dev/null | grep -q .
 }
-if ! have_libclang; then
-    echo "setup: installing libclang-dev (apt)"
+have() { command -v "$1" >/dev/null 2>&1; }
+
+apt_packages=()
+have_libclang || apt_packages+=(libclang-dev)
+have x86_64-w64-mingw32-gcc || apt_packages+=(gcc-mingw-w64-x86-64)
+{ have wine && [ -x /usr/lib/wine/wine64 ]; } || apt_packages+=(wine wine64)
+have objdump || apt_packages+=(binutils)
+python3 -c "import venv, ensurepip" 2>/dev/null || apt_packages+=(python3-venv)
+have chromium || apt_packages+=(chromium)  # headless browser of tests/python/test_docs.py
+if [ "${#apt_packages[@]}" -gt 0 ]; then
+    echo "setup: installing ${apt_packages[*]} (apt)"
     SUDO=""
     [ "$(id -u)" -ne 0 ] && SUDO="sudo"
     $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libclang-dev >/dev/null
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+        "${apt_packages[@]}" >/dev/null
+fi
+have_libclang || { echo "setup: libclang.so still missing after installing libclang-dev" >&2; exit 1; }
+
+# The Windows standard library, where rustc looks for it (the same test as `hsp package`).
+if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$WINDOWS_TARGET/lib" ]; then
+    if ! have rustup; then
+        echo "setup: the Rust target $WINDOWS_TARGET is missing and rustup is not installed" >&2
+        exit 1
+    fi
+    echo "setup: adding the Rust target $WINDOWS_TARGET (rustup)"
+    rustup target add "$WINDOWS_TARGET"
 fi
 
-command -v chromium >/dev/null || { echo "setup: installing chromium (apt), for tests/python/test_docs.py"; S=""; [ "$(id -u)" -ne 0 ] && S=sudo; $S apt-get update -qq && DEBIAN_FRONTEND=noninteractive $S apt-get install -y -qq chromium >/dev/null; }
-if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, distributed, matplotlib" 2>/dev/null; then
-    echo "setup: creating the Python virtual environment .venv"
-    python3 -m venv .venv
+venv_complete() {
+    [ -x .venv/bin/python ] && [ -x .venv/bin/cargo-zigbuild ] &&
+        .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, distributed, matplotlib" 2>/dev/null &&
+        .venv/bin/python -m ziglang version >/dev/null 2>&1
+}
+if ! venv_complete; then
+    echo "setup: installing the Python virtual environment .venv (tests/requirements.txt)"
+    [ -x .venv/bin/python ] || python3 -m venv .venv
     .venv/bin/pip install --quiet --upgrade pip
     .venv/bin/pip install --quiet -r tests/requirements.txt
+    venv_complete || { echo "setup: .venv is still incomplete after pip install" >&2; exit 1; }
 fi

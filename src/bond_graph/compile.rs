@@ -1158,6 +1158,20 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
             SignalKind::Port(src) => {
                 b.eq(dst, Expr::Lin(vec![(1.0, sig_slot[src.unwrap().0])]), name)
             }
+            SignalKind::Function(law, input) => {
+                let law = b.law(law);
+                b.eq(
+                    dst,
+                    Expr::Law {
+                        law,
+                        arg: sig_slot[input.unwrap().0],
+                        ki: 1.0,
+                        ko: 1.0,
+                        modulator: None,
+                    },
+                    name,
+                )
+            }
         }
     }
 

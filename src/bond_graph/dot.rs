@@ -66,6 +66,7 @@ impl BondGraph {
             let extra = match &sg.kind {
                 SignalKind::Gain(k, _) => format!("\\n{k:.4e}"),
                 SignalKind::Constant(c) => format!("\\n{c:.4e}"),
+                SignalKind::Function(law, _) => format!("\\n{}", esc(&law.label)),
                 _ => String::new(),
             };
             let _ = writeln!(
@@ -100,6 +101,7 @@ impl BondGraph {
             let to = format!("s{i}");
             match &sg.kind {
                 SignalKind::Gain(_, Some(x))
+                | SignalKind::Function(_, Some(x))
                 | SignalKind::Integrator(Some(x))
                 | SignalKind::Port(Some(x)) => edge(&mut s, format!("s{}", x.0), to),
                 SignalKind::Sum(t) => {

@@ -257,6 +257,9 @@ pub enum SignalKind {
     Product(SignalId, SignalId),
     /// `dy/dt = u`; `y` is a state of the model.
     Integrator(Option<SignalId>),
+    /// `y = phi(u)`, a static nonlinear function (e.g. an amplifier's smooth output limit); the
+    /// law's derivative enters the Jacobian.
+    Function(NonlinearLaw, Option<SignalId>),
     /// A sensor of an effort, a flow or a state.
     Sensor(Quantity),
     /// A named pass-through whose source is connected later (forward reference between
@@ -274,6 +277,7 @@ impl SignalKind {
             SignalKind::Sum(_) => "sum",
             SignalKind::Product(..) => "product",
             SignalKind::Integrator(_) => "integrator",
+            SignalKind::Function(..) => "function",
             SignalKind::Sensor(Quantity::Effort(_)) => "De",
             SignalKind::Sensor(Quantity::Flow(_)) => "Df",
             SignalKind::Sensor(Quantity::State(..)) => "Dx",

@@ -290,6 +290,17 @@ impl BondGraph {
         self.push_signal(name, SignalKind::Product(a, b))
     }
 
+    /// `y = phi(u)`: a static nonlinear function with its exact derivative (`law` returns
+    /// `(phi, dphi/du)`, see [`NonlinearLaw::new`]), e.g. the smooth output limit of an amplifier.
+    pub fn add_function(
+        &mut self,
+        name: impl Into<String>,
+        law: NonlinearLaw,
+        input: SignalId,
+    ) -> SignalId {
+        self.push_signal(name, SignalKind::Function(law, Some(input)))
+    }
+
     /// `dy/dt = u`; `y` becomes a state named `<name>` (e.g. the rotor angle "loes.theta_a", the
     /// integral of the rotor speed).
     pub fn add_integrator(&mut self, name: impl Into<String>, input: SignalId) -> SignalId {

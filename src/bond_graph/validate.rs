@@ -271,6 +271,11 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
                     return Err(structure(name, "integrator input is not connected"));
                 }
             }
+            SignalKind::Function(_, input) => {
+                if input.is_none() {
+                    return Err(structure(name, "function input is not connected"));
+                }
+            }
             SignalKind::Sensor(q) => check_quantity(name, q)?,
             SignalKind::Port(src) => {
                 if src.is_none() {

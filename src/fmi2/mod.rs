@@ -3,7 +3,7 @@
 //! This layer knows FMI and nothing of physics: the state machine of the standard (section 4.2.4
 //! of FMI 2.0.4), argument checks, logging with categories, value-reference dispatch, FMU states
 //! and their serialisation, and `catch_unwind` around every entry point so that no panic crosses
-//! the C boundary. A model plugs in by implementing [`FmuModel`]; [`export_fmi2_cosimulation!`]
+//! the C boundary. A model plugs in by implementing [`FmuModel`]; [`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation)
 //! then emits the `fmi2*` symbols for it. The same shape as the Modelica Reference FMUs: a generic
 //! FMI layer over a small per-model file.
 //!

@@ -1,19 +1,40 @@
-//! The paper's analog position controller (section 2 of the paper, eq. 1).
+//! The paper's analog position controller (section 2 of the paper, eq. 1), the power amplifier's
+//! output limit, and the external drive of the valve coil.
 //!
 //! A potentiometer on the actuator shaft gives `y_POT = k_POT theta_a` (volts); an error
 //! amplifier of gain `A1 = 2` forms `A1 (r - y_POT)`, and a power amplifier of gain `A2 = 10`
 //! drives the servo-valve coil with `e_in = A2 A1 (r - y_POT)`. The paper calls the power
 //! amplifier inverting; eq. 1 has the product `k_sv A1 A2` with a positive sign, i.e. the
 //! inversion is compensated by the valve's polarity, so both gains are positive here.
+//!
+//! **Output limit** ([`AmplifierLimit`]). Eq. 1 is linear; a real power amplifier cannot drive
+//! the coil beyond its supply rails. With `saturation` on, the amplifier output follows the
+//! command exactly up to [`LINEAR_FRACTION`] of the rail `e_max` and then bends smoothly
+//! (a `tanh` arc, continuous in value, slope and curvature) towards `+-e_max`, so the Jacobian
+//! stays finite and the stiff integrator sees no kink. Default rail 12 V: an analog servo
+//! amplifier on the usual +-15 V supply whose power stage (an op-amp output stage driving a coil
+//! of some tens to hundreds of ohms) swings to within about 3 V of its rails. The paper's own loop
+//! saturates early: a 1 V reference step asks for 20 V.
+//!
+//! **External control** (`external`). The analog controller is replaced by the input `e_in`
+//! \[V\], the coil drive voltage a user's own controller computes; it passes through the same
+//! output limit (turn `saturation` off to drive the coil without one). The potentiometer stays,
+//! so `y_POT` remains an output for the user's loop.
 
-use crate::bond_graph::{BondGraph, SignalId};
+use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId};
 
 /// Potentiometer full-scale voltage assumed for the default `k_POT` \[V\].
 pub const POT_FULL_SCALE_VOLTS: f64 = 10.0;
-/// Potentiometer angle span for that voltage \[deg\] (MODEL_NOTES section 2 item 7).
+/// Potentiometer angle span for that voltage \[deg\] (10 V over 150 deg: the paper gives no
+/// `k_POT`; docs/model-notes.md, item 7).
 pub const POT_SPAN_DEG: f64 = 150.0;
+/// Default output limit of the power amplifier \[V\]: a +-15 V supply less about 3 V of headroom
+/// of the output stage.
+pub const DEFAULT_E_MAX: f64 = 12.0;
+/// Fraction of `e_max` up to which the limited amplifier is exactly linear.
+pub const LINEAR_FRACTION: f64 = 0.8;
 
-/// Controller gains.
+/// Controller gains, the amplifier's output limit and the choice of drive.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ControllerParameters {
     /// Error amplifier gain `A1` \[V/V\] (paper: 2).
@@ -21,16 +42,102 @@ pub struct ControllerParameters {
     /// Power amplifier gain `A2` \[V/V\] (paper: 10).
     pub a2: f64,
     /// Potentiometer gain `k_POT` \[V/rad\]. The paper does not give it; default 10 V over 150 deg
-    /// = 3.8197 V/rad (MODEL_NOTES section 2 item 7).
+    /// = 3.8197 V/rad (docs/model-notes.md, item 7).
     pub k_pot: f64,
+    /// Output limit of the power amplifier \[V\] (`controller.e_max`), used when `saturation`.
+    pub e_max: f64,
+    /// Whether the power amplifier's output saturates at `+-e_max` (`controller.saturation`);
+    /// false is the paper's linear eq. 1.
+    pub saturation: bool,
+    /// Whether the input `e_in` drives the coil in place of the analog controller
+    /// (`controller.external`).
+    pub external: bool,
 }
 
 impl Default for ControllerParameters {
+    /// The paper's gains with the output limit on and the analog controller in the loop (the
+    /// FMU's defaults).
     fn default() -> Self {
         ControllerParameters {
             a1: 2.0,
             a2: 10.0,
             k_pot: POT_FULL_SCALE_VOLTS / POT_SPAN_DEG.to_radians(),
+            e_max: DEFAULT_E_MAX,
+            saturation: true,
+            external: false,
+        }
+    }
+}
+
+impl ControllerParameters {
+    /// The paper's controller exactly as in eq. 1: the default gains, a linear amplifier.
+    pub fn linear() -> Self {
+        ControllerParameters {
+            saturation: false,
+            ..Self::default()
+        }
+    }
+
+    /// The amplifier's output law.
+    pub fn limit(&self) -> AmplifierLimit {
+        if self.saturation {
+            AmplifierLimit::Saturating { e_max: self.e_max }
+        } else {
+            AmplifierLimit::Linear
+        }
+    }
+
+    /// Checks the gains and the rail; the error names the FMU variable.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [("A1", self.a1), ("A2", self.a2), ("k_pot", self.k_pot)] {
+            if !v.is_finite() {
+                return Err(format!("controller.{name}: must be finite, got {v}"));
+            }
+        }
+        if !(self.e_max.is_finite() && self.e_max > 0.0) {
+            return Err(format!(
+                "controller.e_max: the amplifier's output limit must be positive, got {} V",
+                self.e_max
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The power amplifier's output as a function of its demanded output `u` \[V\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AmplifierLimit {
+    /// `e = u` (eq. 1).
+    Linear,
+    /// `e = u` for `|u| <= LINEAR_FRACTION e_max`; beyond, with `k = LINEAR_FRACTION e_max` and
+    /// `w = e_max - k`, `e = sign(u) (k + w tanh((|u| - k) / w))`: odd, monotonic, bounded by
+    /// `e_max`, twice continuously differentiable.
+    Saturating { e_max: f64 },
+}
+
+impl AmplifierLimit {
+    /// `(e, de/du)`.
+    pub fn eval(&self, u: f64) -> (f64, f64) {
+        match *self {
+            AmplifierLimit::Linear => (u, 1.0),
+            AmplifierLimit::Saturating { e_max } => {
+                let k = LINEAR_FRACTION * e_max;
+                let a = u.abs();
+                if a <= k {
+                    return (u, 1.0);
+                }
+                let w = e_max - k;
+                let t = ((a - k) / w).tanh();
+                ((k + w * t).copysign(u), 1.0 - t * t)
+            }
+        }
+    }
+
+    /// Whether a demanded output `u` is beyond the linear range (the amplifier is limiting).
+    pub fn is_limiting(&self, u: f64) -> bool {
+        match *self {
+            AmplifierLimit::Linear => false,
+            AmplifierLimit::Saturating { e_max } => u.abs() > LINEAR_FRACTION * e_max,
         }
     }
 }
@@ -44,7 +151,8 @@ pub struct ControllerPorts {
     pub error: SignalId,
     /// Error amplifier output `A1 (r - y_POT)` \[V\] (`<prefix>.A1`).
     pub amplified_error: SignalId,
-    /// Power amplifier output (valve command) `e_in = A2 A1 (r - y_POT)` \[V\] (`<prefix>.A2`).
+    /// Power amplifier output (valve command, the coil voltage `e_in` of eq. 1), after the output
+    /// limit \[V\] (`<prefix>.A2`, or `<prefix>.e_out` when limited).
     pub command: SignalId,
 }
 
@@ -58,7 +166,28 @@ pub fn add_potentiometer(
     g.add_gain(format!("{prefix}.k_pot"), p.k_pot, angle)
 }
 
-/// The two amplifiers: returns `(A1 error, A2 A1 error)`, signals `<prefix>.A1`, `<prefix>.A2`.
+/// The power amplifier's output limit on a demanded voltage `u`: `u` itself when linear,
+/// otherwise the signal `<prefix>.e_out`.
+pub fn add_output_limit(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &ControllerParameters,
+    u: SignalId,
+) -> SignalId {
+    match p.limit() {
+        AmplifierLimit::Linear => u,
+        limit @ AmplifierLimit::Saturating { e_max } => g.add_function(
+            format!("{prefix}.e_out"),
+            NonlinearLaw::new(format!("amplifier limit +-{e_max} V"), move |u| {
+                limit.eval(u)
+            }),
+            u,
+        ),
+    }
+}
+
+/// The two amplifiers: returns `(A1 error, power amplifier output)`, signals `<prefix>.A1`,
+/// `<prefix>.A2` (and `<prefix>.e_out`, the limited output, when `saturation`).
 pub fn add_amplifiers(
     g: &mut BondGraph,
     prefix: &str,
@@ -67,7 +196,7 @@ pub fn add_amplifiers(
 ) -> (SignalId, SignalId) {
     let a1 = g.add_gain(format!("{prefix}.A1"), p.a1, error);
     let a2 = g.add_gain(format!("{prefix}.A2"), p.a2, a1);
-    (a1, a2)
+    (a1, add_output_limit(g, prefix, p, a2))
 }
 
 /// The closed-loop controller: potentiometer on `angle` \[rad\], error against `reference` \[V\],
@@ -90,5 +219,66 @@ pub fn add_controller(
         error,
         amplified_error,
         command,
+    }
+}
+
+/// The valve drive of the assembled model: the analog controller closing the loop on
+/// `reference`, or, with `p.external`, the external coil voltage `e_in` through the amplifier's
+/// output limit (the potentiometer stays). Returns `(y_POT, coil voltage)`.
+pub fn add_drive(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &ControllerParameters,
+    reference: SignalId,
+    e_in: SignalId,
+    angle: SignalId,
+) -> (SignalId, SignalId) {
+    if p.external {
+        let y_pot = add_potentiometer(g, prefix, p, angle);
+        (y_pot, add_output_limit(g, prefix, p, e_in))
+    } else {
+        let c = add_controller(g, prefix, p, reference, angle);
+        (c.y_pot, c.command)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn limit_is_exactly_linear_below_the_knee() {
+        let l = AmplifierLimit::Saturating { e_max: 12.0 };
+        for u in [-9.6, -5.0, -1e-9, 0.0, 3.3, 9.6] {
+            assert_eq!(l.eval(u), (u, 1.0));
+        }
+        assert!(!l.is_limiting(9.6) && l.is_limiting(9.61));
+    }
+
+    #[test]
+    fn limit_is_odd_monotonic_bounded_and_smooth() {
+        let e_max = 12.0;
+        let l = AmplifierLimit::Saturating { e_max };
+        let mut last = f64::NEG_INFINITY;
+        for i in -4000..=4000 {
+            let u = i as f64 * 0.05;
+            let (e, de) = l.eval(u);
+            assert_eq!(l.eval(-u).0, -e, "odd at {u}");
+            assert!(
+                e >= last && e.abs() <= e_max,
+                "monotonic and below the rail at {u}"
+            );
+            assert!((0.0..=1.0).contains(&de));
+            // The derivative is the exact one (central difference, error O(h^2)).
+            let h = 1e-6;
+            let fd = (l.eval(u + h).0 - l.eval(u - h).0) / (2.0 * h);
+            assert!((fd - de).abs() < 1e-6, "de/du at {u}: {de} vs {fd}");
+            last = e;
+        }
+        // Far beyond the rail the output is the rail to round-off; the slope vanishes.
+        assert!((l.eval(200.0).0 - e_max).abs() < 1e-12);
+        // Slope and curvature are continuous at the knee u = 9.6: slope 1 - O(d^2) just beyond.
+        let (_, d) = l.eval(9.6 + 1e-4);
+        assert!((1.0 - d) < 1e-7);
     }
 }

@@ -48,7 +48,7 @@ pub const PRINTED_C3: f64 = 5.28e-11;
 /// Rotor inertia printed in the paper \[kg m^2\] (printed as "I_6", read I_b).
 pub const PRINTED_I_B: f64 = 0.0025;
 /// Leakage resistance printed in the paper \[N s/m^5\] (inconsistent with `G_est`, see
-/// MODEL_NOTES section 2 item 7).
+/// docs/model-notes.md, item 7).
 pub const PRINTED_R7: f64 = 3.8e7;
 
 /// Physical parameters of the LOES (SI units).
@@ -67,7 +67,7 @@ pub struct LoesParameters {
 }
 
 impl Default for LoesParameters {
-    /// The `G(s)`-consistent set (MODEL_NOTES section 2 item 7), derived from `G_est` with the
+    /// The `G(s)`-consistent set (docs/model-notes.md, item 7), derived from `G_est` with the
     /// default controller gains: see [`LoesParameters::from_g_est`].
     fn default() -> Self {
         Self::from_g_est(&ControllerParameters::default())
@@ -122,7 +122,7 @@ impl LoesParameters {
 
     /// The set printed in the paper: `C3 = 5.28e-11`, `I_b = 0.0025`, `R7 = 3.8e7`. The paper
     /// prints neither `D_m` nor `k_sv`; they are taken from the `G(s)`-consistent set
-    /// (MODEL_NOTES section 2 item 7: `D_m` = 8.038e-5 m^3/rad, `k_sv` = 4.84e-5 m^3/(s V)).
+    /// (docs/model-notes.md, item 7: `D_m` = 8.038e-5 m^3/rad, `k_sv` = 4.84e-5 m^3/(s V)).
     /// With this set the open-loop poles are at 0, -135 and -364 rad/s, not those of `G_est`.
     pub fn paper_printed() -> Self {
         LoesParameters {

@@ -1,7 +1,7 @@
 //! The paper's physical parts as bond-graph fragments.
 //!
 //! A fragment is a function that adds its elements and signal blocks to a shared
-//! [`BondGraph`](crate::bond_graph::BondGraph) under a name prefix ("loes", "controller", ...)
+//! [`BondGraph`] under a name prefix ("loes", "controller", ...)
 //! and returns a small struct of handles (junctions to bond onto, signals to wire), so that
 //! fragments compose into one graph. Element names match the FMU parameter names where possible
 //! ("loes.C3", "controller.A1").

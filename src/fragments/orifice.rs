@@ -7,7 +7,7 @@
 //! The textbook turbulent orifice, `Q = Cd A sqrt(2 |dp| / rho) sgn(dp)`, has an infinite slope at
 //! `dp = 0`, which breaks the Newton iterations of Radau and the Jacobian of Rosenbrock methods
 //! every time a pressure drop crosses zero (flow reversal). As the Modelica libraries do
-//! (MODEL_NOTES section 3), the law is regularised with a laminar region around zero:
+//! (docs/model-notes.md, item 16), the law is regularised with a laminar region around zero:
 //!
 //! ```text
 //! Q = Cd A sqrt(2/rho) dp / (dp^2 + dp_cr^2)^(1/4)

@@ -3,7 +3,7 @@
 //!
 //! The paper does not give its stiffness. Default 2.5e3 N m/rad: a steel bar of 20 mm diameter
 //! and 0.5 m (`G J / L` = 80e9 * pi 0.02^4 / 32 / 0.5 = 2.5e3), which puts the rigid mode of hub and
-//! plate on the bar near 2.5 Hz (MODEL_NOTES section 3).
+//! plate on the bar near 2.5 Hz (docs/model-notes.md, item 13).
 //!
 //! Bond graph: motor 1-junction -> 0-junction `<prefix>` (common effort: the bar torque) -> C
 //! `<prefix>.k` (compliance `1 / k`, state: twist \[rad\]); the 0-junction is then bonded to the

@@ -16,38 +16,51 @@ use super::variables::{idx, VARIABLES};
 
 /// The bond graph of the whole model for a parameter set.
 ///
-/// Always: the reference `r`, the position loop (the LOES of Fig. 3, or the full servo valve of
-/// Fig. 2b, per `hydraulics.model`) with the analog controller, the shaker forces `F1`, `F2` and
-/// the plate (with its hub unless the root is locked). With `hydraulics.motor_coupled` the motor
-/// rotor drives the hub through the torsion bar (Fig. 8);
-/// without it the motor runs alone, as in the paper's identification, and the plate is driven by
-/// F1 and F2 only (hub free on its gas bearing, or locked).
+/// Always: the inputs `r`, `F1`, `F2`, `e_in`; the hydraulic actuator (the LOES of Fig. 3, or the
+/// full servo valve of Fig. 2b, per `hydraulics.model`) driven by the analog controller closing
+/// the position loop on `r`, or with `controller.external` by `e_in` (see
+/// [`controller::add_drive`]); the power amplifier's output limit; the plate (with its hub unless
+/// the root is locked). With `hydraulics.motor_coupled` the motor rotor drives the hub through
+/// the torsion bar (Fig. 8); without it the motor runs alone, as in the paper's identification,
+/// and the plate is driven by F1 and F2 only (hub free on its gas bearing, or locked).
 pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
+    p.controller.validate()?;
     let model = PlateModel::new(&p.plate)?;
     let mut g = BondGraph::new("hydraulic_slewing_plate");
     let r = g.add_input("r");
     let f1 = g.add_input("F1");
     let f2 = g.add_input("F2");
-    // The position loop: either hydraulic model, closed by the analog controller.
-    let (rotor, y_pot, theta, omega, p_load, q_valve) = match p.hydraulics {
+    let e_in = g.add_input("e_in");
+    // The actuator, its valve command port left open for the drive.
+    let (rotor, valve_command, theta, omega, p_load, q_valve) = match p.hydraulics {
         HydraulicsModel::Loes => {
             let l = loes::add_loes(&mut g, "loes", &p.loes);
-            let c = controller::add_controller(&mut g, "controller", &p.controller, r, l.theta);
-            g.connect_signal_port(l.valve_command, c.command);
-            (l.rotor, c.y_pot, l.theta, l.omega, l.p_load, l.q_valve)
+            (
+                l.rotor,
+                l.valve_command,
+                l.theta,
+                l.omega,
+                l.p_load,
+                l.q_valve,
+            )
         }
         HydraulicsModel::ServoValve => {
-            let (sv, y_pot) = servo_valve::add_servo_valve_loop(
-                &mut g,
-                "servo_valve",
-                &p.servo_valve,
-                &p.controller,
-                r,
-            )?;
+            let sv = servo_valve::add_servo_valve(&mut g, "servo_valve", &p.servo_valve)?;
             servo_valve::add_valve_outputs(&mut g, &sv);
-            (sv.rotor, y_pot, sv.theta, sv.omega, sv.p_load, sv.q_valve)
+            (
+                sv.rotor,
+                sv.valve_command,
+                sv.theta,
+                sv.omega,
+                sv.p_load,
+                sv.q_valve,
+            )
         }
     };
+    let (y_pot, command) =
+        controller::add_drive(&mut g, "controller", &p.controller, r, e_in, theta);
+    g.connect_signal_port(valve_command, command);
+    g.add_output("controller.e_out", command);
     let bar = p
         .motor_coupled
         .then(|| torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, rotor));

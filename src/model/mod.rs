@@ -4,14 +4,16 @@
 //!
 //! - [`variables`]: the generated variable table (positions and value references by name).
 //! - [`parameters`]: the typed parameter set read from the FMU's values, and `--set NAME=VALUE`.
+//! - [`presets`]: the paper's configurations as named parameter sets (`hsp run --preset NAME`).
 //! - [`assembly`]: which fragments make up the model for a parameter set, and the resulting
 //!   [`OdeSystem`](crate::solver::OdeSystem).
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
-//! - [`HydraulicSlewingPlate`]: the [`FmuModel`](crate::fmi2::FmuModel) the C ABI exports.
+//! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
 pub mod assembly;
 pub mod frf;
 pub mod parameters;
+pub mod presets;
 pub mod variables;
 
 use serde::{Deserialize, Serialize};

@@ -2,7 +2,7 @@
 //!
 //! ROBER, VDPOL (ε = 1e-6), HIRES and OREGO are from the Mazzia–Magherini "Test Set for IVP
 //! Solvers" (release 2.4); their reference values at the end time are those of
-//! `/work/shared/MODEL_NOTES.md` Sec. 5 (from that test set). Prothero–Robinson and the lightly
+//! docs/model-notes.md, item 19 (from that test set). Prothero–Robinson and the lightly
 //! damped oscillator have exact solutions.
 //!
 //! Absolute tolerances follow the test set's spirit — a component counts as significant

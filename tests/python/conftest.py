@@ -1,7 +1,10 @@
 """Shared fixtures of the import-side tests: the packaged FMU, low-level instances with a logger
-that records every message, and the analytic closed-loop response of the LOES (eq. 1, eq. 2)."""
+that records every message, the named parameter sets (`hsp presets --json`), and the analytic
+closed-loop response of the LOES (eq. 1, eq. 2)."""
 
 import ctypes
+import functools
+import json
 import math
 import os
 import pathlib
@@ -44,6 +47,27 @@ def md(fmu_path):
 @pytest.fixture(scope="session")
 def vr(md):
     return {v.name: v.valueReference for v in md.modelVariables}
+
+
+@functools.lru_cache(maxsize=None)
+def _presets():
+    out = subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", "presets", "--json"],
+                         cwd=ROOT, capture_output=True, text=True, check=True)
+    return {p["name"]: p["settings"] for p in json.loads(out.stdout)}
+
+
+def preset(name, **extra):
+    """The start values of a named parameter set (src/model/presets.rs, the one definition), with
+    `extra` start values (names with dots as keyword arguments: pass a dict with **{...})."""
+    return {**_presets()[name], **extra}
+
+
+def apply_preset(slave, md, name):
+    """Sets a preset on a low-level instance (before initialisation), each value with its type."""
+    kinds = {v.name: (v.type, v.valueReference) for v in md.modelVariables}
+    for var, value in _presets()[name].items():
+        kind, ref = kinds[var]
+        {"Real": slave.setReal, "Integer": slave.setInteger, "Boolean": slave.setBoolean}[kind]([ref], [value])
 
 
 class Recorder:
@@ -92,7 +116,7 @@ def slave_factory(md, unzipped):
             pass
 
 
-# The LOES default parameters (MODEL_NOTES.md section 2 item 7): the printed C3 and I_b, the rest
+# The LOES default parameters (docs/model-notes.md, item 7): the printed C3 and I_b, the rest
 # fitted to G_est(s) = 2.25e6 / (s (s + 65) (s + 753)) of eq. 2.
 C3, I_B, A1, A2 = 5.28e-11, 0.0025, 2.0, 10.0
 R7 = 1 / (818 * C3)

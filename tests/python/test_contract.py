@@ -8,7 +8,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
-from conftest import make_slave
+from conftest import apply_preset, make_slave
 
 
 def errors(slave):
@@ -150,9 +150,10 @@ def test_log_categories_filter(slave_factory, vr):
     assert len(s.recorder.messages) == n
 
 
-def test_solver_failure_is_a_discard_with_last_successful_time(slave_factory, vr):
+def test_solver_failure_is_a_discard_with_last_successful_time(slave_factory, vr, md):
     s = slave_factory()
     s.setupExperiment(startTime=0.0)
+    apply_preset(s, md, "loes-motor")  # the motor must have moved within 50 us
     s.setReal([vr["solver.max_step"]], [1e-6])
     s.setInteger([vr["solver.max_steps"]], [50])
     s.setReal([vr["r"]], [1.0])

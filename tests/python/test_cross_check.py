@@ -3,22 +3,41 @@ _ref.csv with the analytic LOES closed loop as the reference), checked by fmpy's
 validators: the entry is well-formed, and fmpy's simulation of it matches the reference with no
 outliers in fmpy's tube."""
 
-import shutil
+import re
+import zipfile
 
 import numpy as np
 from fmpy import simulate_fmu
 from fmpy.cross_check.validate_vendor_repo import validate_test_fmu
 from fmpy.util import read_csv, read_ref_opt_file, validate_result, write_csv
 
-from conftest import K_POT, closed_loop_step
+from conftest import K_POT, closed_loop_step, preset
 
 MODEL = "HydraulicSlewingPlate"
+
+
+def copy_with_start_values(src, dst, start_values):
+    """The FMU with other start values in its modelDescription.xml (a cross-check entry cannot set
+    parameters, so the entry's FMU carries them); the GUID stays, the binary is the same."""
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                for name, value in start_values.items():
+                    text, n = re.subn(r'(<ScalarVariable name="%s".*?start=")[^"]*(")' % re.escape(name),
+                                      lambda m: m.group(1) + str(value).lower() + m.group(2), text,
+                                      count=1, flags=re.S)
+                    assert n == 1, name
+                data = text.encode()
+            zout.writestr(item, data)
 
 
 def make_entry(root, fmu_path):
     d = root / "2.0" / "cs" / "linux64" / "hydraulic-slewing-plate" / "0.1.0" / MODEL
     d.mkdir(parents=True)
-    shutil.copy(fmu_path, d / f"{MODEL}.fmu")
+    # The reference is the analytic LOES loop on the motor alone (linear amplifier).
+    copy_with_start_values(fmu_path, d / f"{MODEL}.fmu", preset("loes-motor"))
     (d / f"{MODEL}_ref.opt").write_text("StartTime,0.0\nStopTime,0.5\nStepSize,0.001\nRelTol,1e-6\n")
     # A reference step of 1 V at t = 0.05 s: the input table holds r.
     inp = np.array([(0.0, 0.0), (0.05, 0.0), (0.05, 1.0), (0.5, 1.0)], dtype=[("time", float), ("r", float)])

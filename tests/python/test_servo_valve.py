@@ -6,7 +6,7 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.fmi1 import FMICallException
 
-from conftest import closed_loop_step
+from conftest import closed_loop_step, preset
 
 SERVO_OUTPUTS = ["servo_valve.i_coil", "servo_valve.x_f", "servo_valve.x_v", "servo_valve.p_a",
                  "servo_valve.p_b", "servo_valve.p_1", "servo_valve.p_2", "servo_valve.q_supply"]
@@ -33,7 +33,7 @@ def test_step_response_follows_the_loes(fmu_path):
     r = 0.1
     full = simulate_fmu(fmu_path, stop_time=0.5, output_interval=1e-3, relative_tolerance=1e-8,
                         input=step_input(r), output=["y_pot"] + SERVO_OUTPUTS,
-                        start_values={"hydraulics.model": 2})
+                        start_values=preset("servo-valve-motor", **{"controller.saturation": False}))
     loes = closed_loop_step(full["time"], r=r)
     diff = np.max(np.abs(full["y_pot"] - loes))
     print(f"max |y_pot(full) - y_pot(LOES)| = {diff:.3e} V for a {r} V step")
@@ -53,8 +53,8 @@ def test_flow_reversal_finishes_finite(fmu_path):
     # drops through zero, flow reversal at the metering edges), the spool crosses null.
     res = simulate_fmu(fmu_path, stop_time=1.0, output_interval=1e-3,
                        input=square_wave(0.5, 0.25, 1.0), output=["y_pot", "p_load"] + SERVO_OUTPUTS,
-                       start_values={"hydraulics.model": 2, "servo_valve.I_m": 3.5,
-                                     "servo_valve.b_m": 0.01, "servo_valve.p_supply": 10e5})
+                       start_values=preset("servo-valve-motor", **{"servo_valve.I_m": 3.5, "servo_valve.b_m": 0.01,
+                                                                    "servo_valve.p_supply": 10e5}))
     for name in ["y_pot", "p_load"] + SERVO_OUTPUTS:
         assert np.all(np.isfinite(res[name])), name
     assert res["time"][-1] == pytest.approx(1.0)

@@ -1,19 +1,23 @@
 //! `hsp`: the project's command-line tool.
 //!
 //! - `hsp package`: builds the release library and writes `fmu/HydraulicSlewingPlate.fmu`.
-//! - `hsp run`: builds the FMU if needed, loads it through its C ABI, runs the default experiment
-//!   (a step in the reference `r`), prints a summary and writes the results as CSV.
+//! - `hsp run [--preset NAME]`: builds the FMU if needed, loads it through its C ABI, runs the
+//!   default experiment (a slewing manoeuvre of the complete system: a step in the reference `r`),
+//!   prints a summary and writes the results as CSV.
+//! - `hsp presets [--json]`: the named parameter sets (the paper's configurations).
 //! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest.
 //! - `hsp graph [--set ...]`: the model's bond graph as Graphviz DOT, with causal strokes.
 //! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14).
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
 //!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
 
+mod binaries;
 mod docpage;
 mod loader;
 mod package;
 mod plot;
 mod progress;
+mod results;
 mod run;
 
 use std::process::ExitCode;
@@ -24,6 +28,7 @@ use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, plate_modes, Assembled};
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
 #[derive(Parser)]
@@ -44,9 +49,19 @@ enum Command {
         /// Where to write the FMU
         #[arg(long, default_value = package::DEFAULT_FMU)]
         output: String,
+        /// Fail unless the glibc-2.17 Linux binary and the Windows binary are both built (without
+        /// it, a missing toolchain gives a warning and a binary for this machine only)
+        #[arg(long)]
+        require_portable: bool,
     },
-    /// Run the default experiment through the FMU's C ABI and summarise it
+    /// Run the default experiment (a slewing manoeuvre) through the FMU's C ABI and summarise it
     Run(run::RunArgs),
+    /// List the named parameter sets (the paper's configurations) for --preset
+    Presets {
+        /// Print JSON: [{"name", "paper", "description", "settings": {NAME: value}}]
+        #[arg(long)]
+        json: bool,
+    },
     /// Linearise the assembled model at rest: A, B, C, D
     Linearize {
         /// Print JSON (the only format)
@@ -55,11 +70,17 @@ enum Command {
         /// Set a parameter, NAME=VALUE (repeatable); names are the FMU's variable names
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Start from a named parameter set (`hsp presets`); --set applies after it
+        #[arg(long)]
+        preset: Option<String>,
     },
     /// Print the model's bond graph as Graphviz DOT
     Graph {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Start from a named parameter set (`hsp presets`); --set applies after it
+        #[arg(long)]
+        preset: Option<String>,
     },
     /// Natural frequencies of the plate model (eq. 14): {"f_hz": [...], "labels": ["(n,m)", ...]}
     Modes {
@@ -68,13 +89,16 @@ enum Command {
         json: bool,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Start from a named parameter set (`hsp presets`); --set applies after it
+        #[arg(long)]
+        preset: Option<String>,
     },
     /// Frequency response of the linearised model, with its resonance peaks
     Frf {
         /// Input name (r, F1, F2)
         #[arg(long, default_value = "r")]
         input: String,
-        /// Output name (acc_tip, w_tip, acc[k], theta_hub, y_pot, ...)
+        /// Output name (acc_tip, w_tip, `acc[k]`, theta_hub, y_pot, ...)
         #[arg(long, default_value = "acc_tip")]
         output: String,
         /// Lowest frequency, Hz
@@ -94,12 +118,18 @@ enum Command {
         plot: Option<String>,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Start from a named parameter set (`hsp presets`); --set applies after it
+        #[arg(long)]
+        preset: Option<String>,
     },
 }
 
-/// The FMU's start values with `--set` applied.
-fn values_with(sets: &[String]) -> Result<Values, String> {
+/// The FMU's start values with the preset, then `--set`, applied.
+fn values_with(preset: Option<&str>, sets: &[String]) -> Result<Values, String> {
     let mut values = Values::from_start(&VARIABLES);
+    if let Some(name) = preset {
+        presets::apply(&mut values, name)?;
+    }
     for s in sets {
         let (name, value) = s
             .split_once('=')
@@ -109,8 +139,27 @@ fn values_with(sets: &[String]) -> Result<Values, String> {
     Ok(values)
 }
 
-fn linearize(sets: &[String]) -> Result<String, String> {
-    let values = values_with(sets)?;
+fn presets_text(json: bool) -> String {
+    if json {
+        return presets::presets_json().to_string();
+    }
+    let mut s = String::new();
+    for p in presets::PRESETS {
+        let settings: Vec<String> = p.settings.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        s.push_str(&format!(
+            "{:<20} {}: {}\n{:<20} {}\n",
+            p.name,
+            p.paper,
+            p.description,
+            "",
+            settings.join(" ")
+        ));
+    }
+    s.trim_end().to_string()
+}
+
+fn linearize(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
+    let values = values_with(preset, sets)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let system = Assembled::new(&parameters)?;
     let x = system.initial_state();
@@ -127,14 +176,14 @@ fn linearize(sets: &[String]) -> Result<String, String> {
     Ok(json.to_string())
 }
 
-fn graph(sets: &[String]) -> Result<String, String> {
-    let values = values_with(sets)?;
+fn graph(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
+    let values = values_with(preset, sets)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     Ok(bond_graph(&parameters)?.to_dot())
 }
 
-fn modes(sets: &[String]) -> Result<String, String> {
-    let values = values_with(sets)?;
+fn modes(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
+    let values = values_with(preset, sets)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let modes = plate_modes(&parameters)?;
     let json = serde_json::json!({
@@ -159,8 +208,8 @@ fn is_plate_signal(output: &str) -> bool {
     output.starts_with("acc") || output.starts_with("w_tip") || output.starts_with("plate.")
 }
 
-fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
-    let values = values_with(sets)?;
+fn frf(a: &FrfArgs, preset: Option<&str>, sets: &[String]) -> Result<String, String> {
+    let values = values_with(preset, sets)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let system = Assembled::new(&parameters)?;
     let x = system.initial_state();
@@ -205,13 +254,28 @@ fn frf(a: &FrfArgs, sets: &[String]) -> Result<String, String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Package { output } => package::package(&output).map(|path| {
+        Command::Package {
+            output,
+            require_portable,
+        } => package::package_with(&output, require_portable).map(|path| {
             println!("wrote {path}");
         }),
         Command::Run(args) => run::run(&args),
-        Command::Linearize { json: _, set } => linearize(&set).map(|s| println!("{s}")),
-        Command::Graph { set } => graph(&set).map(|s| println!("{s}")),
-        Command::Modes { json: _, set } => modes(&set).map(|s| println!("{s}")),
+        Command::Presets { json } => {
+            println!("{}", presets_text(json));
+            Ok(())
+        }
+        Command::Linearize {
+            json: _,
+            set,
+            preset,
+        } => linearize(preset.as_deref(), &set).map(|s| println!("{s}")),
+        Command::Graph { set, preset } => graph(preset.as_deref(), &set).map(|s| println!("{s}")),
+        Command::Modes {
+            json: _,
+            set,
+            preset,
+        } => modes(preset.as_deref(), &set).map(|s| println!("{s}")),
         Command::Frf {
             input,
             output,
@@ -221,6 +285,7 @@ fn main() -> ExitCode {
             json,
             plot,
             set,
+            preset,
         } => frf(
             &FrfArgs {
                 input: &input,
@@ -231,6 +296,7 @@ fn main() -> ExitCode {
                 json,
                 plot: plot.as_deref(),
             },
+            preset.as_deref(),
             &set,
         )
         .map(|s| println!("{s}")),

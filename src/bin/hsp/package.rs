@@ -1,14 +1,13 @@
 //! `hsp package`: builds the release cdylib and writes the FMU archive: `modelDescription.xml`
-//! (verbatim from `modelDescription/`), `binaries/linux64/HydraulicSlewingPlate.so` and
+//! (verbatim from `modelDescription/`), `binaries/linux64/HydraulicSlewingPlate.so` (glibc 2.17),
+//! `binaries/win64/HydraulicSlewingPlate.dll` (where the binaries come from: [`binaries`]) and
 //! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
+use super::{binaries, docpage};
 use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
-
-use super::docpage;
 
 pub const DEFAULT_FMU: &str = "fmu/HydraulicSlewingPlate.fmu";
 
@@ -17,38 +16,23 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn target_dir() -> PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root().join("target"))
-}
-
-/// Builds the release library and returns the path of the shared object.
-fn build_library() -> Result<PathBuf, String> {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let status = Command::new(&cargo)
-        .args(["build", "--release", "--lib", "--quiet"])
-        .current_dir(root())
-        .status()
-        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
-    if !status.success() {
-        return Err(format!("cargo build --release --lib failed ({status})"));
-    }
-    let so = target_dir()
-        .join("release")
-        .join("libhydraulic_slewing_plate.so");
-    if !so.exists() {
-        return Err(format!("{} was not built", so.display()));
-    }
-    Ok(so)
-}
-
-/// Builds and writes the FMU; returns its path.
+/// Builds and writes the FMU with every binary the installed toolchains allow; returns its path.
 pub fn package(output: &str) -> Result<String, String> {
-    let so = build_library()?;
+    package_with(output, false)
+}
+
+/// Builds and writes the FMU; with `require_portable`, fails unless both the glibc-2.17 Linux
+/// binary and the Windows binary are built (see [`binaries`]). Returns its path.
+pub fn package_with(output: &str, require_portable: bool) -> Result<String, String> {
+    let binaries = binaries::build(require_portable)?;
     let xml_path = root().join("modelDescription/modelDescription.xml");
     let xml = std::fs::read(&xml_path).map_err(|e| format!("{}: {e}", xml_path.display()))?;
-    let binary = std::fs::read(&so).map_err(|e| format!("{}: {e}", so.display()))?;
+    let mut files = Vec::new();
+    for b in &binaries {
+        let data = std::fs::read(&b.path).map_err(|e| format!("{}: {e}", b.path.display()))?;
+        let name = format!("binaries/{}/{MODEL_IDENTIFIER}.{}", b.platform, b.extension);
+        files.push((name, data));
+    }
     let out = if Path::new(output).is_absolute() {
         PathBuf::from(output)
     } else {
@@ -57,16 +41,14 @@ pub fn package(output: &str) -> Result<String, String> {
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    let mut entries: Vec<(String, Vec<u8>)> = vec![
-        ("modelDescription.xml".into(), xml),
-        (format!("binaries/linux64/{MODEL_IDENTIFIER}.so"), binary),
-    ];
+    let xml_text = String::from_utf8_lossy(&xml).into_owned();
+    let mut entries: Vec<(String, Vec<u8>)> = vec![("modelDescription.xml".into(), xml)];
+    entries.extend(files);
     // Write to a temporary name and rename, so that a reader never sees half an archive. The
     // documentation's figures come from running this very FMU: a first archive without them is
     // run, then the complete one is written.
     let tmp = out.with_extension("fmu.partial");
     write_archive(&tmp, &entries)?;
-    let xml_text = String::from_utf8_lossy(&entries[0].1).into_owned();
     let platforms = platforms(&entries);
     let docs = docpage::documentation(&tmp, &xml_text, &platforms)?;
     entries.extend(

@@ -139,10 +139,7 @@ fn draw_time<DB: DrawingBackend>(
             let color = COLORS[k % COLORS.len()];
             chart
                 .draw_series(LineSeries::new(
-                    t.iter()
-                        .zip(&s.values)
-                        .filter(|(_, v)| v.is_finite())
-                        .map(|(a, b)| (*a, *b)),
+                    decimate(t, &s.values, MAX_POINTS),
                     color.stroke_width(2),
                 ))
                 .map_err(err)?
@@ -161,6 +158,38 @@ fn draw_time<DB: DrawingBackend>(
             .map_err(err)?;
     }
     area.present().map_err(err)
+}
+
+/// Most points drawn per curve: beyond it a curve keeps the extremes of each of `MAX_POINTS / 2`
+/// time buckets, which looks the same at figure resolution and keeps the SVG small.
+const MAX_POINTS: usize = 3000;
+
+/// The finite points of `(t, y)`, reduced to the minimum and maximum of each bucket (in time
+/// order) when there are more than `max` of them.
+fn decimate(t: &[f64], y: &[f64], max: usize) -> Vec<(f64, f64)> {
+    let points: Vec<(f64, f64)> = t
+        .iter()
+        .zip(y)
+        .filter(|(_, v)| v.is_finite())
+        .map(|(a, b)| (*a, *b))
+        .collect();
+    if points.len() <= max {
+        return points;
+    }
+    let per_bucket = points.len().div_ceil(max / 2);
+    let mut out = Vec::with_capacity(max);
+    for bucket in points.chunks(per_bucket) {
+        let lo = bucket.iter().min_by(|a, b| a.1.total_cmp(&b.1)).copied();
+        let hi = bucket.iter().max_by(|a, b| a.1.total_cmp(&b.1)).copied();
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            if lo.0 <= hi.0 {
+                out.extend([lo, hi]);
+            } else {
+                out.extend([hi, lo]);
+            }
+        }
+    }
+    out
 }
 
 /// A figure of time histories, one panel under the other: writes `stem.png` and `stem.svg`.
@@ -276,6 +305,13 @@ pub fn experiment_panels(table: &Table) -> Vec<Panel> {
     // The flow only when the spool is not recorded (the LOES has no spool).
     if !panels[4].series.is_empty() {
         panels[5].series.clear();
+    }
+    // A signal that stays at zero beside others (e_in when the built-in controller drives, the
+    // spool of the LOES) only clutters its panel.
+    for p in &mut panels {
+        if p.series.iter().any(|s| s.values.iter().any(|v| *v != 0.0)) {
+            p.series.retain(|s| s.values.iter().any(|v| *v != 0.0));
+        }
     }
     panels.retain(|p| !p.series.is_empty());
     panels
@@ -444,6 +480,31 @@ pub fn bode(stem: &Path, b: &Bode) -> Result<Vec<PathBuf>, String> {
         (1000, 700),
         (|a| draw_bode(a, b), |a| draw_bode(a, b)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimation_keeps_the_extremes_in_time_order() {
+        let t: Vec<f64> = (0..10_000).map(|i| i as f64 * 1e-3).collect();
+        let y: Vec<f64> = t.iter().map(|t| (40.0 * t).sin() * (-t).exp()).collect();
+        let d = decimate(&t, &y, 1000);
+        assert!(d.len() <= 1000, "{}", d.len());
+        assert!(d.windows(2).all(|w| w[0].0 <= w[1].0));
+        let max = |v: &mut dyn Iterator<Item = f64>| v.fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(max(&mut d.iter().map(|p| p.1)), max(&mut y.iter().copied()));
+        let short = decimate(&t[..10], &y[..10], 1000);
+        assert_eq!(short.len(), 10);
+    }
+
+    #[test]
+    fn padded_range_of_a_flat_signal_is_not_empty() {
+        let (lo, hi) = padded_range([2.0, 2.0].iter());
+        assert!(lo < 2.0 && hi > 2.0);
+        assert_eq!(padded_range([].iter()), (-1.0, 1.0));
+    }
 }
 
 /// The stem of a `--plot FILE` argument: `FILE` without a `.png`/`.svg` extension (both are

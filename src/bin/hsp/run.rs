@@ -1,16 +1,23 @@
-//! `hsp run`: the main job. Builds the FMU, loads it through its C ABI, applies a step of the
-//! reference `r` at t = 0, runs the experiment, prints a readable summary and writes every output
-//! at every communication point to CSV.
+//! `hsp run`: the main job. Builds the FMU, loads it through its C ABI, applies a preset (the
+//! complete system by default) and the `--set` values, steps the reference `r` (or, with
+//! `controller.external`, the coil drive `e_in`) at t = 0, runs the experiment, prints a summary
+//! of the slewing manoeuvre and writes every recorded output at every communication point to CSV.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use hydraulic_slewing_plate::model::variables::vr;
+use hydraulic_slewing_plate::fmi2::Experiment;
+use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
+use hydraulic_slewing_plate::fragments::plate::Root;
+use hydraulic_slewing_plate::model::parameters::{HydraulicsModel, Parameters};
+use hydraulic_slewing_plate::model::presets::{self, COMPLETE};
+use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
 
 use super::loader::Fmu;
 use super::package;
+use super::results::Results;
 
 #[derive(Args)]
 pub struct RunArgs {
@@ -20,11 +27,17 @@ pub struct RunArgs {
     /// Use the FMU as it is, without rebuilding it
     #[arg(long)]
     no_build: bool,
-    /// Size of the reference step r, V
-    #[arg(long, default_value_t = 1.0)]
+    /// Parameter set to start from (`hsp presets` lists them); --set values apply after it
+    #[arg(long, default_value = COMPLETE)]
+    preset: String,
+    /// Size of the reference step r, V (2 V = 30 deg of motor angle with the default k_pot)
+    #[arg(long, default_value_t = 2.0)]
     r: f64,
+    /// Size of the step of the external coil drive e_in, V (used with controller.external=true)
+    #[arg(long, default_value_t = 0.0)]
+    e_in: f64,
     /// Stop time, s
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 20.0)]
     stop: f64,
     /// Communication step, s
     #[arg(long, default_value_t = 1e-3)]
@@ -42,15 +55,53 @@ pub struct RunArgs {
     plot: super::plot::PlotArgs,
 }
 
-/// The outputs recorded, with a display scale and unit for the summary.
-const RECORDED: &[(&str, u32)] = &[
-    ("y_pot", vr::Y_POT),
-    ("theta_motor", vr::THETA_MOTOR),
-    ("omega_motor", vr::OMEGA_MOTOR),
-    ("p_load", vr::P_LOAD),
-    ("q_valve", vr::Q_VALVE),
-    ("energy", vr::ENERGY),
+/// Outputs recorded for every configuration.
+const RECORDED: &[&str] = &[
+    "r",
+    "e_in",
+    "controller.e_out",
+    "y_pot",
+    "theta_motor",
+    "omega_motor",
+    "theta_hub",
+    "omega_hub",
+    "torsion_bar.torque",
+    "w_tip",
+    "acc_tip",
+    "p_load",
+    "q_valve",
+    "energy",
 ];
+
+/// Outputs recorded with the full servo valve only (they are 0 with the LOES).
+const RECORDED_SERVO_VALVE: &[&str] = &[
+    "servo_valve.i_coil",
+    "servo_valve.x_v",
+    "servo_valve.p_1",
+    "servo_valve.p_2",
+];
+
+/// The settings of a run in order: the preset's, then the user's `--set`.
+fn settings(args: &RunArgs) -> Result<Vec<String>, String> {
+    let preset = presets::preset(&args.preset)?;
+    let mut all: Vec<String> = preset
+        .settings
+        .iter()
+        .map(|(n, v)| format!("{n}={v}"))
+        .collect();
+    all.extend(args.set.iter().cloned());
+    Ok(all)
+}
+
+/// What the summary needs besides the results table.
+pub struct RunInfo {
+    pub preset: String,
+    pub parameters: Parameters,
+    /// Solver statistics: steps, rejected, f evaluations, Jacobians, LU factorisations.
+    pub stats: Vec<i32>,
+    /// Wall-clock time of the stepping loop \[s\].
+    pub seconds: f64,
+}
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
     if !(args.stop > 0.0 && args.step > 0.0 && args.step <= args.stop) {
@@ -59,25 +110,67 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
             args.stop, args.step
         ));
     }
+    let settings = settings(args)?;
+    // The typed parameters the run will use (the FMU checks them again when it initialises).
+    let values = super::values_with(Some(&args.preset), &args.set)?;
+    let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let fmu_path = if args.no_build {
         PathBuf::from(&args.fmu)
     } else {
         PathBuf::from(package::package(&args.fmu)?)
     };
-    let fmu = Fmu::load(&fmu_path)?;
+    let (results, stats, seconds) = simulate(args, &fmu_path, &settings, &parameters)?;
+    let csv_path = package::root().join(&args.csv);
+    results.write_csv(&csv_path)?;
+    let info = RunInfo {
+        preset: args.preset.clone(),
+        parameters,
+        stats,
+        seconds,
+    };
+    print!(
+        "{}",
+        summary(args, &results, &info, &csv_path.display().to_string())
+    );
+    super::plot::after_run(&csv_path, &args.plot)
+}
+
+/// Runs the experiment through the FMU's C ABI; returns the results table, the solver statistics
+/// and the wall time of the stepping loop.
+fn simulate(
+    args: &RunArgs,
+    fmu_path: &std::path::Path,
+    settings: &[String],
+    p: &Parameters,
+) -> Result<(Results, Vec<i32>, f64), String> {
+    let fmu = Fmu::load(fmu_path)?;
     let inst = fmu.instantiate("hsp-run")?;
     inst.setup(args.tolerance, 0.0, args.stop)?;
-    for s in &args.set {
+    for s in settings {
         inst.set_from_text(s)?;
     }
     inst.set_real(vr::R, args.r)?;
+    inst.set_real(vr::E_IN, args.e_in)?;
     inst.enter_initialization()?;
     inst.exit_initialization()?;
 
-    let vrs: Vec<u32> = RECORDED.iter().map(|(_, v)| *v).collect();
+    let mut names: Vec<&str> = RECORDED.to_vec();
+    if p.hydraulics == HydraulicsModel::ServoValve {
+        names.extend(RECORDED_SERVO_VALVE);
+    }
+    let vrs = names
+        .iter()
+        .map(|n| {
+            VARIABLES
+                .iter()
+                .find(|v| v.name == *n)
+                .map(|v| v.value_reference)
+                .ok_or_else(|| format!("{n} is not an FMU variable"))
+        })
+        .collect::<Result<Vec<u32>, String>>()?;
+    let mut results = Results::new(names.iter().map(|n| n.to_string()).collect());
     let n = (args.stop / args.step).round() as usize;
-    let mut rows: Vec<(f64, Vec<f64>)> = Vec::with_capacity(n + 1);
-    rows.push((0.0, inst.get_reals(&vrs)?));
+    results.push(0.0, inst.get_reals(&vrs)?);
     let wall = Instant::now();
     let mut progress = super::progress::Progress::new("hsp run");
     for i in 0..n {
@@ -89,118 +182,228 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
             (i + 1) as f64 * args.step
         };
         inst.do_step(t, t_next - t)?;
-        rows.push((t_next, inst.get_reals(&vrs)?));
+        results.push(t_next, inst.get_reals(&vrs)?);
         progress.update(t_next / args.stop);
     }
     drop(progress);
     let seconds = wall.elapsed().as_secs_f64();
     let stats = inst.solver_stats()?;
     inst.terminate()?;
-
-    // CSV
-    let csv_path = package::root().join(&args.csv);
-    if let Some(dir) = csv_path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    }
-    let mut csv = String::from("time");
-    for (name, _) in RECORDED {
-        write!(csv, ",{name}").unwrap();
-    }
-    csv.push('\n');
-    for (t, y) in &rows {
-        write!(csv, "{t}").unwrap();
-        for v in y {
-            write!(csv, ",{v:e}").unwrap();
-        }
-        csv.push('\n');
-    }
-    std::fs::write(&csv_path, csv).map_err(|e| format!("{}: {e}", csv_path.display()))?;
-
-    print!(
-        "{}",
-        summary(
-            args,
-            &rows,
-            &stats,
-            seconds,
-            &csv_path.display().to_string()
-        )
-    );
-    super::plot::after_run(&csv_path, &args.plot)
+    Ok((results, stats, seconds))
 }
 
-/// Step-response figures of y_pot against the reference r.
-fn summary(
-    args: &RunArgs,
-    rows: &[(f64, Vec<f64>)],
-    stats: &[i32],
-    seconds: f64,
-    csv: &str,
-) -> String {
-    let y: Vec<f64> = rows.iter().map(|(_, v)| v[0]).collect();
-    let t: Vec<f64> = rows.iter().map(|(t, _)| *t).collect();
-    let last = rows.last().map(|(_, v)| v.clone()).unwrap_or_default();
-    let r = args.r;
-    let peak = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let overshoot = if r != 0.0 {
-        (peak - r) / r * 100.0
-    } else {
-        0.0
+/// Step-response figures of a series that starts at 0 and should end at `target`.
+#[derive(Debug, PartialEq)]
+pub struct StepFigures {
+    /// Largest excursion beyond the target, in % of the target (0 if never beyond).
+    pub overshoot_pct: f64,
+    /// Time from which the series stays within `band` x |target| of the target, if it does by
+    /// the end of the run.
+    pub settling: Option<f64>,
+}
+
+/// Overshoot and settling time of `y(t)` against `target` with a settling band of `band` (e.g.
+/// 0.02) of the target.
+pub fn step_figures(t: &[f64], y: &[f64], target: f64, band: f64) -> StepFigures {
+    if target == 0.0 || y.is_empty() {
+        return StepFigures {
+            overshoot_pct: 0.0,
+            settling: None,
+        };
+    }
+    let s = target.signum();
+    let peak = y.iter().map(|v| s * v).fold(f64::NEG_INFINITY, f64::max);
+    let overshoot_pct = ((peak - target.abs()) / target.abs() * 100.0).max(0.0);
+    let tol = band * target.abs();
+    let settling = match y.iter().rposition(|v| (v - target).abs() > tol) {
+        None => Some(t[0]),
+        Some(i) if i + 1 < t.len() => Some(t[i + 1]),
+        Some(_) => None,
     };
-    let crossing = |level: f64| {
-        t.iter()
-            .zip(&y)
-            .find(|(_, y)| **y >= level * r)
-            .map(|(t, _)| *t)
-    };
-    let rise = match (crossing(0.1), crossing(0.9)) {
-        (Some(a), Some(b)) => format!("{:.1} ms", (b - a) * 1e3),
-        _ => "not reached".into(),
-    };
-    let settled = y.iter().rposition(|v| (v - r).abs() > 0.02 * r.abs());
-    let settling = match settled {
-        Some(i) if i + 1 < t.len() => format!("{:.1} ms", t[i + 1] * 1e3),
-        Some(_) => "not settled".into(),
-        None => "0 ms".into(),
-    };
-    let max_abs = |k: usize| rows.iter().map(|(_, v)| v[k].abs()).fold(0.0, f64::max);
+    StepFigures {
+        overshoot_pct,
+        settling,
+    }
+}
+
+/// Total time during which `pred` holds at the end of a communication interval \[s\].
+fn time_where(t: &[f64], y: &[f64], pred: impl Fn(f64) -> bool) -> f64 {
+    t.windows(2)
+        .zip(&y[1..])
+        .filter(|(_, v)| pred(**v))
+        .map(|(w, _)| w[1] - w[0])
+        .sum()
+}
+
+fn max_abs(y: &[f64]) -> f64 {
+    y.iter().fold(0.0, |m, v| m.max(v.abs()))
+}
+
+/// The summary of a run: the manoeuvre (motor and hub angle, tip deflection), pressures, limits,
+/// solver statistics and speed.
+pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> String {
+    let p = &info.parameters;
+    let col = |n: &str| res.column(n).unwrap_or_default();
+    let t = &res.time;
     let mut s = String::new();
+    let preset = presets::preset(&info.preset).map_or("", |p| p.paper);
+    let hydraulics = match p.hydraulics {
+        HydraulicsModel::Loes => "LOES",
+        HydraulicsModel::ServoValve => "full servo valve",
+    };
+    let coupling = if p.motor_coupled {
+        "motor coupled to the hub"
+    } else {
+        "motor alone"
+    };
     writeln!(
         s,
-        "Hydraulic slewing plate: step of r = {r} V, {} s in steps of {} s",
-        args.stop, args.step
+        "Hydraulic slewing plate, preset {} ({preset}): {hydraulics}, {coupling}{}",
+        info.preset,
+        if hub_locked(p) { ", hub locked" } else { "" }
     )
     .unwrap();
+    let theta_motor = col("theta_motor");
+    let theta_hub = col("theta_hub");
+    let last = |y: &[f64]| y.last().copied().unwrap_or(0.0);
+    if p.controller.external {
+        writeln!(
+            s,
+            "  drive   external: step of e_in = {} V, {} s in steps of {} s",
+            args.e_in, args.stop, args.step
+        )
+        .unwrap();
+        writeln!(
+            s,
+            "  motor   final {:.3} deg, {:.4} rad/s",
+            last(&theta_motor).to_degrees(),
+            last(&col("omega_motor"))
+        )
+        .unwrap();
+        if p.motor_coupled {
+            writeln!(
+                s,
+                "  hub     final {:.3} deg, {:.4} rad/s",
+                last(&theta_hub).to_degrees(),
+                last(&col("omega_hub"))
+            )
+            .unwrap();
+        }
+    } else {
+        let target = args.r / p.controller.k_pot;
+        writeln!(
+            s,
+            "  command step of r = {} V (motor target {:.2} deg), {} s in steps of {} s",
+            args.r,
+            target.to_degrees(),
+            args.stop,
+            args.step
+        )
+        .unwrap();
+        let line = |name: &str, y: &[f64]| {
+            let f = step_figures(t, y, target, 0.02);
+            let settling = f
+                .settling
+                .map_or(format!("not settled within {} s", args.stop), |ts| {
+                    format!("{ts:.3} s")
+                });
+            format!(
+                "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling (2 %) {settling}\n",
+                last(y).to_degrees(),
+                f.overshoot_pct
+            )
+        };
+        s.push_str(&line("motor", &theta_motor));
+        if p.motor_coupled && !hub_locked(p) {
+            s.push_str(&line("hub", &theta_hub));
+        }
+    }
+    let w_tip = col("w_tip");
+    let tail = (w_tip.len() * 9) / 10;
     writeln!(
         s,
-        "  final   y_pot = {:.6} V, theta_motor = {:.4} deg, omega_motor = {:.3e} rad/s",
-        last[0],
-        last[1].to_degrees(),
-        last[2]
+        "  tip     peak |w_tip| {:.3} mm, residual {:.4} mm (largest |w_tip| over the last 10 % of the run)",
+        max_abs(&w_tip) * 1e3,
+        max_abs(&w_tip[tail.min(w_tip.len())..]) * 1e3
     )
     .unwrap();
-    writeln!(s, "  step    overshoot {overshoot:.2} %, rise time (10-90 %) {rise}, settling time (2 %) {settling}").unwrap();
-    writeln!(
-        s,
-        "  peaks   |p_load| = {:.2} bar, |q_valve| = {:.3} L/min, |omega_motor| = {:.3} rad/s",
-        max_abs(3) * 1e-5,
-        max_abs(4) * 6e4,
-        max_abs(2)
-    )
-    .unwrap();
+    let bar = |y: &[f64]| {
+        (
+            y.iter().copied().fold(f64::INFINITY, f64::min) * 1e-5,
+            y.iter().copied().fold(f64::NEG_INFINITY, f64::max) * 1e-5,
+        )
+    };
+    if p.hydraulics == HydraulicsModel::ServoValve {
+        let (p1_lo, p1_hi) = bar(&col("servo_valve.p_1"));
+        let (p2_lo, p2_hi) = bar(&col("servo_valve.p_2"));
+        writeln!(
+            s,
+            "  press.  p_1 {p1_lo:.2} .. {p1_hi:.2} bar, p_2 {p2_lo:.2} .. {p2_hi:.2} bar (gauge; supply {:.0} bar), peak |p_load| {:.2} bar",
+            p.servo_valve.p_supply * 1e-5,
+            max_abs(&col("p_load")) * 1e-5
+        )
+        .unwrap();
+    } else {
+        writeln!(
+            s,
+            "  press.  peak |p_load| {:.2} bar",
+            max_abs(&col("p_load")) * 1e-5
+        )
+        .unwrap();
+    }
+    let amplifier = if p.controller.saturation {
+        let knee = LINEAR_FRACTION * p.controller.e_max;
+        let e = col("controller.e_out");
+        format!(
+            "amplifier beyond its linear range (|e_out| > {knee} V) for {:.3} s, peak |e_out| {:.2} V of {} V",
+            time_where(t, &e, |v| v.abs() > knee),
+            max_abs(&e),
+            p.controller.e_max
+        )
+    } else {
+        format!(
+            "amplifier linear (no limit), peak |e_out| {:.2} V",
+            max_abs(&col("controller.e_out"))
+        )
+    };
+    writeln!(s, "  limits  {amplifier}").unwrap();
+    let st = &info.stats;
     writeln!(
         s,
         "  solver  {} steps, {} rejected, {} f evaluations, {} Jacobians, {} LU factorisations",
-        stats[0], stats[1], stats[2], stats[3], stats[4]
+        st[0], st[1], st[2], st[3], st[4]
     )
     .unwrap();
     writeln!(
         s,
-        "  time    {:.3} s wall, {:.0} x real time",
-        seconds,
-        args.stop / seconds.max(1e-9)
+        "  time    {:.3} s wall, {:.1} x real time",
+        info.seconds,
+        args.stop / info.seconds.max(1e-9)
     )
     .unwrap();
     writeln!(s, "  results {csv}").unwrap();
     s
+}
+
+fn hub_locked(p: &Parameters) -> bool {
+    p.plate.root == Root::Locked
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_figures_of_a_known_series() {
+        let t: Vec<f64> = (0..=10).map(|i| i as f64).collect();
+        let y = [0.0, 0.5, 1.1, 1.05, 0.97, 1.01, 1.0, 1.0, 1.0, 1.0, 1.0];
+        let f = step_figures(&t, &y, 1.0, 0.02);
+        assert!((f.overshoot_pct - 10.0).abs() < 1e-9);
+        assert_eq!(f.settling, Some(5.0));
+        // Negative target, and a series that never settles.
+        let y: Vec<f64> = y.iter().map(|v| -v).collect();
+        assert!((step_figures(&t, &y, -1.0, 0.02).overshoot_pct - 10.0).abs() < 1e-9);
+        assert_eq!(step_figures(&t[..5], &y[..5], -1.0, 0.02).settling, None);
+        assert!((time_where(&t, &y, |v| v < -1.0) - 2.0).abs() < 1e-12);
+    }
 }

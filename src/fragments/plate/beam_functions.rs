@@ -4,14 +4,15 @@
 //! * [`BeamKind::PinnedFree`]: eq. 8 (written there in `(a - x) / a`), pinned at the hub
 //!   (`xi = 0`: `phi = phi'' = 0`, eq. 9a) and free at the tip (`phi'' = phi''' = 0`, eq. 9b).
 //!   `phi = sin(beta xi) + sigma sinh(beta xi)`, `sigma = sin beta / sinh beta`, roots of
-//!   `tan beta = tanh beta`: 3.9266, 7.0686, 10.2102, 13.3518, ... (MODEL_NOTES item 6).
+//!   `tan beta = tanh beta`: 3.9266, 7.0686, 10.2102, 13.3518, ... (docs/model-notes.md, item 6).
 //! * [`BeamKind::ClampedFree`]: clamped at the hub (`phi = phi' = 0`), free at the tip;
 //!   `phi = cosh - cos - sigma (sinh - sin)`, roots of `cos beta cosh beta = -1`: 1.8751,
 //!   4.6941, 7.8548, ... Used for the locked hub and by the consistent formulation (shapes
 //!   clamped at the root in the hub frame).
-//! * [`BeamKind::FreeFree`]: eq. 11 and eq. 12 read as MODEL_NOTES item 4 (free at both edges,
-//!   `psi'' = psi''' = 0` at `y = 0` and `y = b`): `m = 1` the rigid translation `psi = 1`,
-//!   `m = 2` the rigid rotation `psi = sqrt(12) (xi - 1/2)` (eq. 11's `A_2y (y - b/2)`), `m >= 3`
+//! * [`BeamKind::FreeFree`]: eq. 11 and eq. 12 read as docs/model-notes.md, item 4 (free at
+//!   both edges, `psi'' = psi''' = 0` at `y = 0` and `y = b`): `m = 1` the rigid translation
+//!   `psi = 1`, `m = 2` the rigid rotation `psi = sqrt(12) (xi - 1/2)` (eq. 11's
+//!   `A_2y (y - b/2)`), `m >= 3`
 //!   `psi = cosh + cos - sigma (sinh + sin)`, roots of `cos beta cosh beta = 1`: 4.7300,
 //!   7.8532, 10.9956, ... (eq. 11 prints the negative of this shape; the sign of a shape is
 //!   immaterial).

@@ -1,5 +1,5 @@
-//! The consistent plate model: the Lagrangian of hub and plate (eqs. 3-5 in full), MODEL_NOTES
-//! sections 2 item 2 and 4.
+//! The consistent plate model: the Lagrangian of hub and plate (eqs. 3-5 in full),
+//! docs/model-notes.md, items 2 and 18.
 //!
 //! In the hub frame the deflection is `w = sum phi_n(x) psi_m(y) eta_nm` with clamped-free
 //! functions along `x` (the root is clamped to the hub) and the free-free family across; the
@@ -10,7 +10,7 @@
 //! * strain energy (eq. 5), Kirchhoff with Poisson and twist terms:
 //!   `K = D [X22 Y00 + X00 Y22 + nu (X20 Y02 + X02 Y20) + 2 (1 - nu) X11 Y11]` (times two arms),
 //!   `Xij = int phi^(i) phi^(j) dx`, `Yij = int psi^(i) psi^(j) dy`: a full (coupled) matrix;
-//!   the Poisson term couples `m = 1` and `m = 3` (MODEL_NOTES item 9);
+//!   the Poisson term couples `m = 1` and `m = 3` (docs/model-notes.md, item 9);
 //! * the mass matrix of the plate alone is `2 m a b` times the identity (the functions are
 //!   orthogonal), so the plate part is first diagonalised exactly: the coordinates of the model
 //!   are the natural modes of the clamped plate (eigenvectors of the Ritz problem), with an R
@@ -19,7 +19,7 @@
 //!
 //! Without damping the model conserves energy exactly (a Hamiltonian system), and as a
 //! Rayleigh-Ritz model its frequencies converge from above as `N x M` grows. It does not
-//! reproduce eq. 16 and must not be tuned to (MODEL_NOTES item 10).
+//! reproduce eq. 16 and must not be tuned to (docs/model-notes.md, item 10).
 
 use nalgebra::{DMatrix, DVector};
 

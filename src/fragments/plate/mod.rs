@@ -6,7 +6,7 @@
 //! [`PlateModel`] (generalised coordinates with mass and stiffness matrices and the vectors that
 //! map the hub torque, the shaker forces and the sensors onto them):
 //!
-//! * [`paper`]: eqs. 18-21 of the paper with the errata of MODEL_NOTES section 2 fixed.
+//! * [`paper`]: eqs. 18-21 of the paper with the errata of docs/model-notes.md (items 1-6) fixed.
 //! * [`consistent`]: the Lagrangian of hub and plate (eq. 4 and eq. 5 in full).
 //!
 //! [`modes`] solves eq. 14 (natural frequencies) with a symmetric generalised eigen-solver;
@@ -68,11 +68,11 @@ pub struct PlateParameters {
     pub rho: f64,
     /// Length from the hub axis to the tip \[m\] (paper: 1.41).
     pub a: f64,
-    /// Width \[m\] (paper's table: 0.4685, MODEL_NOTES item 1).
+    /// Width \[m\] (paper's table: 0.4685, docs/model-notes.md, item 1).
     pub b: f64,
     /// Thickness \[m\] (paper: 2.65e-3).
     pub h: f64,
-    /// Poisson's ratio (not in the paper; 0.3 reproduces eq. 16, MODEL_NOTES item 1).
+    /// Poisson's ratio (not in the paper; 0.3 reproduces eq. 16, docs/model-notes.md, item 1).
     pub nu: f64,
     /// Modal damping ratio (not in the paper; 1 %).
     pub zeta: f64,
@@ -125,8 +125,9 @@ impl PlateParameters {
     pub fn hub_total_inertia(&self) -> f64 {
         self.i_h + 2.0 * self.i_p()
     }
-    /// The 4 x 3 accelerometer grid over one arm, numbered along `y` first: point `k = 3 (i - 1)
-    /// + j` is at `x = i a / 4`, `y = (2 j - 1) b / 6` (so `acc[11]` is the tip centre of eq. 22).
+    /// The 4 x 3 accelerometer grid over one arm, numbered along `y` first: point
+    /// `k = 3 (i - 1) + j` is at `x = i a / 4`, `y = (2 j - 1) b / 6` (so `acc[11]` is the tip
+    /// centre of eq. 22).
     pub fn accelerometer_points(&self) -> Vec<(f64, f64)> {
         let mut v = Vec::new();
         for i in 1..=GRID_X {

@@ -1,4 +1,4 @@
-//! The paper's plate model: eqs. 18-21, with the errata of MODEL_NOTES section 2 fixed.
+//! The paper's plate model: eqs. 18-21, with the errata of docs/model-notes.md (items 1-6) fixed.
 //!
 //! Coordinates: the hub angle `theta` (inertia `I = I_H + 2 I_P`, section 3) when the root is the
 //! hub, then `eta_nm` in the order `j = N (m - 1) + n` of eq. 15. With pinned-free functions
@@ -10,8 +10,8 @@
 //! * Modal stiffness, eq. 21 (eq. 18's `k^T` and eq. 19's are its `m = 1, 2` cases):
 //!   `k_nm = D [b int phi'''' phi dx + 2 int phi'' phi dx int psi'' psi dy + a int psi'''' psi dy]`,
 //!   `D = E h^3 / (12 (1 - nu^2))`. With `nu = 0.3` and `b = 0.4685 m` this reproduces eq. 16 to
-//!   every printed digit (MODEL_NOTES item 1).
-//! * The hub torque enters through the root slope (MODEL_NOTES item 3: eq. 18's
+//!   every printed digit (docs/model-notes.md, item 1).
+//! * The hub torque enters through the root slope (docs/model-notes.md, item 3: eq. 18's
 //!   `b phi_nx(0) tau` is `b phi'_nx(0) tau`; eq. 20's last term `T0 phi'_nx(0) int psi_my dy`):
 //!   generalised force `tau phi'_n(0) int_0^b psi_m dy`, zero for `m >= 2`. As in the paper the
 //!   moment `T0 delta'(x)` is taken per unit width with `T0 = tau`, so this coefficient has units

@@ -1,0 +1,209 @@
+//! Named parameter sets: the paper's configurations, one place for `hsp run --preset NAME`, the
+//! tests and the README.
+//!
+//! A preset is a list of `NAME=VALUE` settings of FMU parameters, applied over the start values
+//! (a user's `--set` comes after it and wins). Every preset states the whole configuration
+//! (hydraulic model, coupling, root, amplifier limit, drive), so it means the same thing whatever
+//! the FMU's defaults are; the parameters it does not name (gains, plate, valve constants) keep
+//! their values. [`COMPLETE`] is the FMU's default.
+//!
+//! | preset | paper | what |
+//! | --- | --- | --- |
+//! | `complete` | Fig. 8 | full servo valve driving hub and plate through the torsion bar, hub free |
+//! | `complete-hub-locked` | Fig. 8, Fig. 10 | the same with the hub locked (the motor twists the bar) |
+//! | `servo-valve-motor` | Fig. 2b | full servo valve on the motor alone: the setup of the `G_est` fit |
+//! | `loes-motor` | eq. 1, eq. 2 | the LOES on the motor alone, linear amplifier: the identification |
+//! | `loes-coupled` | Fig. 9b | the LOES driving hub and plate, linear amplifier |
+//! | `hub-locked` | Fig. 10 | plate clamped at the root, shaken by F1/F2; the LOES motor alone |
+
+use crate::fmi2::Values;
+
+use super::parameters::set_by_name;
+
+/// A named parameter set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Preset {
+    /// The name for `--preset`.
+    pub name: &'static str,
+    /// Where the configuration is in the paper.
+    pub paper: &'static str,
+    /// One line on what it is.
+    pub description: &'static str,
+    /// `(NAME, VALUE)` settings of FMU parameters.
+    pub settings: &'static [(&'static str, &'static str)],
+}
+
+/// The FMU's default: the paper's complete system.
+pub const COMPLETE: &str = "complete";
+
+/// Every preset, the default first.
+pub const PRESETS: &[Preset] = &[
+    Preset {
+        name: COMPLETE,
+        paper: "Fig. 8",
+        description: "full servo valve driving the hub and plate through the torsion bar, hub \
+                      free, amplifier limit on (the FMU's defaults)",
+        settings: &[
+            ("hydraulics.model", "2"),
+            ("hydraulics.motor_coupled", "true"),
+            ("plate.root", "1"),
+            ("controller.saturation", "true"),
+            ("controller.external", "false"),
+        ],
+    },
+    Preset {
+        name: "complete-hub-locked",
+        paper: "Fig. 8, Fig. 10",
+        description: "the complete system with the hub locked: the motor twists the torsion bar \
+                      against a clamped plate root",
+        settings: &[
+            ("hydraulics.model", "2"),
+            ("hydraulics.motor_coupled", "true"),
+            ("plate.root", "2"),
+            ("controller.saturation", "true"),
+            ("controller.external", "false"),
+        ],
+    },
+    Preset {
+        name: "servo-valve-motor",
+        paper: "Fig. 2b",
+        description: "full servo valve on the motor alone (the setup of the G_est fit); the plate \
+                      is driven by F1 and F2 only",
+        settings: &[
+            ("hydraulics.model", "2"),
+            ("hydraulics.motor_coupled", "false"),
+            ("plate.root", "1"),
+            ("controller.saturation", "true"),
+            ("controller.external", "false"),
+        ],
+    },
+    Preset {
+        name: "loes-motor",
+        paper: "eq. 1, eq. 2",
+        description: "the LOES on the motor alone with the linear amplifier of eq. 1: the paper's \
+                      identification setup (G_est)",
+        settings: &[
+            ("hydraulics.model", "1"),
+            ("hydraulics.motor_coupled", "false"),
+            ("plate.root", "1"),
+            ("controller.saturation", "false"),
+            ("controller.external", "false"),
+        ],
+    },
+    Preset {
+        name: "loes-coupled",
+        paper: "Fig. 9b",
+        description: "the LOES driving the hub and plate through the torsion bar, linear \
+                      amplifier (the FRF from r to the tip acceleration)",
+        settings: &[
+            ("hydraulics.model", "1"),
+            ("hydraulics.motor_coupled", "true"),
+            ("plate.root", "1"),
+            ("controller.saturation", "false"),
+            ("controller.external", "false"),
+        ],
+    },
+    Preset {
+        name: "hub-locked",
+        paper: "Fig. 10",
+        description: "plate clamped at the root (hub locked) and shaken by F1, F2; the LOES motor \
+                      runs alone",
+        settings: &[
+            ("hydraulics.model", "1"),
+            ("hydraulics.motor_coupled", "false"),
+            ("plate.root", "2"),
+            ("controller.saturation", "false"),
+            ("controller.external", "false"),
+        ],
+    },
+];
+
+/// The preset of this name; the error lists the known names.
+pub fn preset(name: &str) -> Result<&'static Preset, String> {
+    PRESETS.iter().find(|p| p.name == name).ok_or_else(|| {
+        let names: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+        format!("unknown preset '{name}' (known: {})", names.join(", "))
+    })
+}
+
+/// Applies the preset `name` to `values` with the FMU's own checks.
+pub fn apply(values: &mut Values, name: &str) -> Result<(), String> {
+    for (var, value) in preset(name)?.settings {
+        set_by_name(values, var, value).map_err(|e| format!("preset '{name}': {e}"))?;
+    }
+    Ok(())
+}
+
+/// The presets as JSON: `[{"name", "paper", "description", "settings": {NAME: value}}]` with
+/// values typed as the FMU variables are (number or boolean), for importers such as the Python
+/// tests.
+pub fn presets_json() -> serde_json::Value {
+    let typed = |v: &str| -> serde_json::Value {
+        match v {
+            "true" => true.into(),
+            "false" => false.into(),
+            _ => v
+                .parse::<i64>()
+                .map(Into::into)
+                .or_else(|_| v.parse::<f64>().map(Into::into))
+                .unwrap_or_else(|_| v.into()),
+        }
+    };
+    PRESETS
+        .iter()
+        .map(|p| {
+            let settings: serde_json::Map<String, serde_json::Value> = p
+                .settings
+                .iter()
+                .map(|(n, v)| (n.to_string(), typed(v)))
+                .collect();
+            serde_json::json!({
+                "name": p.name,
+                "paper": p.paper,
+                "description": p.description,
+                "settings": settings,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmi2::Experiment;
+    use crate::model::parameters::{HydraulicsModel, Parameters};
+    use crate::model::variables::VARIABLES;
+
+    #[test]
+    fn every_preset_applies_and_names_are_unique() {
+        for (i, p) in PRESETS.iter().enumerate() {
+            let mut values = Values::from_start(&VARIABLES);
+            apply(&mut values, p.name).unwrap();
+            Parameters::from_values(&values, &Experiment::default()).unwrap();
+            assert!(PRESETS[..i].iter().all(|q| q.name != p.name), "{}", p.name);
+        }
+    }
+
+    #[test]
+    fn the_loes_motor_preset_is_the_identification_setup() {
+        let mut values = Values::from_start(&VARIABLES);
+        apply(&mut values, "loes-motor").unwrap();
+        let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+        assert_eq!(p.hydraulics, HydraulicsModel::Loes);
+        assert!(!p.motor_coupled && !p.controller.saturation && !p.controller.external);
+    }
+
+    #[test]
+    fn unknown_preset_is_named_with_the_known_ones() {
+        let e = apply(&mut Values::from_start(&VARIABLES), "fig9").unwrap_err();
+        assert!(e.contains("'fig9'") && e.contains("loes-motor"), "{e}");
+    }
+
+    #[test]
+    fn json_values_are_typed() {
+        let j = presets_json();
+        assert_eq!(j[0]["name"], COMPLETE);
+        assert_eq!(j[0]["settings"]["hydraulics.model"], 2);
+        assert_eq!(j[0]["settings"]["hydraulics.motor_coupled"], true);
+    }
+}

@@ -1,0 +1,109 @@
+//! External control (`controller.external = true`): the input `e_in` drives the valve coil (the
+//! LOES's valve command) in place of the analog controller, through the power amplifier's output
+//! limit; `r` is not used; `y_pot` stays an output.
+
+use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::model::assembly::Assembled;
+use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::presets;
+use hydraulic_slewing_plate::model::variables::VARIABLES;
+use hydraulic_slewing_plate::solver::Integrator;
+
+/// The model of a preset with `sets` applied and the inputs set by name.
+fn model(preset: &str, sets: &[(&str, &str)], inputs: &[(&str, f64)]) -> (Parameters, Assembled) {
+    let mut values = Values::from_start(&VARIABLES);
+    presets::apply(&mut values, preset).unwrap();
+    for (n, v) in sets {
+        set_by_name(&mut values, n, v).unwrap();
+    }
+    for (n, v) in inputs {
+        set_by_name(&mut values, n, &v.to_string()).unwrap();
+    }
+    let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+    let mut sys = Assembled::new(&p).unwrap();
+    sys.set_inputs(&values);
+    (p, sys)
+}
+
+/// Runs from rest to `t_end`; returns the outputs by name at the end.
+fn run(p: &Parameters, sys: &Assembled, t_end: f64) -> impl Fn(&str) -> f64 {
+    let mut integ = Integrator::new(p.solver_options(sys), 0.0, sys.initial_state()).unwrap();
+    integ.advance_to(sys, t_end).expect("integration");
+    let m = sys.compiled().clone();
+    let mut y = vec![0.0; m.n_outputs()];
+    m.outputs(integ.x(), sys.inputs(), &mut y);
+    move |name: &str| {
+        y[m.output_index(name)
+            .unwrap_or_else(|| panic!("no output {name}"))]
+    }
+}
+
+const EXTERNAL: (&str, &str) = ("controller.external", "true");
+
+#[test]
+fn with_e_in_zero_the_motor_stays_at_rest_whatever_r() {
+    for preset in ["loes-motor", "loes-coupled", "servo-valve-motor"] {
+        for r in [-5.0, 0.0, 3.0] {
+            let (p, sys) = model(preset, &[EXTERNAL], &[("r", r), ("e_in", 0.0)]);
+            let y = run(&p, &sys, 0.5);
+            // Exactly zero for the linear LOES (the state never leaves 0); the full servo valve
+            // starts at its Newton rest state (steps below 1e-13) and stays there.
+            for name in ["theta_motor", "omega_motor", "controller.e_out"] {
+                assert!(
+                    y(name).abs() < 1e-9,
+                    "{preset}, r = {r}: {name} = {}",
+                    y(name)
+                );
+            }
+            assert!(y("y_pot").abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn the_analog_loop_moves_on_r_and_ignores_e_in() {
+    // The converse: without external control r drives the loop and e_in is not used.
+    let (p, sys) = model("loes-motor", &[], &[("r", 0.5), ("e_in", 7.0)]);
+    let y = run(&p, &sys, 1.0);
+    assert!((y("y_pot") - 0.5).abs() < 1e-4, "y_pot = {}", y("y_pot"));
+}
+
+#[test]
+fn loes_with_constant_e_in_turns_at_k_sv_e_over_d_m() {
+    // Motor alone, no position feedback: at steady state the load pressure is zero (no load
+    // torque), so the valve flow k_sv e_in all goes into displacement: omega = k_sv e_in / D_m.
+    // The transient decays with the hydraulic poles (65 and 753 1/s): after 0.5 s it is below
+    // exp(-32) of the step.
+    for e_in in [-2.0, 0.5, 3.0] {
+        let (p, sys) = model("loes-motor", &[EXTERNAL], &[("r", 1.0), ("e_in", e_in)]);
+        let y = run(&p, &sys, 0.5);
+        let predicted = p.loes.k_sv * e_in / p.loes.d_m;
+        let measured = y("omega_motor");
+        assert!(
+            (measured - predicted).abs() <= 1e-6 * predicted.abs(),
+            "e_in = {e_in}: omega {measured} vs k_sv e / D_m = {predicted}"
+        );
+        assert_eq!(y("controller.e_out"), e_in);
+        // y_pot still reads the potentiometer.
+        assert!((y("y_pot") - p.controller.k_pot * y("theta_motor")).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn e_in_passes_the_amplifier_limit() {
+    // 30 V asked of a 12 V amplifier: the coil sees the limited voltage, and the motor turns at
+    // the rate of that voltage.
+    let (p, sys) = model(
+        "loes-motor",
+        &[EXTERNAL, ("controller.saturation", "true")],
+        &[("e_in", 30.0)],
+    );
+    let y = run(&p, &sys, 0.5);
+    let e = y("controller.e_out");
+    assert!(
+        e < p.controller.e_max && e > 0.99 * p.controller.e_max,
+        "{e}"
+    );
+    let predicted = p.loes.k_sv * e / p.loes.d_m;
+    assert!((y("omega_motor") - predicted).abs() <= 1e-6 * predicted);
+}
