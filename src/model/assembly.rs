@@ -101,7 +101,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
 /// The natural frequencies of the plate model of a parameter set (eq. 14; the chosen
 /// formulation and root condition, hub free, rigid mode left out), ascending.
 pub fn plate_modes(p: &Parameters) -> Result<Vec<NaturalMode>, String> {
-    Ok(natural_modes(&PlateModel::new(&p.plate)?))
+    natural_modes(&PlateModel::new(&p.plate)?)
 }
 
 /// Number of calculated frequency parameters `plate.f[1]` ... `plate.f[20]`.
