@@ -113,6 +113,7 @@ fn generate(text: &str) -> Result<String, String> {
     if let Some(defs) = root.children().find(|n| n.has_tag_name("UnitDefinitions")) {
         for u in defs.children().filter(|n| n.has_tag_name("Unit")) {
             let name = u.attribute("name").ok_or("a Unit has no name")?;
+            check_unit(u)?;
             let displays = u
                 .children()
                 .filter(|n| n.has_tag_name("DisplayUnit"))
@@ -134,6 +135,8 @@ fn generate(text: &str) -> Result<String, String> {
     let mut index_arms = String::new();
     let mut outputs = Vec::new();
     let mut initial_unknowns = Vec::new();
+    let mut inputs = BTreeSet::new();
+    let mut exact = BTreeSet::new();
     for (i, sv) in vars_node
         .children()
         .filter(|n| n.has_tag_name("ScalarVariable"))
@@ -206,6 +209,12 @@ fn generate(text: &str) -> Result<String, String> {
         }
         if causality == "output" {
             outputs.push(position);
+        }
+        if causality == "input" {
+            inputs.insert(position);
+        }
+        if causality == "parameter" && initial != Some("calculated") {
+            exact.insert(position);
         }
         if (causality == "output" && initial != Some("exact")) || causality == "calculatedParameter"
         {
@@ -281,6 +290,34 @@ fn generate(text: &str) -> Result<String, String> {
             })
             .unwrap_or_default()
     };
+    // Every unknown declares its dependencies: the outputs on inputs only (the knowns of a step),
+    // the initial unknowns on inputs and exact parameters (the knowns of initialisation mode).
+    for (tag, knowns) in [
+        ("Outputs", inputs.clone()),
+        ("InitialUnknowns", &inputs | &exact),
+    ] {
+        let unknowns = structure
+            .children()
+            .find(|n| n.has_tag_name(tag))
+            .into_iter()
+            .flat_map(|n| n.children().filter(|u| u.has_tag_name("Unknown")));
+        for u in unknowns {
+            let index = u.attribute("index").unwrap_or("?");
+            let deps = u.attribute("dependencies").ok_or(format!(
+                "<{tag}> Unknown {index} has no dependencies attribute (without it, it depends on every known)"
+            ))?;
+            for d in deps.split_whitespace() {
+                let d: usize = d
+                    .parse()
+                    .map_err(|_| format!("<{tag}> Unknown {index}: bad dependency '{d}'"))?;
+                if !knowns.contains(&d) {
+                    return Err(format!(
+                        "<{tag}> Unknown {index} depends on variable {d}, which is not a known there"
+                    ));
+                }
+            }
+        }
+    }
     if listed("Outputs") != outputs {
         return Err(format!(
             "<ModelStructure><Outputs> lists {:?}, but the outputs are at positions {outputs:?}",
@@ -310,4 +347,203 @@ fn generate(text: &str) -> Result<String, String> {
          /// Value references, by variable name.\n\
          pub mod vr {{\n{vr_consts}}}\n"
     ))
+}
+
+/// SI base-unit exponents in the order of `<BaseUnit>`'s attributes: kg, m, s, A, K, mol, cd, rad.
+type Dims = [i32; 8];
+const BASE: [&str; 8] = ["kg", "m", "s", "A", "K", "mol", "cd", "rad"];
+
+/// What a unit symbol means in SI: factor and exponents. `g` is both the gram and standard gravity;
+/// the dimensions decide which is meant.
+fn symbol(sym: &str) -> Vec<(f64, Dims)> {
+    let d = |e: [(usize, i32); 4]| {
+        let mut dims = [0; 8];
+        for (i, x) in e {
+            dims[i] += x;
+        }
+        dims
+    };
+    let (kg, m, s, a, rad) = (0, 1, 2, 3, 7);
+    let none = (0, 0);
+    let pa = d([(kg, 1), (m, -1), (s, -2), none]);
+    let v = d([(kg, 1), (m, 2), (s, -3), (a, -1)]);
+    match sym {
+        "1" => vec![(1.0, [0; 8])],
+        "m" => vec![(1.0, d([(m, 1), none, none, none]))],
+        "s" => vec![(1.0, d([(s, 1), none, none, none]))],
+        "min" => vec![(60.0, d([(s, 1), none, none, none]))],
+        "g" => vec![
+            (1e-3, d([(kg, 1), none, none, none])),
+            (9.80665, d([(m, 1), (s, -2), none, none])),
+        ],
+        "A" => vec![(1.0, d([(a, 1), none, none, none]))],
+        "rad" => vec![(1.0, d([(rad, 1), none, none, none]))],
+        "deg" => vec![(
+            std::f64::consts::PI / 180.0,
+            d([(rad, 1), none, none, none]),
+        )],
+        "rpm" => vec![(
+            2.0 * std::f64::consts::PI / 60.0,
+            d([(rad, 1), (s, -1), none, none]),
+        )],
+        "Hz" => vec![(1.0, d([(s, -1), none, none, none]))],
+        "N" => vec![(1.0, d([(kg, 1), (m, 1), (s, -2), none]))],
+        "J" => vec![(1.0, d([(kg, 1), (m, 2), (s, -2), none]))],
+        "Pa" => vec![(1.0, pa)],
+        "bar" => vec![(1e5, pa)],
+        "L" => vec![(1e-3, d([(m, 3), none, none, none]))],
+        "V" => vec![(1.0, v)],
+        "ohm" => vec![(1.0, d([(kg, 1), (m, 2), (s, -3), (a, -2)]))],
+        "H" => vec![(1.0, d([(kg, 1), (m, 2), (s, -2), (a, -2)]))],
+        _ => vec![],
+    }
+}
+
+/// An atom: optional SI prefix, symbol, optional integer exponent (`cm3`, `kg`, `mV`, `m5`).
+fn atom(text: &str) -> Result<Vec<(f64, Dims)>, String> {
+    let split = text
+        .find(|c: char| c.is_ascii_digit() || c == '-')
+        .filter(|&i| i > 0 || text == "1")
+        .unwrap_or(text.len());
+    let (name, exp) = if text == "1" {
+        ("1", 1)
+    } else {
+        let exp = if split < text.len() {
+            text[split..]
+                .parse::<i32>()
+                .map_err(|_| format!("bad exponent in '{text}'"))?
+        } else {
+            1
+        };
+        (&text[..split], exp)
+    };
+    let mut found = symbol(name);
+    if found.is_empty() {
+        let prefixes = [
+            ("n", 1e-9),
+            ("u", 1e-6),
+            ("m", 1e-3),
+            ("c", 1e-2),
+            ("k", 1e3),
+            ("M", 1e6),
+        ];
+        for (p, f) in prefixes {
+            if let Some(rest) = name.strip_prefix(p) {
+                found.extend(symbol(rest).into_iter().map(|(x, d)| (x * f, d)));
+            }
+        }
+    }
+    if found.is_empty() {
+        return Err(format!("unknown unit symbol '{name}'"));
+    }
+    Ok(found
+        .into_iter()
+        .map(|(f, d)| (f.powi(exp), d.map(|x| x * exp)))
+        .collect())
+}
+
+/// Every SI meaning of a unit expression such as `bar.min/L` or `m3/(s.V)`: `.` multiplies,
+/// `/` divides by the next factor, parentheses group.
+fn unit_meanings(expr: &str) -> Result<Vec<(f64, Dims)>, String> {
+    fn product(s: &[u8], i: &mut usize) -> Result<Vec<(f64, Dims)>, String> {
+        let mut acc = factor(s, i)?;
+        while *i < s.len() && (s[*i] == b'.' || s[*i] == b'/') {
+            let divide = s[*i] == b'/';
+            *i += 1;
+            let rhs = factor(s, i)?;
+            let mut next = Vec::new();
+            for (fa, da) in &acc {
+                for (fb, db) in &rhs {
+                    let sign = if divide { -1 } else { 1 };
+                    let mut d = *da;
+                    for k in 0..8 {
+                        d[k] += sign * db[k];
+                    }
+                    next.push((if divide { fa / fb } else { fa * fb }, d));
+                }
+            }
+            acc = next;
+        }
+        Ok(acc)
+    }
+    fn factor(s: &[u8], i: &mut usize) -> Result<Vec<(f64, Dims)>, String> {
+        if s.get(*i) == Some(&b'(') {
+            *i += 1;
+            let inner = product(s, i)?;
+            if s.get(*i) != Some(&b')') {
+                return Err("missing ')'".into());
+            }
+            *i += 1;
+            return Ok(inner);
+        }
+        let start = *i;
+        while *i < s.len() && !matches!(s[*i], b'.' | b'/' | b'(' | b')') {
+            *i += 1;
+        }
+        atom(std::str::from_utf8(&s[start..*i]).map_err(|e| e.to_string())?)
+    }
+    let bytes = expr.as_bytes();
+    let mut i = 0;
+    let meanings = product(bytes, &mut i)?;
+    if i != bytes.len() {
+        return Err(format!("cannot read the unit '{expr}'"));
+    }
+    Ok(meanings)
+}
+
+/// Checks a `<Unit>`: its name means what its `<BaseUnit>` says, and every `<DisplayUnit>`'s
+/// factor converts to what its name means (so `bar.min/L` must have factor 1/6e9).
+fn check_unit(u: roxmltree::Node) -> Result<(), String> {
+    let name = u.attribute("name").unwrap_or("");
+    let base = u.children().find(|n| n.has_tag_name("BaseUnit"));
+    let mut dims: Dims = [0; 8];
+    let mut base_factor = 1.0;
+    if let Some(b) = base {
+        for (k, e) in BASE.iter().enumerate() {
+            if let Some(x) = b.attribute(*e) {
+                dims[k] = x
+                    .parse()
+                    .map_err(|_| format!("unit '{name}': bad exponent {e}=\"{x}\""))?;
+            }
+        }
+        if let Some(f) = b.attribute("factor") {
+            base_factor = f
+                .parse()
+                .map_err(|_| format!("unit '{name}': bad factor"))?;
+        }
+    }
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+    let means = |expr: &str, scale: f64| -> Result<bool, String> {
+        Ok(unit_meanings(expr)?
+            .iter()
+            .any(|(f, d)| *d == dims && close(*f, scale)))
+    };
+    if !means(name, base_factor).map_err(|e| format!("unit '{name}': {e}"))? {
+        return Err(format!(
+            "unit '{name}' does not mean its <BaseUnit> (exponents {dims:?} of {BASE:?}, factor {base_factor})"
+        ));
+    }
+    for du in u.children().filter(|n| n.has_tag_name("DisplayUnit")) {
+        let dname = du.attribute("name").unwrap_or("");
+        let factor: f64 = du
+            .attribute("factor")
+            .unwrap_or("1")
+            .parse()
+            .map_err(|_| format!("display unit '{dname}': bad factor"))?;
+        // display value = factor * value in the unit; one display unit is base_factor / factor
+        // in SI.
+        if !means(dname, base_factor / factor)
+            .map_err(|e| format!("display unit '{dname}': {e}"))?
+        {
+            let right = unit_meanings(dname)?
+                .iter()
+                .find(|(_, d)| *d == dims)
+                .map(|(f, _)| base_factor / f);
+            return Err(format!(
+                "display unit '{dname}' of unit '{name}' has factor {factor:e}, but its name gives {}",
+                right.map_or("other dimensions".to_string(), |f| format!("{f:e}"))
+            ));
+        }
+    }
+    Ok(())
 }

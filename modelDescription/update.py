@@ -1,13 +1,29 @@
 #!/usr/bin/env python3
 """Rewrites the derived parts of modelDescription.xml after its variables were edited:
-<ModelStructure> (Outputs and InitialUnknowns, by 1-based position) and the GUID (a hash of the
-file with the GUID left out, as build.rs computes it). build.rs stays the judge: it fails the
-build if either is stale. Usage: python3 modelDescription/update.py"""
+<ModelStructure> (Outputs and InitialUnknowns, by 1-based position, with their dependencies) and
+the GUID (a hash of the file with the GUID left out, as build.rs computes it). build.rs stays the
+judge: it fails the build if either is stale. Usage: python3 modelDescription/update.py
+
+Dependencies: an output depends directly on an input only where FEEDTHROUGH says so: the plate's
+accelerations on the shaker forces (Newton's law: a force changes the acceleration at once), and
+the LOES valve flow and the drive voltage controller.e_out on the reference r and on the external
+drive e_in (the analog controller and the amplifier are static). Every other output is a
+function of the state alone, y_pot and theta among them, so feeding y_pot back to r makes no
+algebraic loop. tests/model_description.rs checks this table against the compiled model in every
+configuration. Initially the outputs depend on the parameters and the same inputs (the simulation
+starts from the rest state); the calculated plate frequencies plate.f[k] on the plate.*
+parameters and hub.I_H."""
 
 import pathlib
 import re
 
 XML = pathlib.Path(__file__).with_name("modelDescription.xml")
+
+# Output name pattern -> the inputs it depends on directly.
+FEEDTHROUGH = {
+    r"acc\[\d+\]|acc_tip": ["F1", "F2"],
+    r"q_valve|controller\.e_out": ["r", "e_in"],
+}
 
 
 def fnv1a(data: bytes, basis: int) -> int:
@@ -29,19 +45,33 @@ def guid_for(text: str) -> str:
 def main():
     text = XML.read_text()
     variables = re.findall(r"<ScalarVariable\b(.*?)>", text, flags=re.S)
-    outputs, initial = [], []
+    names = [re.search(r'name="([^"]*)"', attrs).group(1) for attrs in variables]
+    position = {name: i for i, name in enumerate(names, start=1)}
+
+    def feedthrough(name):
+        return sorted(position[u] for pattern, inputs in FEEDTHROUGH.items() if re.fullmatch(pattern, name) for u in inputs)
+
+    outputs, initial, parameters, plate = [], [], [], []
     for i, attrs in enumerate(variables, start=1):
+        name = names[i - 1]
         causality = re.search(r'causality="(\w+)"', attrs)
         causality = causality.group(1) if causality else "local"
         init = re.search(r'initial="(\w+)"', attrs)
         if causality == "output":
-            outputs.append(i)
+            outputs.append((i, feedthrough(name)))
         if (causality == "output" and not (init and init.group(1) == "exact")) or causality == "calculatedParameter":
-            initial.append(i)
+            initial.append((i, name))
+        if causality == "parameter":
+            parameters.append(i)
+            if name.startswith("plate.") or name == "hub.I_H":
+                plate.append(i)
+    initial = [(i, plate if name.startswith("plate.f[") else sorted(parameters + feedthrough(name))) for i, name in initial]
 
-    def block(tag, indices):
-        lines = "".join(f'      <Unknown index="{i}"/>\n' for i in indices)
-        return f"    <{tag}>\n{lines}    </{tag}>\n" if indices else ""
+    def block(tag, unknowns):
+        lines = "".join(
+            f'      <Unknown index="{i}" dependencies="{" ".join(map(str, deps))}"/>\n' for i, deps in unknowns
+        )
+        return f"    <{tag}>\n{lines}    </{tag}>\n" if unknowns else ""
 
     structure = "  <ModelStructure>\n" + block("Outputs", outputs) + block("InitialUnknowns", initial) + "  </ModelStructure>"
     text = re.sub(r"  <ModelStructure>.*?</ModelStructure>", lambda _: structure, text, flags=re.S)
