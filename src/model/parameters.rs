@@ -34,6 +34,8 @@ pub struct Parameters {
     pub plate: PlateParameters,
     /// Torsion-bar stiffness \[N m/rad\] (`torsion_bar.k`).
     pub torsion_bar_k: f64,
+    /// Torsion-bar structural damping ratio \[-\] (`torsion_bar.zeta`).
+    pub torsion_bar_zeta: f64,
     pub method: Method,
     pub rtol: f64,
     /// Absolute tolerance as a fraction of each state's nominal value.
@@ -73,6 +75,7 @@ const POSITIVE: &[usize] = &[
     idx::SERVO_VALVE_K_V,
     idx::SERVO_VALVE_W,
     idx::SERVO_VALVE_C_R,
+    idx::SERVO_VALVE_X_V_MAX,
     idx::SERVO_VALVE_V_1,
     idx::SERVO_VALVE_R_LEAK,
     idx::SERVO_VALVE_D_M,
@@ -214,6 +217,7 @@ impl Parameters {
                 k_v: values.real(idx::SERVO_VALVE_K_V),
                 w: values.real(idx::SERVO_VALVE_W),
                 c_r: values.real(idx::SERVO_VALVE_C_R),
+                x_v_max: values.real(idx::SERVO_VALVE_X_V_MAX),
                 v_1: values.real(idx::SERVO_VALVE_V_1),
                 r_leak: values.real(idx::SERVO_VALVE_R_LEAK),
                 d_m: values.real(idx::SERVO_VALVE_D_M),
@@ -230,6 +234,7 @@ impl Parameters {
             },
             plate,
             torsion_bar_k: values.real(idx::TORSION_BAR_K),
+            torsion_bar_zeta: values.real(idx::TORSION_BAR_ZETA),
             method,
             rtol: experiment
                 .tolerance
