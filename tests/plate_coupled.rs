@@ -5,11 +5,15 @@ use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use hydraulic_slewing_plate::solver::{Atol, Integrator, Method, SolverOptions};
 
+/// The model with `sets` applied over the LOES on the motor alone (preset `loes-motor`, the
+/// configuration these tests were written for; they couple the motor or lock the hub themselves).
 fn system(sets: &[(&str, &str)]) -> (Parameters, Assembled) {
     let mut values = Values::from_start(&VARIABLES);
+    presets::apply(&mut values, "loes-motor").unwrap();
     for (n, v) in sets {
         set_by_name(&mut values, n, v).unwrap();
     }
@@ -138,7 +142,16 @@ fn power_balance_with_damping_and_forcing() {
                 }
             })
             .collect();
-        let u = [0.8, 3.0, -2.0];
+        let u: Vec<f64> = m
+            .input_names()
+            .iter()
+            .map(|n| match n.as_str() {
+                "r" => 0.8,
+                "F1" => 3.0,
+                "F2" => -2.0,
+                _ => 0.0,
+            })
+            .collect();
         let pb = m.power_balance(&x, &u);
         let scale = pb.source_power.abs() + pb.dissipated_power.abs() + pb.stored_rate.abs();
         println!(

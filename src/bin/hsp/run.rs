@@ -404,6 +404,7 @@ mod tests {
         let y: Vec<f64> = y.iter().map(|v| -v).collect();
         assert!((step_figures(&t, &y, -1.0, 0.02).overshoot_pct - 10.0).abs() < 1e-9);
         assert_eq!(step_figures(&t[..5], &y[..5], -1.0, 0.02).settling, None);
-        assert!((time_where(&t, &y, |v| v < -1.0) - 2.0).abs() < 1e-12);
+        // Beyond the target at t = 2, 3 and 5: three intervals of 1 s.
+        assert!((time_where(&t, &y, |v| v < -1.0) - 3.0).abs() < 1e-12);
     }
 }
