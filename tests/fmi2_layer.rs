@@ -10,7 +10,7 @@ use std::sync::Mutex;
 use hydraulic_slewing_plate::fmi2::exports as x;
 use hydraulic_slewing_plate::fmi2::ffi::*;
 use hydraulic_slewing_plate::fmi2::{
-    Causality, Experiment, FmuModel, Kind, LogCategory, StepFailure, Value, Values, Variability,
+    Causality, Experiment, FmuModel, Kind, StepFailure, StepLog, Value, Values, Variability,
     Variable,
 };
 
@@ -88,7 +88,7 @@ impl FmuModel for Decay {
         values: &mut Values,
         t0: f64,
         t1: f64,
-        _log: &mut dyn FnMut(LogCategory, &str),
+        _log: &mut StepLog,
     ) -> Result<(), StepFailure> {
         let k = values.real(0);
         let end = match values.integer(1) {
@@ -110,7 +110,13 @@ impl FmuModel for Decay {
     fn save_state(&self) -> (f64, f64) {
         (self.x, self.t)
     }
-    fn restore_state(&mut self, s: &(f64, f64), _: &Values, _: &Experiment) -> Result<(), String> {
+    fn restore_state(
+        &mut self,
+        s: &(f64, f64),
+        _: &Values,
+        _: &Experiment,
+        _: Option<f64>,
+    ) -> Result<(), String> {
         (self.x, self.t) = *s;
         Ok(())
     }
@@ -209,8 +215,9 @@ fn a_panic_becomes_fatal_and_stays_inside() {
     start(c, 2);
     let status = unsafe { x::do_step::<Decay>(c, 0.0, 0.1, 1) };
     assert_eq!(status, Fmi2Status::Fatal);
+    // The message and its place go to the FMU's logger.
     assert!(logged(
-        "fmi2DoStep: internal error: deliberate panic in do_step"
+        "fmi2DoStep: internal error: deliberate panic in do_step (at tests/fmi2_layer.rs:"
     ));
     // After fmi2Fatal nothing but fmi2FreeInstance: every call is refused.
     assert_eq!(get_x(c).0, Fmi2Status::Error);
@@ -309,4 +316,28 @@ fn null_and_foreign_pointers_are_refused() {
         );
         assert!(c.is_null());
     }
+}
+
+/// The panic of `a_panic_becomes_fatal_and_stays_inside`, run in a child process of this test
+/// binary so that its stderr can be read: the panic hook keeps "panicked at" off the host's stderr.
+#[test]
+fn a_panic_prints_nothing_to_stderr() {
+    if std::env::var_os("FMI2_LAYER_CHILD").is_some() {
+        return;
+    }
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([
+            "--exact",
+            "a_panic_becomes_fatal_and_stays_inside",
+            "--nocapture",
+        ])
+        .env("FMI2_LAYER_CHILD", "1")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("1 passed"), "{stdout}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!stderr.contains("deliberate panic"), "{stderr}");
 }

@@ -16,13 +16,13 @@ use nalgebra::DMatrix;
 
 const P: &str = "servo_valve";
 
-fn closed_loop(p: &ServoValveParameters) -> (CompiledModel, Vec<f64>) {
-    let m = servo_valve::build_loop(p, &ControllerParameters::default())
-        .unwrap()
-        .compile()
-        .unwrap();
-    let x = rest_state(&m, &[0.0], P, p).unwrap();
-    (m, x)
+/// The closed loop at rest, with each state's nominal magnitude.
+fn closed_loop(p: &ServoValveParameters) -> (CompiledModel, Vec<f64>, Vec<f64>) {
+    let g = servo_valve::build_loop(p, &ControllerParameters::default()).unwrap();
+    let nominal = servo_valve::nominals(&g);
+    let m = g.compile().unwrap();
+    let x = rest_state(&m, &[0.0], P, p, &nominal).unwrap();
+    (m, x, nominal)
 }
 
 fn state(m: &CompiledModel, name: &str) -> usize {
@@ -40,7 +40,7 @@ fn output(m: &CompiledModel, x: &[f64], name: &str) -> f64 {
 #[test]
 fn null_pressures_are_symmetric() {
     let p = ServoValveParameters::default();
-    let (m, x) = closed_loop(&p);
+    let (m, x, nominal) = closed_loop(&p);
     let (pa, pb) = (
         output(&m, &x, "servo_valve.p_a"),
         output(&m, &x, "servo_valve.p_b"),
@@ -72,8 +72,7 @@ fn null_pressures_are_symmetric() {
     let mut dx = vec![0.0; m.n_states()];
     m.derivatives(&x, &[0.0], &mut dx);
     for (i, d) in dx.iter().enumerate() {
-        let n = p.nominal(P, &m.state_names()[i]).unwrap_or(1.0);
-        assert!(d.abs() <= 1e-9 * n, "{}: {d}", m.state_names()[i]);
+        assert!(d.abs() <= 1e-9 * nominal[i], "{}: {d}", m.state_names()[i]);
     }
 }
 
@@ -91,7 +90,7 @@ fn textbook_q1(p: &ServoValveParameters, x: f64, p1: f64) -> f64 {
 #[test]
 fn flow_characteristic_matches_orifice_law() {
     let p = ServoValveParameters::default();
-    let (m, rest) = closed_loop(&p);
+    let (m, rest, _) = closed_loop(&p);
     let c = p.v_1 / p.beta;
     for &x in &[-4e-4, -1e-4, -2e-5, 2e-5, 1e-4, 4e-4] {
         for &pl in &[-60e5, 0.0, 30e5, 90e5] {
@@ -124,7 +123,7 @@ fn flow_and_pressure_gains_at_null() {
         r_leak: 1e30,
         ..ServoValveParameters::default()
     };
-    let (m, x) = closed_loop(&p);
+    let (m, x, _) = closed_loop(&p);
     let mut jac = DMatrix::zeros(m.n_states(), m.n_states());
     m.jacobian(&x, &[0.0], &mut jac);
     let (i1, ixv) = (state(&m, "C_1.q"), state(&m, "springs.q[2]"));
@@ -191,14 +190,13 @@ impl Lcg {
 #[test]
 fn power_balance_at_random_states() {
     let p = ServoValveParameters::default();
-    let (m, rest) = closed_loop(&p);
+    let (m, rest, nominal) = closed_loop(&p);
     let mut rng = Lcg(6);
     for _ in 0..200 {
         let x: Vec<f64> = rest
             .iter()
-            .zip(m.state_names())
-            .map(|(x0, n)| {
-                let nom = p.nominal(P, n).unwrap_or(1.0);
+            .zip(&nominal)
+            .map(|(x0, &nom)| {
                 // Pressures anywhere from -0.5 p_s to 1.5 p_s, positions and speeds +-2 nominal.
                 x0 + 2.0 * nom * rng.next()
             })
@@ -269,8 +267,8 @@ fn flow_reversal_and_zero_pressure_drop_stay_finite() {
     // hub inertia I_H; b_m = 0.01 N m s/rad): when the command reverses, the coasting rotor
     // drives the motor as a pump against the closing valve, the chamber pressures swing past the
     // supply and tank pressures (metering edges see their pressure drop cross zero and their
-    // flow reverse) and the spool crosses null. (No cavitation model: pressures below the tank's
-    // are allowed.)
+    // flow reverse) and the spool crosses null. (Chamber pressures may fall below the tank's,
+    // down to the cavitation floor, limits::CAVITATION_PRESSURE.)
     let params = fmu_parameters(&[
         ("hydraulics.model", "2"),
         ("servo_valve.I_m", "3.5"),

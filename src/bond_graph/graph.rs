@@ -18,6 +18,9 @@ pub struct BondGraph {
     pub(crate) outputs: Vec<OutputDef>,
     /// State-bearing items in creation order: this is the order of the model's states.
     pub(crate) state_order: Vec<StateOwner>,
+    /// Typical magnitudes of states, set by the fragment that owns them (see
+    /// [`BondGraph::set_nominal`]), keyed by the state owner.
+    nominals: Vec<(StateOwner, Vec<f64>)>,
 }
 
 /// An item that carries states: a storage element or an integrator.
@@ -37,7 +40,75 @@ impl BondGraph {
             signals: Vec::new(),
             outputs: Vec::new(),
             state_order: Vec::new(),
+            nominals: Vec::new(),
         }
+    }
+
+    /// States a typical magnitude of each state of the storage element `element` (one value
+    /// per state: one for an I or C, one per port for a field), for the integrator's absolute
+    /// tolerance. The fragment that adds an element knows its scale (a pilot chamber holds
+    /// 1e-13 m^3 of compressed oil, a rotor angle is of order 1 rad); stating it here keeps it
+    /// with the element through renames. Values must be finite and positive.
+    ///
+    /// # Panics
+    /// If `element` carries no state, or the number of values differs from its number of states
+    /// (a programming error in the fragment).
+    pub fn set_nominal(&mut self, element: ElementId, nominal: &[f64]) {
+        let states = match &self.elements[element.0].kind {
+            ElementKind::I(_) | ElementKind::C(_) => 1,
+            ElementKind::IField(m) | ElementKind::CField(m) => m.nrows(),
+            _ => 0,
+        };
+        assert!(
+            states > 0 && states == nominal.len(),
+            "set_nominal: {} has {states} states, got {} nominal values",
+            self.elements[element.0].name,
+            nominal.len()
+        );
+        self.put_nominal(StateOwner::Element(element), nominal.to_vec());
+    }
+
+    /// States a typical magnitude of the state of the integrator `signal` (see
+    /// [`BondGraph::set_nominal`]).
+    ///
+    /// # Panics
+    /// If `signal` is not an integrator.
+    pub fn set_integrator_nominal(&mut self, signal: SignalId, nominal: f64) {
+        assert!(
+            matches!(self.signals[signal.0].kind, SignalKind::Integrator(_)),
+            "set_integrator_nominal: {} is not an integrator",
+            self.signals[signal.0].name
+        );
+        self.put_nominal(StateOwner::Integrator(signal), vec![nominal]);
+    }
+
+    fn put_nominal(&mut self, owner: StateOwner, values: Vec<f64>) {
+        assert!(
+            values.iter().all(|v| v.is_finite() && *v > 0.0),
+            "nominal values must be finite and positive, got {values:?}"
+        );
+        self.nominals.retain(|(o, _)| *o != owner);
+        self.nominals.push((owner, values));
+    }
+
+    /// The stated nominal magnitude of every state, in the compiled model's state order
+    /// (`None` where the owner stated none).
+    pub fn state_nominals(&self) -> Vec<Option<f64>> {
+        let mut out = Vec::new();
+        for owner in &self.state_order {
+            let n = match owner {
+                StateOwner::Element(e) => match &self.elements[e.0].kind {
+                    ElementKind::IField(m) | ElementKind::CField(m) => m.nrows(),
+                    _ => 1,
+                },
+                StateOwner::Integrator(_) => 1,
+            };
+            match self.nominals.iter().find(|(o, _)| o == owner) {
+                Some((_, v)) => out.extend(v.iter().map(|x| Some(*x))),
+                None => out.extend(std::iter::repeat_n(None, n)),
+            }
+        }
+        out
     }
 
     /// The graph's name.

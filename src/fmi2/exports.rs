@@ -1,12 +1,14 @@
 //! The `extern "C"` entry points. [`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation)
 //! emits one `#[no_mangle]` function per FMI 2.0 co-simulation function, each forwarding to a
-//! generic function here. Every entry point checks its pointers, runs under `catch_unwind`, and
-//! turns a panic into `fmi2Fatal` with a log line: a panic must never unwind into the host.
-
-use std::panic::{catch_unwind, AssertUnwindSafe};
+//! generic function here. Every entry point checks its pointers (instances and FMU states carry a
+//! magic number), runs under [`guarded`], and turns a panic into `fmi2Fatal` with a log line: a
+//! panic must never unwind into the host, and its message goes to the FMU's logger, not to the
+//! host's stderr.
 
 use super::ffi::*;
-use super::instance::{c_str, Instance, SavedState};
+use super::fmu_state::SavedState;
+use super::instance::{c_str, Instance};
+use super::logging::guarded;
 use super::variables::Value;
 use super::FmuModel;
 
@@ -23,18 +25,35 @@ pub unsafe fn with_instance<M: FmuModel>(
     if c.is_null() || !Instance::is_instance(ptr) {
         return Fmi2Status::Error;
     }
-    match catch_unwind(AssertUnwindSafe(|| f(&mut *ptr))) {
+    match guarded(|| f(&mut *ptr)) {
         Ok(status) => status,
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
+        Err(what) => {
             // The logger only reads the name and callbacks, which a panic cannot have broken.
             let inst = &mut *ptr;
             inst.fatal(&format!("{function}: internal error: {what}"))
         }
+    }
+}
+
+/// The FMU state behind `state`, or an `fmi2Error` naming the argument when it is NULL or not an
+/// FMU state of this library (freed already, say, or an instance pointer).
+///
+/// # Safety
+/// `state` is NULL or points to at least 8 readable bytes.
+unsafe fn fmu_state<'a, M: FmuModel>(
+    inst: &mut Instance<M>,
+    function: &str,
+    state: Fmi2FmuState,
+) -> Result<&'a mut SavedState<M::State>, Fmi2Status> {
+    let ptr = state as *mut SavedState<M::State>;
+    if state.is_null() {
+        Err(inst.error(&format!("{function}: argument 'FMUstate' is NULL")))
+    } else if !SavedState::is_saved_state(ptr) {
+        Err(inst.error(&format!(
+            "{function}: argument 'FMUstate' is not an FMU state of this FMU (freed already?)"
+        )))
+    } else {
+        Ok(&mut *ptr)
     }
 }
 
@@ -80,7 +99,7 @@ pub unsafe fn instantiate<M: FmuModel>(
     _visible: Fmi2Boolean,
     logging_on: Fmi2Boolean,
 ) -> Fmi2Component {
-    let result = catch_unwind(AssertUnwindSafe(|| {
+    let result = guarded(|| {
         if functions.is_null() || (*functions).logger.is_none() {
             // Without a logger there is nobody to tell.
             return std::ptr::null_mut();
@@ -106,7 +125,7 @@ pub unsafe fn instantiate<M: FmuModel>(
                 std::ptr::null_mut()
             }
         }
-    }));
+    });
     result.unwrap_or(std::ptr::null_mut())
 }
 
@@ -116,14 +135,14 @@ pub unsafe fn free_instance<M: FmuModel>(c: Fmi2Component) {
     if c.is_null() {
         return;
     }
-    let _ = catch_unwind(AssertUnwindSafe(|| {
+    let _ = guarded(|| {
         if Instance::is_instance(c as *const Instance<M>) {
             let inst = &mut *(c as *mut Instance<M>);
             inst.log_call(|| "fmi2FreeInstance()".into());
             inst.invalidate();
             drop(Box::from_raw(c as *mut Instance<M>));
         }
-    }));
+    });
 }
 
 /// # Safety
@@ -256,12 +275,14 @@ pub unsafe fn get_fmu_state<M: FmuModel>(c: Fmi2Component, state: *mut Fmi2FmuSt
             return s;
         }
         inst.log_call(|| "fmi2GetFMUstate()".into());
-        let saved = inst.save();
         if (*state).is_null() {
-            *state = Box::into_raw(Box::new(saved)) as Fmi2FmuState;
+            *state = Box::into_raw(Box::new(inst.save())) as Fmi2FmuState;
         } else {
             // A state handed back to be overwritten (FMI 2.0.4, 2.1.8).
-            *((*state) as *mut SavedState<M::State>) = saved;
+            match fmu_state(inst, "fmi2GetFMUstate", *state) {
+                Ok(old) => *old = inst.save(),
+                Err(s) => return s,
+            }
         }
         Fmi2Status::Ok
     })
@@ -271,14 +292,15 @@ pub unsafe fn get_fmu_state<M: FmuModel>(c: Fmi2Component, state: *mut Fmi2FmuSt
 /// As `fmi2SetFMUstate`: `state` from `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate` of this FMU.
 pub unsafe fn set_fmu_state<M: FmuModel>(c: Fmi2Component, state: Fmi2FmuState) -> Fmi2Status {
     with_instance::<M>(c, "fmi2SetFMUstate", |inst| {
-        if state.is_null() {
-            return inst.error("fmi2SetFMUstate: argument 'FMUstate' is NULL");
-        }
         if let Err(s) = inst.check_fmu_state_call("fmi2SetFMUstate") {
             return s;
         }
+        let saved = match fmu_state(inst, "fmi2SetFMUstate", state) {
+            Ok(saved) => saved,
+            Err(s) => return s,
+        };
         inst.log_call(|| "fmi2SetFMUstate()".into());
-        inst.restore(&*(state as *const SavedState<M::State>))
+        inst.restore(saved)
     })
 }
 
@@ -292,9 +314,18 @@ pub unsafe fn free_fmu_state<M: FmuModel>(
         if state.is_null() {
             return inst.error("fmi2FreeFMUstate: argument 'FMUstate' is NULL");
         }
+        if let Err(s) = inst.check_fmu_state_call("fmi2FreeFMUstate") {
+            return s;
+        }
         inst.log_call(|| "fmi2FreeFMUstate()".into());
         if !(*state).is_null() {
-            drop(Box::from_raw((*state) as *mut SavedState<M::State>));
+            match fmu_state(inst, "fmi2FreeFMUstate", *state) {
+                Ok(saved) => {
+                    saved.invalidate();
+                    drop(Box::from_raw(saved as *mut SavedState<M::State>));
+                }
+                Err(s) => return s,
+            }
             *state = std::ptr::null_mut();
         }
         Fmi2Status::Ok
@@ -309,13 +340,16 @@ pub unsafe fn serialized_size<M: FmuModel>(
     size: *mut usize,
 ) -> Fmi2Status {
     with_instance::<M>(c, "fmi2SerializedFMUstateSize", |inst| {
-        if state.is_null() || size.is_null() {
-            return inst.error("fmi2SerializedFMUstateSize: argument 'FMUstate' or 'size' is NULL");
+        if size.is_null() {
+            return inst.error("fmi2SerializedFMUstateSize: argument 'size' is NULL");
         }
         if let Err(s) = inst.check_fmu_state_call("fmi2SerializedFMUstateSize") {
             return s;
         }
-        let saved = &mut *(state as *mut SavedState<M::State>);
+        let saved = match fmu_state(inst, "fmi2SerializedFMUstateSize", state) {
+            Ok(saved) => saved,
+            Err(s) => return s,
+        };
         match saved.serialized() {
             Ok(bytes) => {
                 *size = bytes.len();
@@ -335,14 +369,16 @@ pub unsafe fn serialize<M: FmuModel>(
     size: usize,
 ) -> Fmi2Status {
     with_instance::<M>(c, "fmi2SerializeFMUstate", |inst| {
-        if state.is_null() || bytes.is_null() {
-            return inst
-                .error("fmi2SerializeFMUstate: argument 'FMUstate' or 'serializedState' is NULL");
+        if bytes.is_null() {
+            return inst.error("fmi2SerializeFMUstate: argument 'serializedState' is NULL");
         }
         if let Err(s) = inst.check_fmu_state_call("fmi2SerializeFMUstate") {
             return s;
         }
-        let saved = &mut *(state as *mut SavedState<M::State>);
+        let saved = match fmu_state(inst, "fmi2SerializeFMUstate", state) {
+            Ok(saved) => saved,
+            Err(s) => return s,
+        };
         match saved.serialized() {
             Ok(data) if data.len() <= size => {
                 std::ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, data.len());
@@ -413,6 +449,9 @@ pub unsafe fn unsupported<M: FmuModel>(
     why: &'static str,
 ) -> Fmi2Status {
     with_instance::<M>(c, function, |inst| {
+        if let Err(s) = inst.allowed(function, super::calls::Operation::Unsupported) {
+            return s;
+        }
         inst.error(&format!("{function}: not supported: {why}"))
     })
 }

@@ -10,12 +10,18 @@
 //! - [`ffi`]: the C types, written by hand.
 //! - [`variables`]: variable metadata (generated from `modelDescription.xml` by `build.rs`) and the
 //!   value store.
-//! - [`instance`]: one FMU instance: state machine, get/set, step, FMU states.
+//! - [`calls`]: the one table of which call is allowed in which state (not FMI-2-specific).
+//! - [`logging`]: the logger with its categories, numbers printed short, the panic hook.
+//! - [`instance`]: one FMU instance: state machine, get/set, step, restoring FMU states.
+//! - [`fmu_state`]: what an FMU state holds and its serialised form.
 //! - [`exports`]: the `extern "C"` functions.
 
+pub mod calls;
 pub mod exports;
 pub mod ffi;
+pub mod fmu_state;
 pub mod instance;
+pub mod logging;
 pub mod variables;
 
 use serde::{de::DeserializeOwned, Serialize};
@@ -81,6 +87,10 @@ impl LogCategory {
     }
 }
 
+/// Where a model sends log messages during a step: the message is built (by the closure) only
+/// when its category is enabled, so that a step costs no formatting with logging off.
+pub type StepLog<'a> = dyn FnMut(LogCategory, &dyn Fn() -> String) + 'a;
+
 /// A communication step the model could not complete: the time it reached (its state stays there)
 /// and why.
 #[derive(Clone, Debug, PartialEq)]
@@ -130,18 +140,23 @@ pub trait FmuModel: Sized + Send {
         values: &mut Values,
         t_start: f64,
         t_end: f64,
-        log: &mut dyn FnMut(LogCategory, &str),
+        log: &mut StepLog,
     ) -> Result<(), StepFailure>;
 
     /// The model's part of an FMU state.
     fn save_state(&self) -> Self::State;
 
-    /// Restores a state saved by [`FmuModel::save_state`], together with the `values` saved with it
-    /// (already restored). Fails if the state does not fit the model (wrong sizes, say).
+    /// Restores a state saved by [`FmuModel::save_state`], together with the `values` and
+    /// experiment saved with it (already checked against the variable table). `time` is the FMU's
+    /// time when the state was taken after initialisation, `None` before. The state may come from
+    /// a hostile blob: check it as strictly as fresh input (sizes, finite numbers, options as the
+    /// parameters give them, the model's time against `time`) and fail with a message naming what
+    /// is wrong.
     fn restore_state(
         &mut self,
         state: &Self::State,
         values: &Values,
         experiment: &Experiment,
+        time: Option<f64>,
     ) -> Result<(), String>;
 }

@@ -12,7 +12,8 @@
 //!
 //! * Two control chambers `<prefix>.chamber_a`, `<prefix>.chamber_b` (0-junctions), each with
 //!   the oil compressibility `C_H = V_H / beta` (states `<prefix>.C_Ha.q`, `<prefix>.C_Hb.q`, oil
-//!   volume compressed in the chamber, `p = q / C_H`).
+//!   volume compressed in the chamber, `p = q / C_H` above the cavitation floor of
+//!   [`super::servo_valve::limits::chamber`]).
 //! * Each chamber is fed from the supply through a fixed inlet orifice (`<prefix>.R1`,
 //!   `<prefix>.R2`, diameter `d_0`) and drained to the tank through its nozzle
 //!   (`<prefix>.R_nozzle_a`, `<prefix>.R_nozzle_b`), a curtain area `pi d_n (x_f0 -+ x_f)` that the
@@ -23,7 +24,9 @@
 //!   `A_s (p_a - p_b)`, and the spool displaces `A_s v_v` out of chamber B into chamber A's end.
 //! * The spool (`<prefix>.spool`, 1-junction, velocity `v_v`): mass `m_v`, viscous friction `b_v`,
 //!   centring spring `k_v`; the spring is part of the spring field (below), whose second state is
-//!   the spool position `x_v`.
+//!   the spool position `x_v`. The end stops at `+-x_v_max` (`<prefix>.spool_stop`, a smooth
+//!   contact force modulated by `x_v`, [`super::servo_valve::limits::spool_stop`]) keep the spool
+//!   within its stroke.
 //!
 //! **Feedback spring.** A spool driven only by `k_v` (as in the paper's BG2) must be very stiff
 //! for a usable null, and then the pilot flow cannot move it faster than a few hundred rad/s
@@ -49,7 +52,8 @@ use nalgebra::DMatrix;
 use crate::bond_graph::{BondGraph, BondId, ElementId, Law, SignalId};
 
 use super::orifice::{fixed_orifice, variable_orifice, OrificeFluid};
-use super::servo_valve::ServoValveParameters;
+use super::servo_valve::limits::{spool_stop, stop_stiffness};
+use super::servo_valve::{limits, ServoValveParameters};
 
 /// Handles into the flapper-nozzle fragment.
 #[derive(Clone, Copy, Debug)]
@@ -101,15 +105,17 @@ pub fn add_flapper_nozzle(
     let fluid = p.fluid();
     let a0 = std::f64::consts::PI * p.d_0 * p.d_0 / 4.0;
     let nozzle_width = std::f64::consts::PI * p.d_n;
-    let c_h = p.v_h / p.beta;
     let a_s = p.spool_area();
     // Smallest nozzle gap: a hundredth of the null gap (contact of flapper and nozzle).
     let gap_rounding = 0.01 * p.x_f0;
 
     let chamber_a = g.add_zero(format!("{prefix}.chamber_a"));
     let chamber_b = g.add_zero(format!("{prefix}.chamber_b"));
-    let c_ha = g.add_c(format!("{prefix}.C_Ha"), c_h);
-    let c_hb = g.add_c(format!("{prefix}.C_Hb"), c_h);
+    let c_ha = g.add_c(format!("{prefix}.C_Ha"), limits::chamber(p.v_h, p.beta));
+    let c_hb = g.add_c(format!("{prefix}.C_Hb"), limits::chamber(p.v_h, p.beta));
+    // Compressed volume at the supply pressure.
+    g.set_nominal(c_ha, &[p.v_h / p.beta * p.p_supply]);
+    g.set_nominal(c_hb, &[p.v_h / p.beta * p.p_supply]);
     let ca_bond = g.bond(chamber_a, c_ha);
     let cb_bond = g.bond(chamber_b, c_hb);
 
@@ -144,8 +150,18 @@ pub fn add_flapper_nozzle(
     let b_v = g.add_r(format!("{prefix}.b_v"), p.b_v);
     g.bond(spool, m_v);
     g.bond(spool, b_v);
-
+    g.set_nominal(m_v, &[p.m_v * 0.1]); // 0.1 m/s
     let x_v = g.add_signal_port(format!("{prefix}.x_v"));
+    let stop = g.add_r_modulated(
+        format!("{prefix}.spool_stop"),
+        spool_stop(
+            p.x_v_max,
+            stop_stiffness(a_s, p.p_supply - p.p_tank, p.x_v_max),
+            p.m_v,
+        ),
+        x_v,
+    );
+    g.bond(spool, stop);
     let p_a = g.add_effort_sensor(format!("{prefix}.p_a"), ca_bond);
     let p_b = g.add_effort_sensor(format!("{prefix}.p_b"), cb_bond);
     FlapperNozzlePorts {
@@ -175,6 +191,8 @@ pub fn add_spring_field(
 ) -> ElementId {
     let k = DMatrix::from_row_slice(2, 2, &[p.k_f + p.k_w, p.k_w, p.k_w, p.k_v + p.k_w]);
     let field = g.add_c_field(format!("{prefix}.springs"), k);
+    // The flapper's null gap, the spool's stroke.
+    g.set_nominal(field, &[p.x_f0, p.x_v_max]);
     g.bond(flapper, field);
     g.bond(spool, field);
     let sf = g.add_field_state_sensor(format!("{prefix}.x_f_sensor"), field, 0);

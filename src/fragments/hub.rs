@@ -27,6 +27,7 @@ pub struct HubPorts {
 pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPorts {
     let omega = g.add_signal_port(format!("{prefix}.omega_hub"));
     let theta = g.add_integrator(format!("{prefix}.theta"), omega);
+    g.set_integrator_nominal(theta, 1.0);
     let junction = g.add_one(format!("{prefix}.omega"));
     let mut ports = HubPorts {
         junction,
@@ -36,6 +37,7 @@ pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPort
     };
     if let Some(i) = inertia {
         let el = g.add_i(format!("{prefix}.I"), i);
+        g.set_nominal(el, &[i]); // momentum at 1 rad/s
         let b = g.bond(junction, el);
         connect_inertia(g, &ports, b);
         ports.inertia_bond = Some(b);

@@ -35,6 +35,9 @@ use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
 
 use super::servo_valve::ServoValveParameters;
 
+/// Coil current at which the flux state is stated nominal \[A\]: 10 V over the default 80 ohm.
+const NOMINAL_CURRENT: f64 = 0.125;
+
 /// Handles into the torque motor fragment.
 #[derive(Clone, Copy, Debug)]
 pub struct TorqueMotorPorts {
@@ -68,6 +71,9 @@ pub fn add_torque_motor(
     let flapper = g.add_one(format!("{prefix}.flapper"));
     let m_f = g.add_i(format!("{prefix}.m_f"), p.m_f);
     let b_f = g.add_r(format!("{prefix}.b_f"), p.b_f);
+    // Flux at the nominal current; flapper momentum at 50 mm/s.
+    g.set_nominal(l_bob, &[p.l_bob * NOMINAL_CURRENT]);
+    g.set_nominal(m_f, &[p.m_f * 0.05]);
 
     g.bond(amp, coil);
     g.bond(coil, r_bob);

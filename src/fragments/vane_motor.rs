@@ -11,7 +11,8 @@
 //!   `x_v < 0`, each of area `w ramp(+-x_v, c_r)` with area gradient `w` and radial clearance
 //!   `c_r` ([`super::orifice::smooth_ramp`]), through the regularised orifice law.
 //! * Actuator chambers `<prefix>.chamber_1`, `<prefix>.chamber_2` (0-junctions) with
-//!   compressibility `C = V_1 / beta` (states `<prefix>.C_1.q`, `<prefix>.C_2.q`).
+//!   compressibility `C = V_1 / beta` (states `<prefix>.C_1.q`, `<prefix>.C_2.q`) and the
+//!   cavitation floor of [`super::servo_valve::limits::chamber`].
 //! * Internal leakage across the vanes `<prefix>.R_leak` \[N s/m^5\] (laminar).
 //! * The vane motor: TF `<prefix>.D_m` from the load 1-junction (pressure `p_1 - p_2`, flow
 //!   through the motor) to the rotor 1-junction `<prefix>.rotor` (speed `omega`): torque
@@ -29,7 +30,7 @@ use crate::bond_graph::{BondGraph, BondId, ElementId, Law, SignalId};
 
 use super::flapper_nozzle::restriction;
 use super::orifice::variable_orifice;
-use super::servo_valve::ServoValveParameters;
+use super::servo_valve::{limits, ServoValveParameters};
 
 /// Handles into the power stage and vane motor fragment.
 #[derive(Clone, Copy, Debug)]
@@ -68,11 +69,12 @@ pub fn add_vane_motor(
     x_v: SignalId,
 ) -> VaneMotorPorts {
     let fluid = p.fluid();
-    let c = p.v_1 / p.beta;
     let chamber_1 = g.add_zero(format!("{prefix}.chamber_1"));
     let chamber_2 = g.add_zero(format!("{prefix}.chamber_2"));
-    let c_1 = g.add_c(format!("{prefix}.C_1"), c);
-    let c_2 = g.add_c(format!("{prefix}.C_2"), c);
+    let c_1 = g.add_c(format!("{prefix}.C_1"), limits::chamber(p.v_1, p.beta));
+    let c_2 = g.add_c(format!("{prefix}.C_2"), limits::chamber(p.v_1, p.beta));
+    g.set_nominal(c_1, &[p.v_1 / p.beta * p.p_supply]);
+    g.set_nominal(c_2, &[p.v_1 / p.beta * p.p_supply]);
     let c1_bond = g.bond(chamber_1, c_1);
     let c2_bond = g.bond(chamber_2, c_2);
 
@@ -103,6 +105,7 @@ pub fn add_vane_motor(
     let b_m = g.add_r(format!("{prefix}.b_m"), p.b_m);
     let i_m_bond = g.bond(rotor, i_m);
     g.bond(rotor, b_m);
+    g.set_nominal(i_m, &[p.i_m * 10.0]); // 10 rad/s
 
     let p_1 = g.add_effort_sensor(format!("{prefix}.p_1"), c1_bond);
     let p_2 = g.add_effort_sensor(format!("{prefix}.p_2"), c2_bond);

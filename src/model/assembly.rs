@@ -35,6 +35,9 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     let (rotor, valve_command, theta, omega, p_load, q_valve) = match p.hydraulics {
         HydraulicsModel::Loes => {
             let l = loes::add_loes(&mut g, "loes", &p.loes);
+            // Momentum at 10 rad/s, compressed volume at 100 bar.
+            g.set_nominal(l.i_b, &[p.loes.i_b * 10.0]);
+            g.set_nominal(l.c3, &[p.loes.c3 * 1e7]);
             (
                 l.rotor,
                 l.valve_command,
@@ -61,9 +64,14 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
         controller::add_drive(&mut g, "controller", &p.controller, r, e_in, theta);
     g.connect_signal_port(valve_command, command);
     g.add_output("controller.e_out", command);
-    let bar = p
-        .motor_coupled
-        .then(|| torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, rotor));
+    let bar = p.motor_coupled.then(|| {
+        let c = torsion_bar::damping_coefficient(
+            p.torsion_bar_k,
+            p.torsion_bar_zeta,
+            p.plate.hub_total_inertia(),
+        );
+        torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, c, rotor)
+    });
     let hub = model
         .hub
         .then(|| hub::add_hub(&mut g, "hub", model.hub_one_port()));
@@ -101,7 +109,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
 /// The natural frequencies of the plate model of a parameter set (eq. 14; the chosen
 /// formulation and root condition, hub free, rigid mode left out), ascending.
 pub fn plate_modes(p: &Parameters) -> Result<Vec<NaturalMode>, String> {
-    Ok(natural_modes(&PlateModel::new(&p.plate)?))
+    natural_modes(&PlateModel::new(&p.plate)?)
 }
 
 /// Number of calculated frequency parameters `plate.f[1]` ... `plate.f[20]`.
@@ -155,17 +163,22 @@ impl Assembled {
             .iter()
             .map(|n| position(n))
             .collect();
-        let nominal = compiled
-            .state_names()
-            .iter()
-            .map(|n| nominal(n, p))
-            .collect();
+        let nominal = graph
+            .state_nominals()
+            .into_iter()
+            .zip(compiled.state_names())
+            .map(|(n, name)| n.unwrap_or_else(|| plate_nominal(name, p)))
+            .collect::<Vec<f64>>();
         let inputs = vec![0.0; input_index.len()];
         let rest = match p.hydraulics {
             HydraulicsModel::Loes => vec![0.0; compiled.n_states()],
-            HydraulicsModel::ServoValve => {
-                servo_valve::rest_state(&compiled, &inputs, "servo_valve", &p.servo_valve)?
-            }
+            HydraulicsModel::ServoValve => servo_valve::rest_state(
+                &compiled,
+                &inputs,
+                "servo_valve",
+                &p.servo_valve,
+                &nominal,
+            )?,
         };
         Ok(Assembled {
             inputs,
@@ -230,22 +243,13 @@ impl Assembled {
     }
 }
 
-/// A typical magnitude of a state, by the element it belongs to: the rotor angle in radians, a
-/// momentum at 10 rad/s, a displaced volume at 100 bar, plate modes at 1 mm and 0.1 m/s; for the
-/// full servo valve see [`servo_valve::ServoValveParameters::nominal`] (its states span some 15
-/// decades). Tolerances are relative to these.
-fn nominal(state: &str, p: &Parameters) -> f64 {
-    if let Some(n) = p.servo_valve.nominal("servo_valve", state) {
-        return n;
-    }
+/// A typical magnitude of a plate state, whose fragment states none: modes at 1 mm and 0.1 m/s.
+/// Every other fragment states its nominals with its elements ([`BondGraph::set_nominal`]);
+/// states without one count as 1.
+fn plate_nominal(state: &str, p: &Parameters) -> f64 {
     let element = state.rsplit_once('.').map_or(state, |(e, _)| e);
     let plate_momentum = p.plate.areal_mass() * p.plate.a * p.plate.b * 0.1;
     match element {
-        "loes.I_b" => p.loes.i_b * 10.0,
-        "loes.C3" => p.loes.c3 * 1e7,
-        // bar twist 0.01 rad; hub momentum at 1 rad/s; plate: 1 mm, 0.1 m/s
-        "torsion_bar.k" => 1e-2,
-        "hub.I" => p.plate.hub_total_inertia(),
         e if e.starts_with("plate.C[") => 1e-3,
         e if e.starts_with("plate.I[") => plate_momentum,
         "plate.inertia" => plate_momentum.max(1e-3 * p.plate.hub_total_inertia()),

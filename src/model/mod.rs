@@ -18,7 +18,10 @@ pub mod variables;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fmi2::{Experiment, FmuModel, LogCategory, StepFailure, Value, Values, Variable};
+use crate::fmi2::logging::Short;
+use crate::fmi2::{
+    Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
+};
 use crate::solver::Integrator;
 use assembly::Assembled;
 use parameters::Parameters;
@@ -32,6 +35,9 @@ pub struct HydraulicSlewingPlate {
     /// The compiled model with its held inputs.
     system: Option<Assembled>,
     integrator: Option<Integrator>,
+    /// The state at the start of the current step, kept to go back to when the step ends on
+    /// non-finite outputs (allocated once, reused every step).
+    step_start: Vec<f64>,
 }
 
 /// The model's part of an FMU state.
@@ -59,6 +65,52 @@ impl HydraulicSlewingPlate {
 
     pub fn integrator(&self) -> Option<&Integrator> {
         self.integrator.as_ref()
+    }
+
+    /// The first output that is not finite, as "name = value".
+    fn non_finite_output(values: &Values) -> Option<String> {
+        variables::VARIABLES
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.causality == Causality::Output)
+            .find_map(|(i, v)| match values.get(i) {
+                Value::Real(x) if !x.is_finite() => Some(format!("{} = {x}", v.name)),
+                _ => None,
+            })
+    }
+
+    /// The inputs held over the step, as "r = 0, F1 = 1e300, F2 = 0", for messages.
+    fn held_inputs(values: &Values) -> String {
+        variables::VARIABLES
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.causality == Causality::Input)
+            .map(|(i, v)| format!("{} = {}", v.name, Short(values.real(i))))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Builds the model and its integrator at the start of the experiment.
+    fn try_initialize(
+        &mut self,
+        values: &mut Values,
+        experiment: &Experiment,
+    ) -> Result<(), String> {
+        self.build(values, experiment)?;
+        let (Some(system), Some(parameters)) = (&mut self.system, &self.parameters) else {
+            return Err("the model was not built".into());
+        };
+        system.set_inputs(values);
+        assembly::write_plate_frequencies(parameters, values)?;
+        let integrator = Integrator::new(
+            parameters.solver_options(system),
+            experiment.start_time,
+            system.initial_state(),
+        )
+        .map_err(|e| e.to_string())?;
+        self.integrator = Some(integrator);
+        self.write_outputs(values);
+        Ok(())
     }
 
     /// Writes outputs and solver statistics for the integrator's current point.
@@ -100,33 +152,21 @@ impl FmuModel for HydraulicSlewingPlate {
     }
 
     fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String> {
-        self.build(values, experiment)?;
-        let (Some(system), Some(parameters)) = (&mut self.system, &self.parameters) else {
-            return Err("the model was not built".into());
-        };
-        system.set_inputs(values);
-        assembly::write_plate_frequencies(parameters, values)?;
-        let integrator = Integrator::new(
-            parameters.solver_options(system),
-            experiment.start_time,
-            system.initial_state(),
-        )
-        .map_err(|e| e.to_string())?;
-        self.integrator = Some(integrator);
-        self.write_outputs(values);
-        Ok(())
+        self.integrator = None;
+        self.try_initialize(values, experiment)
+            .map_err(|message| with_suspects(message, values))
     }
 
     fn do_step(
         &mut self,
         values: &mut Values,
-        _t_start: f64,
+        t_start: f64,
         t_end: f64,
-        log: &mut dyn FnMut(LogCategory, &str),
+        log: &mut StepLog,
     ) -> Result<(), StepFailure> {
         let (Some(system), Some(integrator)) = (&mut self.system, &mut self.integrator) else {
             return Err(StepFailure {
-                last_successful_time: t_end,
+                last_successful_time: t_start,
                 message: "the model was not initialized".into(),
             });
         };
@@ -134,26 +174,53 @@ impl FmuModel for HydraulicSlewingPlate {
             // A zero-order-hold jump of the inputs: the solution has a kink here.
             integrator.notify_discontinuity();
         }
+        // After a communication step shorter than the solver's minimum step, the step size it
+        // carries on with is as short and may not grow past that minimum in the next step:
+        // let the next step start from a fresh estimate instead.
+        if integrator.h > 0.0 && integrator.h < integrator.options().min_step {
+            integrator.h = 0.0;
+        }
+        self.step_start.clear();
+        self.step_start.extend_from_slice(integrator.x());
         let result = integrator.advance_to(&*system, t_end);
-        let stats = *integrator.stats();
-        log(
-            LogCategory::Solver,
-            &format!(
+        log(LogCategory::Solver, &|| {
+            let stats = integrator.stats();
+            format!(
                 "t = {}: {} steps ({} rejected), {} f evaluations, {} Jacobians, {} LU factorisations so far",
-                integrator.t(),
+                Short(integrator.t()),
                 stats.accepted,
                 stats.rejected,
                 stats.f_evals,
                 stats.jac_evals,
                 stats.lu_decompositions
-            ),
-        );
+            )
+        });
         let reached = integrator.t();
         self.write_outputs(values);
-        result.map_err(|e| StepFailure {
-            last_successful_time: reached,
-            message: e.to_string(),
-        })
+        if let Err(e) = result {
+            return Err(StepFailure {
+                last_successful_time: reached,
+                message: format!("{e}, with the inputs {}", Self::held_inputs(values)),
+            });
+        }
+        if let Some(bad) = Self::non_finite_output(values) {
+            // Finite states whose outputs overflow (the stored energy, say): go back to the
+            // start of the step, whose outputs were finite.
+            let message = format!(
+                "output {bad} is not finite at t = {}, with the inputs {}",
+                Short(t_end),
+                Self::held_inputs(values)
+            );
+            if let Some(integrator) = &mut self.integrator {
+                integrator.reset(t_start, std::mem::take(&mut self.step_start));
+            }
+            self.write_outputs(values);
+            return Err(StepFailure {
+                last_successful_time: t_start,
+                message,
+            });
+        }
+        Ok(())
     }
 
     fn save_state(&self) -> ModelState {
@@ -172,27 +239,129 @@ impl FmuModel for HydraulicSlewingPlate {
         state: &ModelState,
         values: &Values,
         experiment: &Experiment,
+        time: Option<f64>,
     ) -> Result<(), String> {
-        let Some(integrator) = &state.integrator else {
-            // Saved before initialisation: nothing is built yet.
-            self.integrator = None;
-            return Ok(());
+        // Until it checks out, the model holds no integrator: a failed restore leaves nothing
+        // half-restored to step on.
+        self.integrator = None;
+        let integrator = match (&state.integrator, time) {
+            (None, None) => return Ok(()), // saved before the model was built
+            (None, Some(_)) => {
+                return Err("it was taken after initialization but holds no integrator".into())
+            }
+            (Some(integrator), _) => integrator,
         };
         self.build(values, experiment)?;
-        let Some(system) = &mut self.system else {
+        let (Some(system), Some(parameters)) = (&mut self.system, &self.parameters) else {
             return Err("the model was not built".into());
         };
-        if integrator.x().len() != system.dim() || state.inputs.len() != system.inputs().len() {
+        check_restored_integrator(
+            integrator,
+            &parameters.solver_options(system),
+            system.dim(),
+            time.unwrap_or(experiment.start_time),
+        )?;
+        if state.inputs.len() != system.inputs().len() {
             return Err(format!(
-                "the FMU state has {} states and {} inputs, the model {} and {}",
-                integrator.x().len(),
+                "it holds {} inputs, the model has {}",
                 state.inputs.len(),
-                system.dim(),
                 system.inputs().len()
             ));
+        }
+        if let Some(u) = state.inputs.iter().find(|u| !u.is_finite()) {
+            return Err(format!("a held input is not finite: {u}"));
         }
         system.restore_inputs(&state.inputs);
         self.integrator = Some(integrator.clone());
         Ok(())
     }
+}
+
+/// A failure message that names no parameter gets the list of parameters set away from their
+/// start values appended: the usual suspects when a lower layer fails on a derived quantity.
+fn with_suspects(message: String, values: &Values) -> String {
+    let parameters = variables::VARIABLES
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.causality == Causality::Parameter);
+    if parameters.clone().any(|(_, v)| message.contains(v.name)) {
+        return message;
+    }
+    let start = Values::from_start(&variables::VARIABLES);
+    let changed: Vec<String> = parameters
+        .filter(|&(i, _)| values.get(i) != start.get(i))
+        .map(|(i, v)| match values.get(i) {
+            Value::Real(x) => format!("{} = {}", v.name, Short(*x)),
+            other => format!("{} = {other:?}", v.name),
+        })
+        .collect();
+    if changed.is_empty() {
+        message
+    } else {
+        format!(
+            "{message} (parameters set away from their defaults: {})",
+            changed.join(", ")
+        )
+    }
+}
+
+/// Checks a restored integrator as strictly as a fresh one: its options must be exactly those
+/// its parameters give (so they pass the same checks), its time the FMU's, its state and step
+/// history finite and of the model's size.
+fn check_restored_integrator(
+    integrator: &Integrator,
+    options: &crate::solver::SolverOptions,
+    dim: usize,
+    time: f64,
+) -> Result<(), String> {
+    if integrator.x().len() != dim {
+        return Err(format!(
+            "its integrator has {} states, the model {dim}",
+            integrator.x().len()
+        ));
+    }
+    if integrator.options() != options {
+        return Err(
+            "its solver options differ from those its parameters give (solver.*, tolerance)".into(),
+        );
+    }
+    options.validate(dim).map_err(|e| e.message)?;
+    if integrator.t().to_bits() != time.to_bits() {
+        return Err(format!(
+            "its integrator is at t = {}, the FMU at t = {}",
+            Short(integrator.t()),
+            Short(time)
+        ));
+    }
+    if let Some((i, x)) = integrator
+        .x()
+        .iter()
+        .enumerate()
+        .find(|(_, x)| !x.is_finite())
+    {
+        return Err(format!("its state x[{i}] = {x} is not finite"));
+    }
+    let h = &integrator.hist;
+    let history = [
+        ("h", integrator.h),
+        ("err_prev", h.err_prev),
+        ("h_acc", h.h_acc),
+        ("err_acc", h.err_acc),
+        ("h_old", h.h_old),
+        ("faccon", h.faccon),
+    ];
+    if let Some((name, v)) = history.iter().find(|(_, v)| !(v.is_finite() && *v >= 0.0)) {
+        return Err(format!(
+            "its integrator's {name} = {} is not a finite non-negative number",
+            Short(*v)
+        ));
+    }
+    if !(h.cont.is_empty() || h.cont.len() == 3 * dim) || h.cont.iter().any(|c| !c.is_finite()) {
+        return Err(format!(
+            "its integrator's interpolation history has {} entries, not 0 or {}, or a non-finite one",
+            h.cont.len(),
+            3 * dim
+        ));
+    }
+    Ok(())
 }

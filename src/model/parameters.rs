@@ -1,8 +1,9 @@
 //! The typed parameter set of the FMU, read from its variable values, and the checks that the
 //! XML's `min`/`max` cannot express (strictly positive physical constants).
 
+use crate::fmi2::logging::Short;
 use crate::fmi2::variables::{check_value, Value, Values};
-use crate::fmi2::{Experiment, Kind};
+use crate::fmi2::{Causality, Experiment, Kind};
 use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
 use crate::fragments::plate::{Formulation, PlateParameters, Root};
@@ -34,6 +35,8 @@ pub struct Parameters {
     pub plate: PlateParameters,
     /// Torsion-bar stiffness \[N m/rad\] (`torsion_bar.k`).
     pub torsion_bar_k: f64,
+    /// Torsion-bar structural damping ratio \[-\] (`torsion_bar.zeta`).
+    pub torsion_bar_zeta: f64,
     pub method: Method,
     pub rtol: f64,
     /// Absolute tolerance as a fraction of each state's nominal value.
@@ -73,6 +76,7 @@ const POSITIVE: &[usize] = &[
     idx::SERVO_VALVE_K_V,
     idx::SERVO_VALVE_W,
     idx::SERVO_VALVE_C_R,
+    idx::SERVO_VALVE_X_V_MAX,
     idx::SERVO_VALVE_V_1,
     idx::SERVO_VALVE_R_LEAK,
     idx::SERVO_VALVE_D_M,
@@ -111,6 +115,7 @@ impl Parameters {
         for &i in POSITIVE {
             check(i, values.get(i))?;
         }
+        check_magnitudes(values)?;
         let hydraulics = match values.integer(idx::HYDRAULICS_MODEL) {
             1 => HydraulicsModel::Loes,
             2 => HydraulicsModel::ServoValve,
@@ -180,7 +185,7 @@ impl Parameters {
             y2: values.real(idx::PLATE_Y2),
         };
         plate.validate()?;
-        Ok(Parameters {
+        let parameters = Parameters {
             hydraulics,
             motor_coupled: values.boolean(idx::HYDRAULICS_MOTOR_COUPLED),
             loes: LoesParameters {
@@ -214,6 +219,7 @@ impl Parameters {
                 k_v: values.real(idx::SERVO_VALVE_K_V),
                 w: values.real(idx::SERVO_VALVE_W),
                 c_r: values.real(idx::SERVO_VALVE_C_R),
+                x_v_max: values.real(idx::SERVO_VALVE_X_V_MAX),
                 v_1: values.real(idx::SERVO_VALVE_V_1),
                 r_leak: values.real(idx::SERVO_VALVE_R_LEAK),
                 d_m: values.real(idx::SERVO_VALVE_D_M),
@@ -230,6 +236,7 @@ impl Parameters {
             },
             plate,
             torsion_bar_k: values.real(idx::TORSION_BAR_K),
+            torsion_bar_zeta: values.real(idx::TORSION_BAR_ZETA),
             method,
             rtol: experiment
                 .tolerance
@@ -237,7 +244,9 @@ impl Parameters {
             atol: values.real(idx::SOLVER_ATOL),
             max_step: values.real(idx::SOLVER_MAX_STEP),
             max_steps: max_steps as u64,
-        })
+        };
+        parameters.check_derived(values)?;
+        Ok(parameters)
     }
 
     /// The integrator's options for the assembled model: the absolute tolerance scaled by each
@@ -251,6 +260,145 @@ impl Parameters {
             max_steps: self.max_steps,
             ..SolverOptions::default()
         }
+    }
+}
+
+/// The magnitudes a parameter or derived quantity may have, in SI units. The model's largest
+/// constant is the bulk modulus (about 1e9 Pa), its smallest the chamber compliances (about
+/// 1e-17 m^5/N); nothing physical in it comes near 1e-50 or 1e50. Inside this window the model's
+/// products and squares (energies, Jacobian entries) stay far inside double precision's range
+/// (1e-308 to 1e308); outside it they overflow or underflow, and the model would fail somewhere
+/// that cannot name the cause.
+pub const MAGNITUDES: std::ops::RangeInclusive<f64> = 1e-50..=1e50;
+
+/// Every nonzero Real parameter within [`MAGNITUDES`]; the error names it.
+fn check_magnitudes(values: &Values) -> Result<(), String> {
+    for (i, var) in VARIABLES.iter().enumerate() {
+        if var.causality != Causality::Parameter {
+            continue;
+        }
+        if let Value::Real(v) = values.get(i) {
+            if *v != 0.0 && !MAGNITUDES.contains(&v.abs()) {
+                return Err(format!(
+                    "{}: {} is physically absurd: |value| must lie between {} and {} in SI units",
+                    var.name,
+                    Short(*v),
+                    Short(*MAGNITUDES.start()),
+                    Short(*MAGNITUDES.end())
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Of the parameters a derived quantity comes from, the one farthest (in decades) from its start
+/// value: the likely culprit when the quantity is out of range.
+fn culprit(values: &Values, from: &[usize]) -> String {
+    let decades = |i: usize| match (values.get(i), VARIABLES[i].kind) {
+        (Value::Real(v), Kind::Real { start: Some(s), .. }) if *v != 0.0 && s != 0.0 => {
+            (v.abs() / s.abs()).log10().abs()
+        }
+        _ => 0.0,
+    };
+    let worst = from
+        .iter()
+        .copied()
+        .max_by(|&a, &b| decades(a).total_cmp(&decades(b)))
+        .unwrap_or(from[0]);
+    let others: Vec<&str> = from
+        .iter()
+        .filter(|&&i| i != worst)
+        .map(|&i| VARIABLES[i].name)
+        .collect();
+    let mut text = format!("{} = {}", VARIABLES[worst].name, Short(values.real(worst)));
+    if !others.is_empty() {
+        text += &format!(" (with {})", others.join(", "));
+    }
+    text
+}
+
+impl Parameters {
+    /// Checks the quantities the model derives from several parameters: masses, stiffnesses,
+    /// compliances, the plate's frequency scale and the hydraulic energies at supply pressure
+    /// must be finite, positive and within [`MAGNITUDES`]. The error names the parameter farthest
+    /// from its default among those the quantity comes from.
+    fn check_derived(&self, values: &Values) -> Result<(), String> {
+        self.servo_valve.validate()?;
+        let pl = &self.plate;
+        let sv = &self.servo_valve;
+        let rigidity = pl.e * pl.h.powi(3) / (12.0 * (1.0 - pl.nu * pl.nu));
+        let derived: [(&str, f64, &[usize]); 8] = [
+            (
+                "the plate's mass rho a b h",
+                pl.rho * pl.a * pl.b * pl.h,
+                &[idx::PLATE_RHO, idx::PLATE_A, idx::PLATE_B, idx::PLATE_H],
+            ),
+            (
+                "the plate's flexural rigidity E h^3 / (12 (1 - nu^2))",
+                rigidity,
+                &[idx::PLATE_E, idx::PLATE_H, idx::PLATE_NU],
+            ),
+            (
+                "the hub's total inertia I_H + 2 I_P",
+                pl.hub_total_inertia(),
+                &[
+                    idx::HUB_I_H,
+                    idx::PLATE_RHO,
+                    idx::PLATE_H,
+                    idx::PLATE_A,
+                    idx::PLATE_B,
+                ],
+            ),
+            (
+                "the plate's frequency scale sqrt(D / (rho h)) / a^2",
+                (rigidity / pl.areal_mass()).sqrt() / (pl.a * pl.a),
+                &[idx::PLATE_E, idx::PLATE_H, idx::PLATE_RHO, idx::PLATE_A],
+            ),
+            (
+                "the control-chamber compliance V_H / beta",
+                sv.v_h / sv.beta,
+                &[idx::SERVO_VALVE_V_H, idx::SERVO_VALVE_BETA],
+            ),
+            (
+                "the actuator-chamber compliance V_1 / beta",
+                sv.v_1 / sv.beta,
+                &[idx::SERVO_VALVE_V_1, idx::SERVO_VALVE_BETA],
+            ),
+            (
+                "the hydraulic energy at supply pressure p_s^2 (V_1 + V_H) / beta",
+                sv.p_supply * sv.p_supply * (sv.v_1 + sv.v_h) / sv.beta,
+                &[
+                    idx::SERVO_VALVE_P_SUPPLY,
+                    idx::SERVO_VALVE_V_1,
+                    idx::SERVO_VALVE_V_H,
+                    idx::SERVO_VALVE_BETA,
+                ],
+            ),
+            (
+                "the spool's null flow gain Cd w sqrt((p_s - p_t) / rho)",
+                sv.flow_gain(),
+                &[
+                    idx::SERVO_VALVE_CD,
+                    idx::SERVO_VALVE_W,
+                    idx::SERVO_VALVE_P_SUPPLY,
+                    idx::SERVO_VALVE_P_TANK,
+                    idx::SERVO_VALVE_RHO,
+                ],
+            ),
+        ];
+        for (what, v, from) in derived {
+            if !(v.is_finite() && MAGNITUDES.contains(&v)) {
+                return Err(format!(
+                    "{}: {what} = {} is not finite, positive and between {} and {} (SI)",
+                    culprit(values, from),
+                    Short(v),
+                    Short(*MAGNITUDES.start()),
+                    Short(*MAGNITUDES.end())
+                ));
+            }
+        }
+        Ok(())
     }
 }
 

@@ -15,34 +15,42 @@ pub struct NaturalMode {
     pub label: (usize, usize),
 }
 
-/// Eigenvalues `omega^2` (ascending) and `M`-orthonormal eigenvectors of `K v = omega^2 M v`.
-pub fn generalized_eigen(k: &DMatrix<f64>, m: &DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+/// Eigenvalues `omega^2` (ascending) and `M`-orthonormal eigenvectors of `K v = omega^2 M v`;
+/// an error when `M` is not numerically positive definite or the result is not finite.
+pub fn generalized_eigen(
+    k: &DMatrix<f64>,
+    m: &DMatrix<f64>,
+) -> Result<(Vec<f64>, DMatrix<f64>), String> {
     let l = m
         .clone()
         .cholesky()
-        .expect("the mass matrix is positive definite")
+        .ok_or("the plate's mass matrix is not numerically positive definite")?
         .l();
     let linv = l
         .clone()
         .try_inverse()
-        .expect("the Cholesky factor is invertible");
+        .ok_or("the Cholesky factor of the plate's mass matrix is singular")?;
     let a = &linv * k * linv.transpose();
     let a = (&a + a.transpose()) * 0.5;
     let eig = a.symmetric_eigen();
     let n = k.nrows();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
-    let vals = order.iter().map(|&i| eig.eigenvalues[i]).collect();
+    let vals: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i]).collect();
     let mut vecs = DMatrix::zeros(n, n);
     for (c, &i) in order.iter().enumerate() {
         vecs.set_column(c, &(linv.transpose() * eig.eigenvectors.column(i)));
     }
-    (vals, vecs)
+    if vals.iter().chain(vecs.iter()).any(|v: &f64| !v.is_finite()) {
+        return Err("the plate's natural modes are not finite".into());
+    }
+    Ok((vals, vecs))
 }
 
-/// The elastic natural modes of a plate model, ascending.
-pub fn natural_modes(model: &PlateModel) -> Vec<NaturalMode> {
-    let (vals, vecs) = generalized_eigen(&model.stiffness, &model.mass);
+/// The elastic natural modes of a plate model, ascending; an error instead of a panic when the
+/// eigenproblem is degenerate (parameters are validated before, so this is a last guard).
+pub fn natural_modes(model: &PlateModel) -> Result<Vec<NaturalMode>, String> {
+    let (vals, vecs) = generalized_eigen(&model.stiffness, &model.mass)?;
     let scale = vals.iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let first = model.first_plate();
     let mut out = Vec::new();
@@ -58,10 +66,15 @@ pub fn natural_modes(model: &PlateModel) -> Vec<NaturalMode> {
                 best = (e, j);
             }
         }
+        let label = best
+            .1
+            .checked_sub(first)
+            .and_then(|j| model.labels.get(j))
+            .ok_or("a natural mode of the plate has no plate coordinate with kinetic energy")?;
         out.push(NaturalMode {
             f_hz: w2.sqrt() / (2.0 * std::f64::consts::PI),
-            label: model.labels[best.1 - first],
+            label: *label,
         });
     }
-    out
+    Ok(out)
 }

@@ -1,0 +1,199 @@
+//! The one table of which call is allowed in which state, in the manner of the Modelica Reference
+//! FMUs' `MASK_fmi2*` defines: each state is a bit, each operation has a mask of the states it is
+//! allowed in, and [`Instance::allowed`](super::instance::Instance::allowed) is the only place that
+//! consults it.
+//!
+//! The states and operations are named for what they are, not for an FMI version: FMI 2.0
+//! co-simulation (section 4.2.4 of FMI 2.0.4, figure 9 and its table) uses the states below, and a
+//! Model Exchange or FMI 3.0 layer adds its own states (event mode, continuous-time mode,
+//! configuration mode) as further bits and its own rows, sharing the rules that are the same in
+//! every version (getters after instantiation, setters not after termination, nothing after a
+//! fatal error but freeing the instance).
+
+use serde::{Deserialize, Serialize};
+
+/// The states of an FMU instance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MachineState {
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    Terminated,
+    Error,
+    Fatal,
+}
+
+impl MachineState {
+    pub const ALL: [MachineState; 7] = [
+        MachineState::Instantiated,
+        MachineState::InitializationMode,
+        MachineState::StepComplete,
+        MachineState::StepFailed,
+        MachineState::Terminated,
+        MachineState::Error,
+        MachineState::Fatal,
+    ];
+
+    /// The state's name in log messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            MachineState::Instantiated => "instantiated",
+            MachineState::InitializationMode => "initialization mode",
+            MachineState::StepComplete => "step complete",
+            MachineState::StepFailed => "step failed",
+            MachineState::Terminated => "terminated",
+            MachineState::Error => "error",
+            MachineState::Fatal => "fatal",
+        }
+    }
+
+    /// The state's bit in a [`StateMask`].
+    pub const fn bit(self) -> StateMask {
+        StateMask(1 << self as u16)
+    }
+}
+
+/// A set of [`MachineState`]s.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StateMask(u16);
+
+impl StateMask {
+    pub const fn contains(self, state: MachineState) -> bool {
+        self.0 & state.bit().0 != 0
+    }
+
+    const fn or(self, other: StateMask) -> StateMask {
+        StateMask(self.0 | other.0)
+    }
+}
+
+use MachineState::*;
+
+const INSTANTIATED: StateMask = Instantiated.bit();
+const INITIALIZATION_MODE: StateMask = InitializationMode.bit();
+const STEP_COMPLETE: StateMask = StepComplete.bit();
+const STEP_FAILED: StateMask = StepFailed.bit();
+const TERMINATED: StateMask = Terminated.bit();
+const ERROR: StateMask = Error.bit();
+
+/// Every state but fatal (the Reference FMUs' `MASK_fmi2SetDebugLogging`).
+const NOT_FATAL: StateMask = INSTANTIATED
+    .or(INITIALIZATION_MODE)
+    .or(STEP_COMPLETE)
+    .or(STEP_FAILED)
+    .or(TERMINATED)
+    .or(ERROR);
+/// Where values can be read: once initialisation mode is entered, and on after an error.
+const READABLE: StateMask = INITIALIZATION_MODE
+    .or(STEP_COMPLETE)
+    .or(STEP_FAILED)
+    .or(TERMINATED)
+    .or(ERROR);
+/// Where the status of the last step can be asked for.
+const AFTER_A_STEP: StateMask = STEP_COMPLETE.or(STEP_FAILED).or(TERMINATED);
+
+/// The operations of the FMI C API that depend on the state. The exported function names map onto
+/// these (several functions of a version may share one operation, e.g. all getters).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Operation {
+    SetDebugLogging,
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    /// `fmi2GetReal` and its siblings.
+    GetValues,
+    /// `fmi2SetReal` and its siblings (which variables may be set in which state is a further
+    /// rule of the variable's causality and variability).
+    SetValues,
+    /// `fmi2GetFMUstate`, `fmi2SetFMUstate`, `fmi2FreeFMUstate`, `fmi2SerializedFMUstateSize`,
+    /// `fmi2SerializeFMUstate`, `fmi2DeSerializeFMUstate`.
+    FmuState,
+    DoStep,
+    /// `fmi2GetRealStatus`, `fmi2GetBooleanStatus`.
+    GetStatus,
+    /// A function the FMU does not support; it answers with an error in every state.
+    Unsupported,
+}
+
+impl Operation {
+    /// The states the operation is allowed in.
+    pub const fn allowed_in(self) -> StateMask {
+        match self {
+            Operation::SetDebugLogging | Operation::Reset | Operation::FmuState => NOT_FATAL,
+            Operation::SetupExperiment | Operation::EnterInitializationMode => INSTANTIATED,
+            Operation::ExitInitializationMode => INITIALIZATION_MODE,
+            Operation::Terminate => STEP_COMPLETE.or(STEP_FAILED),
+            Operation::GetValues => READABLE,
+            Operation::SetValues => INSTANTIATED.or(INITIALIZATION_MODE).or(STEP_COMPLETE),
+            Operation::DoStep => STEP_COMPLETE,
+            Operation::GetStatus => AFTER_A_STEP,
+            Operation::Unsupported => NOT_FATAL,
+        }
+    }
+}
+
+/// The states an FMU state may have been taken in and be restored to: a state saved in the error
+/// state cannot be continued, and none can be saved in the fatal state.
+pub const RESTORABLE: StateMask = INSTANTIATED
+    .or(INITIALIZATION_MODE)
+    .or(STEP_COMPLETE)
+    .or(STEP_FAILED)
+    .or(TERMINATED);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nothing_but_freeing_after_fatal() {
+        for op in [
+            Operation::SetDebugLogging,
+            Operation::SetupExperiment,
+            Operation::EnterInitializationMode,
+            Operation::ExitInitializationMode,
+            Operation::Terminate,
+            Operation::Reset,
+            Operation::GetValues,
+            Operation::SetValues,
+            Operation::FmuState,
+            Operation::DoStep,
+            Operation::GetStatus,
+            Operation::Unsupported,
+        ] {
+            assert!(!op.allowed_in().contains(Fatal), "{op:?}");
+        }
+    }
+
+    #[test]
+    fn after_an_error_only_reset_fmu_states_and_getters() {
+        let allowed: Vec<_> = [
+            Operation::SetupExperiment,
+            Operation::EnterInitializationMode,
+            Operation::ExitInitializationMode,
+            Operation::Terminate,
+            Operation::SetValues,
+            Operation::DoStep,
+            Operation::GetStatus,
+        ]
+        .into_iter()
+        .filter(|op| op.allowed_in().contains(Error))
+        .collect();
+        assert!(allowed.is_empty(), "{allowed:?}");
+        assert!(Operation::Reset.allowed_in().contains(Error));
+        assert!(Operation::FmuState.allowed_in().contains(Error));
+    }
+
+    #[test]
+    fn each_state_has_its_own_bit() {
+        let all = MachineState::ALL;
+        for (i, a) in all.iter().enumerate() {
+            for b in &all[i + 1..] {
+                assert!(!a.bit().contains(*b));
+            }
+            assert!(a.bit().contains(*a));
+        }
+    }
+}

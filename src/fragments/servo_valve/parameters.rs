@@ -1,0 +1,197 @@
+//! The constants of the full servo valve and actuator, with their sources and reasons, and the
+//! checks that reject physically absurd values by name at initialisation.
+
+use super::super::loes::PRINTED_I_B;
+use super::super::orifice::OrificeFluid;
+
+/// Every physical constant of the full servo valve and actuator (SI units). The FMU names are
+/// `servo_valve.<name>` with the names in brackets. Ranges quoted are those of two-stage
+/// flapper-nozzle valves with mechanical feedback (README, "The full servo valve").
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ServoValveParameters {
+    /// Supply pressure \[Pa\] (`p_supply`): 140 bar, middle of the 70-210 bar range.
+    pub p_supply: f64,
+    /// Tank (return) pressure \[Pa\] (`p_tank`): 0 (gauge).
+    pub p_tank: f64,
+    /// Oil density \[kg/m^3\] (`rho`): ISO VG 32 mineral oil, 860 (range 850-870).
+    pub rho: f64,
+    /// Effective bulk modulus \[Pa\] (`beta`): 1.4 GPa (oil without entrained air; range 0.7-1.6).
+    pub beta: f64,
+    /// Discharge coefficient of every orifice \[-\] (`Cd`): 0.61, sharp-edged.
+    pub cd: f64,
+    /// Laminar-transition pressure drop of the orifice law \[Pa\] (`dp_cr`): 0.05 bar, from
+    /// `Re_cr` = 10 at the inlet orifice, rounded up (see [`super::orifice`]).
+    pub dp_cr: f64,
+    /// Coil resistance \[ohm\] (`R_bob`): 80, bottom of the 80-200 range.
+    pub r_bob: f64,
+    /// Coil inductance \[H\] (`L_bob`): fitted to `G_est`, 1.252 H, so that the voltage-driven
+    /// coil's lag `R_bob / L_bob` = 64 1/s is the identified 65 1/s pole. Above the 0.1-1 H of
+    /// single coils: the two coils of a torque motor in series, at low frequency, reach it.
+    pub l_bob: f64,
+    /// Torque-motor force constant at the nozzle \[N/A\] (`k_phi`): fitted to `G_est` (it sets the
+    /// loop gain), 0.1692 N/A: 10 V drive 125 mA, 21 mN, which the wire balances at 0.4 mm of
+    /// spool travel, the full stroke.
+    pub k_phi: f64,
+    /// Effective armature-flapper mass at the nozzle \[kg\] (`m_f`): 0.02 g, so that with
+    /// `k_f + k_w` = 353 N/m the torque motor is at 670 Hz (range 500-1000 Hz).
+    pub m_f: f64,
+    /// Flapper viscous friction \[N s/m\] (`b_f`): 0.06, torque-motor damping ratio
+    /// `b_f / (2 sqrt((k_f + k_w) m_f))` = 0.36 (range 0.3-0.5).
+    pub b_f: f64,
+    /// Flapper pivot (flexure tube, net of the magnetic spring) stiffness at the nozzle \[N/m\]
+    /// (`k_f`): 300.
+    pub k_f: f64,
+    /// Feedback-wire stiffness at the nozzle \[N/m\] (`k_w`): fitted to `G_est`, 53.41 N/m. Its
+    /// share of the flapper stiffness sets the valve-stage pole
+    /// `K_qp k_w / (A_s (k_f + k_w))`, the identified 753 1/s.
+    pub k_w: f64,
+    /// Inlet orifice diameter, R1 = R2 \[m\] (`d_0`): 0.25 mm (range 0.2-0.3).
+    pub d_0: f64,
+    /// Nozzle diameter \[m\] (`d_n`): 0.4 mm (range 0.3-0.5).
+    pub d_n: f64,
+    /// Flapper-nozzle null gap \[m\] (`x_f0`): `d_0^2 / (4 d_n)` = 39 um (range 25-50), so that the
+    /// nozzle curtain area equals the inlet area and the control pressures rest at `p_s / 2`.
+    pub x_f0: f64,
+    /// Volume of each control chamber \[m^3\] (`V_H`): 0.1 cm^3 (spool end and its drilling).
+    pub v_h: f64,
+    /// Spool diameter \[m\] (`d_s`): 5 mm (range 4-8).
+    pub d_s: f64,
+    /// Spool mass \[kg\] (`m_v`): 3 g (range 2-10).
+    pub m_v: f64,
+    /// Spool viscous friction \[N s/m\] (`b_v`): 1 (oil film on a 5 mm spool).
+    pub b_v: f64,
+    /// Spool centring spring \[N/m\] (`k_v`): weak; the feedback wire positions the spool.
+    pub k_v: f64,
+    /// Area gradient of each metering edge \[m\] (`w`): the full spool periphery `pi d_s`.
+    pub w: f64,
+    /// Radial clearance of the spool \[m\] (`c_r`): 2.5 um; rounds the critical-centre null.
+    pub c_r: f64,
+    /// Spool stroke \[m\] (`x_v_max`): +-0.4 mm (range 0.3-0.5), where the spool meets its end
+    /// stops ([`super::limits::spool_stop`]).
+    pub x_v_max: f64,
+    /// Volume of each actuator chamber with its line \[m^3\] (`V_1`): 150 cm^3, half the swept
+    /// volume of a +-90 deg vane stroke (`D_m pi / 2` = 126 cm^3) plus 25 cm^3 of line (0.5 m of
+    /// 8 mm bore).
+    pub v_1: f64,
+    /// Internal leakage resistance of the vane motor \[N s/m^5\] (`R_leak`): 1 L/min at 100 bar.
+    pub r_leak: f64,
+    /// Vane motor displacement \[m^3/rad\] (`D_m`): 8.04e-5 (0.5 L/rev), the LOES's `D_m`.
+    pub d_m: f64,
+    /// Rotor inertia \[kg m^2\] (`I_m`): the paper's `I_b`.
+    pub i_m: f64,
+    /// Rotor viscous friction \[N m s/rad\] (`b_m`): 0.1 (vane seal drag); the fit does not
+    /// depend on it.
+    pub b_m: f64,
+}
+
+impl Default for ServoValveParameters {
+    fn default() -> Self {
+        let d_0: f64 = 0.25e-3;
+        let d_n = 0.4e-3;
+        let d_s = 5e-3;
+        ServoValveParameters {
+            p_supply: 140e5,
+            p_tank: 0.0,
+            rho: 860.0,
+            beta: 1.4e9,
+            cd: 0.61,
+            dp_cr: 5e3,
+            r_bob: 80.0,
+            l_bob: 1.252,
+            k_phi: 0.1692,
+            m_f: 2e-5,
+            b_f: 0.06,
+            k_f: 300.0,
+            k_w: 53.41,
+            d_0,
+            d_n,
+            x_f0: d_0 * d_0 / (4.0 * d_n),
+            v_h: 1e-7,
+            d_s,
+            m_v: 3e-3,
+            b_v: 1.0,
+            k_v: 200.0,
+            w: std::f64::consts::PI * d_s,
+            c_r: 2.5e-6,
+            x_v_max: 4e-4,
+            v_1: 1.5e-4,
+            r_leak: 100e5 / (1e-3 / 60.0),
+            d_m: 8.04e-5,
+            i_m: PRINTED_I_B,
+            b_m: 0.1,
+        }
+    }
+}
+
+impl ServoValveParameters {
+    /// The fluid constants of the orifice law.
+    pub fn fluid(&self) -> OrificeFluid {
+        OrificeFluid {
+            cd: self.cd,
+            rho: self.rho,
+            dp_cr: self.dp_cr,
+        }
+    }
+
+    /// Spool end area `pi d_s^2 / 4` \[m^2\].
+    pub fn spool_area(&self) -> f64 {
+        std::f64::consts::PI * self.d_s * self.d_s / 4.0
+    }
+
+    /// Null flow gain of the four-way stage `Cd w sqrt((p_s - p_t)/rho)` \[m^2/s\].
+    pub fn flow_gain(&self) -> f64 {
+        self.cd * self.w * ((self.p_supply - self.p_tank) / self.rho).sqrt()
+    }
+
+    /// Checks that every constant is finite and positive (`p_tank` finite and below the supply);
+    /// the error names the FMU variable, e.g. `servo_valve.p_supply`.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.p_supply.is_finite() && self.p_supply > 0.0) {
+            return Err(format!(
+                "servo_valve.p_supply: the supply pressure must be positive, got {} Pa",
+                self.p_supply
+            ));
+        }
+        if !(self.p_tank.is_finite() && self.p_tank < self.p_supply) {
+            return Err(format!(
+                "servo_valve.p_tank: the tank pressure must be below the supply pressure ({} Pa), got {} Pa",
+                self.p_supply, self.p_tank
+            ));
+        }
+        let positive = [
+            ("rho", self.rho),
+            ("beta", self.beta),
+            ("Cd", self.cd),
+            ("dp_cr", self.dp_cr),
+            ("R_bob", self.r_bob),
+            ("L_bob", self.l_bob),
+            ("k_phi", self.k_phi),
+            ("m_f", self.m_f),
+            ("b_f", self.b_f),
+            ("k_f", self.k_f),
+            ("k_w", self.k_w),
+            ("d_0", self.d_0),
+            ("d_n", self.d_n),
+            ("x_f0", self.x_f0),
+            ("V_H", self.v_h),
+            ("d_s", self.d_s),
+            ("m_v", self.m_v),
+            ("b_v", self.b_v),
+            ("k_v", self.k_v),
+            ("w", self.w),
+            ("c_r", self.c_r),
+            ("x_v_max", self.x_v_max),
+            ("V_1", self.v_1),
+            ("R_leak", self.r_leak),
+            ("D_m", self.d_m),
+            ("I_m", self.i_m),
+            ("b_m", self.b_m),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("servo_valve.{name}: must be positive, got {v}"));
+            }
+        }
+        Ok(())
+    }
+}
