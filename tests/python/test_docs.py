@@ -77,7 +77,10 @@ def test_page_content(page, md):
                  "linux64", "FMU version", md.version, "Barbosa", "CONEM", "2002",
                  "before initialisation only", "read-only"):
         assert text in page, text
-    assert re.search(r"final\s+\S+\s*=\s*-?\d", page), "no numbers of the expected result"
+    # The expected result: what `hsp run` printed for the default experiment, with its numbers.
+    pre = re.search(r"What <code>hsp run</code> printed.*?<pre>(.*?)</pre>", page, re.S)
+    assert pre, "no expected result"
+    assert re.search(r"final\s+-?\d", pre.group(1)) and re.search(r"solver\s+\d+ steps", pre.group(1)), pre.group(1)
     # Every parameter and output is in a table, with its unit and display unit.
     for v in md.modelVariables:
         assert f"<code>{v.name}</code>" in page.replace("&quot;", '"'), v.name

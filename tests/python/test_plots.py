@@ -61,3 +61,17 @@ def test_frf_plot_has_no_table_1_marks_off_the_plate(tmp_path):
     texts = " ".join("".join(t.itertext()) for t in root.iter() if t.tag.endswith("text"))
     assert "magnitude [dB]" in texts
     assert "Table 1" not in texts
+
+
+def test_modes_plot_labels_each_shape_with_its_frequency(tmp_path):
+    import json
+
+    stem = tmp_path / "modes"
+    out = json.loads(hsp("modes", "--plot", str(stem), "--count", "6"))
+    png, svg = stem.with_suffix(".png"), stem.with_suffix(".svg")
+    assert png_size(png.read_bytes()) == (1100, 2 * 260 + 60)  # 6 shapes: 2 rows of 3
+    assert_png(png.read_bytes())
+    root = assert_svg(svg.read_bytes())
+    texts = " ".join("".join(t.itertext()) for t in root.iter() if t.tag.endswith("text"))
+    for label, f in list(zip(out["labels"], out["f_hz"]))[:6]:
+        assert f"{label}  {f:.2f} Hz" in texts or f"{label} {f:.2f} Hz" in texts, (label, f, texts)

@@ -11,6 +11,7 @@ import sys
 
 import pytest
 
+from conftest import preset
 from figures import assert_png
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -19,14 +20,20 @@ sweep = importlib.util.module_from_spec(spec)
 sys.modules["sweep"] = sweep
 spec.loader.exec_module(sweep)
 
-# The LOES driving the hub and plate (the paper's Fig. 9b setup), over 0.3 s: enough for the
-# metrics to depend on the parameters, short enough for a test.
+# The LOES driving the hub and plate (preset loes-coupled, the paper's Fig. 9b setup), over 0.3 s:
+# enough for the metrics to depend on the parameters, short enough for a test.
 OPTIONS = {"inputs": {"r": "1.0"}, "stop": 0.3, "step": 1e-3, "tolerance": None}
-FIXED = {"hydraulics.model": "1", "hydraulics.motor_coupled": "true"}
 GOOD = sweep.grid_points([("torsion_bar.k", ["1000", "2500", "5000"]),
                           ("plate.zeta", ["0.005", "0.02"])])
 BAD = [{"torsion_bar.k": "2500", "plate.zeta": "-1"},      # below its minimum: fmi2Error
        {"torsion_bar.k": "2500", "plate.zeta": "0.01", "no.such": "1"}]  # not a variable
+
+
+def as_text(value):
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+FIXED = {k: as_text(v) for k, v in preset("loes-coupled").items()}
 POINTS = [dict(FIXED, **p) for p in GOOD + BAD]
 COMPARED = [m for m in sweep.METRICS if m != "wall_s"]
 
@@ -99,7 +106,7 @@ def test_command_line_writes_csv_and_plot(fmu_path, tmp_path):
     done = subprocess.run(
         [sys.executable, str(ROOT / "tools" / "sweep.py"), "--fmu", fmu_path, "--workers", "2",
          "--grid", "plate.zeta=0.005,0.02", "--grid", "torsion_bar.k=1000,5000",
-         "--set", "hydraulics.model=1", "--set", "hydraulics.motor_coupled=true",
+         *[a for k, v in FIXED.items() for a in ("--set", f"{k}={v}")],
          "--stop", "0.2", "--out", str(out), "--plot", "peak_w_tip"],
         capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]

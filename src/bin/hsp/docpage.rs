@@ -22,6 +22,7 @@ use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::presets::PRESETS;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
 use super::plot;
@@ -70,6 +71,40 @@ fn make(fmu: &Path, xml: &str, platforms: &[String], work: &Path) -> Result<Vec<
     let page = page(&md, platforms, &summary, &bode.caption);
     files.insert(0, ("index.html".into(), page.into_bytes()));
     Ok(files)
+}
+
+/// The figures of a packaged FMU's `documentation/` copied into `dir` (`hsp doc-figures`, which
+/// refreshes the README's pictures in `docs/img/`); returns the paths written.
+pub fn copy_figures(fmu: &Path, dir: &Path) -> Result<Vec<std::path::PathBuf>, String> {
+    let file = std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?;
+    let mut zip = zip::ZipArchive::new(file).map_err(|e| format!("{}: {e}", fmu.display()))?;
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut written = Vec::new();
+    for i in 0..zip.len() {
+        let mut entry = zip
+            .by_index(i)
+            .map_err(|e| format!("{}: {e}", fmu.display()))?;
+        let Some(name) = entry
+            .name()
+            .strip_prefix("documentation/")
+            .map(str::to_string)
+        else {
+            continue;
+        };
+        if !(name.ends_with(".svg") || name.ends_with(".png")) || name.contains('/') {
+            continue;
+        }
+        let path = dir.join(&name);
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut entry, &mut bytes)
+            .map_err(|e| format!("{}: {name}: {e}", fmu.display()))?;
+        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        written.push(path);
+    }
+    if written.is_empty() {
+        return Err(format!("{}: no figures in documentation/", fmu.display()));
+    }
+    Ok(written)
 }
 
 /// Settings of the bond-graph figure: the FMU's start values with a two-mode plate, so that the
@@ -242,14 +277,17 @@ struct Var {
     description: String,
 }
 
+/// A display unit: name, factor, offset (display = factor * SI + offset).
+type DisplayUnit = (String, f64, f64);
+
 /// What the page needs from `modelDescription.xml`.
 struct ModelDescription {
     attributes: Vec<(String, String)>,
     co_simulation: Vec<(String, String)>,
     model_exchange: bool,
     default_experiment: Vec<(String, String)>,
-    /// unit -> [(display unit, factor, offset)]
-    display_units: Vec<(String, Vec<(String, f64, f64)>)>,
+    /// unit -> its display units
+    display_units: Vec<(String, Vec<DisplayUnit>)>,
     variables: Vec<Var>,
 }
 
@@ -331,7 +369,7 @@ impl ModelDescription {
     }
 
     /// The display unit of a variable: its `displayUnit`, else the unit's first display unit.
-    fn display(&self, v: &Var) -> Option<(String, f64, f64)> {
+    fn display(&self, v: &Var) -> Option<DisplayUnit> {
         let unit = v.unit.as_deref()?;
         let list = &self.display_units.iter().find(|(u, _)| u == unit)?.1;
         match &v.display_unit {
@@ -512,7 +550,9 @@ fn page(md: &ModelDescription, platforms: &[String], summary: &str, bode_caption
             &["parameter"][..],
             "<em>fixed</em> parameters can be set only before initialisation (between \
              <code>fmi2Instantiate</code> and <code>fmi2ExitInitializationMode</code>); \
-             <em>tunable</em> ones at any time.",
+             <em>tunable</em> ones at any time. A value outside min/max is refused by \
+             <code>fmi2SetReal</code>/<code>fmi2SetInteger</code> with a message naming the \
+             variable.",
         ),
         (
             "Calculated parameters",
@@ -537,6 +577,26 @@ fn page(md: &ModelDescription, platforms: &[String], summary: &str, bode_caption
     let generation_tool = attr("generationTool");
     let today = date();
     let summary = escape(summary);
+    let mut presets = String::from(
+        "<table>\n<tr><th>name</th><th>in the paper</th><th>what</th><th>settings</th></tr>\n",
+    );
+    for p in PRESETS {
+        let settings: Vec<String> = p
+            .settings
+            .iter()
+            .map(|(k, v)| format!("<code>{k} = {v}</code>"))
+            .collect();
+        writeln!(
+            presets,
+            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            p.name,
+            escape(p.paper),
+            escape(p.description),
+            settings.join(", ")
+        )
+        .unwrap();
+    }
+    presets.push_str("</table>\n");
     let bond_graph_settings = BOND_GRAPH_FIGURE
         .iter()
         .map(|(k, v)| format!("<code>{k} = {v}</code>"))
@@ -618,9 +678,9 @@ solver tolerance):</p>
 <h2>How to use</h2>
 <h3>Python (fmpy)</h3>
 <pre>from fmpy import simulate_fmu
-result = simulate_fmu("HydraulicSlewingPlate.fmu", stop_time=1.0, output_interval=1e-3,
-                      start_values={{"r": 1.0}},
-                      output=["y_pot", "theta_motor", "p_load"])
+result = simulate_fmu("HydraulicSlewingPlate.fmu", stop_time=5.0, output_interval=1e-3,
+                      start_values={{"r": 2.0}},  # a 2 V step of the reference: 30 degrees
+                      output=["y_pot", "theta_hub", "w_tip", "p_load"])
 # result is a NumPy structured array: result["time"], result["y_pot"], ...</pre>
 <p>Parameters are set the same way (<code>start_values={{"plate.zeta": 0.01}}</code>); fixed
 parameters only take effect when given before initialisation, which <code>simulate_fmu</code>
@@ -635,13 +695,10 @@ internal steps). Connect a signal to <code>r</code> (the position reference, V; 
 degrees of motor angle) and read <code>y_pot</code>, <code>theta_hub</code>, <code>w_tip</code> and
 the accelerometers.</p>
 <h3>Configurations of the paper</h3>
-<p>The paper's configurations are parameter sets: the identified low-order hydraulics on the motor
-alone (<code>hydraulics.model = 1</code>, <code>hydraulics.motor_coupled = false</code>: its
-step response and the identified transfer function); the same driving the hub and the plate
-(<code>hydraulics.motor_coupled = true</code>: the frequency response of its Table 1); the
-plate clamped at the root and shaken by <code>F1</code>, <code>F2</code>
-(<code>plate.root = 2</code>: its experimental modal test). The command-line tool of the
-repository selects them by name (<code>hsp run --preset NAME</code>).</p>
+<p>The paper's configurations are parameter sets: set these parameters before initialisation (the
+others keep their start values). The first is the FMU's default. The repository's command-line
+tool selects them by name (<code>hsp run --preset NAME</code>).</p>
+{presets}
 {external}
 <h3>Limits</h3>
 <p>The paper's frequency response (its Table 1) also shows peaks at 66, 73 and 84 Hz. In the plate

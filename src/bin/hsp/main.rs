@@ -7,13 +7,17 @@
 //! - `hsp presets [--json]`: the named parameter sets (the paper's configurations).
 //! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest.
 //! - `hsp graph [--set ...]`: the model's bond graph as Graphviz DOT, with causal strokes.
-//! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14).
+//! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14); `--plot FILE`
+//!   draws the first mode shapes.
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
 //!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
+//! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
+//!   copied for the README.
 
 mod binaries;
 mod docpage;
 mod loader;
+mod modeshape;
 mod package;
 mod plot;
 mod progress;
@@ -87,11 +91,26 @@ enum Command {
         /// Print JSON (the only format)
         #[arg(long)]
         json: bool,
+        /// Also draw the first mode shapes into FILE.png and FILE.svg
+        #[arg(long, value_name = "FILE")]
+        plot: Option<String>,
+        /// How many mode shapes --plot draws
+        #[arg(long, default_value_t = 6)]
+        count: usize,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
         /// Start from a named parameter set (`hsp presets`); --set applies after it
         #[arg(long)]
         preset: Option<String>,
+    },
+    /// Copy the packaged FMU's documentation figures into a folder (the README's docs/img)
+    DocFigures {
+        /// The FMU to read (built by `hsp package`)
+        #[arg(long, default_value = package::DEFAULT_FMU)]
+        fmu: String,
+        /// Where to write the figures
+        #[arg(long, default_value = "docs/img")]
+        out: String,
     },
     /// Frequency response of the linearised model, with its resonance peaks
     Frf {
@@ -182,10 +201,25 @@ fn graph(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
     Ok(bond_graph(&parameters)?.to_dot())
 }
 
-fn modes(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
+fn modes(
+    preset: Option<&str>,
+    sets: &[String],
+    plot_file: Option<&str>,
+    count: usize,
+) -> Result<String, String> {
     let values = values_with(preset, sets)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let modes = plate_modes(&parameters)?;
+    if let Some(file) = plot_file {
+        let shapes = modeshape::mode_shapes(&parameters.plate, count, 41, 17)?;
+        for p in plot::mode_shapes(
+            &plot::stem_of(file),
+            "Plate mode shapes (deflection relative to the hub; white: nodal lines)",
+            &shapes,
+        )? {
+            eprintln!("wrote {}", p.display());
+        }
+    }
     let json = serde_json::json!({
         "f_hz": modes.iter().map(|m| m.f_hz).collect::<Vec<_>>(),
         "labels": modes.iter().map(|m| format!("({},{})", m.label.0, m.label.1)).collect::<Vec<_>>(),
@@ -261,6 +295,14 @@ fn main() -> ExitCode {
             println!("wrote {path}");
         }),
         Command::Run(args) => run::run(&args),
+        Command::DocFigures { fmu, out } => {
+            let root = package::root();
+            docpage::copy_figures(&root.join(fmu), &root.join(out)).map(|paths| {
+                for p in paths {
+                    println!("wrote {}", p.display());
+                }
+            })
+        }
         Command::Presets { json } => {
             println!("{}", presets_text(json));
             Ok(())
@@ -273,9 +315,11 @@ fn main() -> ExitCode {
         Command::Graph { set, preset } => graph(preset.as_deref(), &set).map(|s| println!("{s}")),
         Command::Modes {
             json: _,
+            plot,
+            count,
             set,
             preset,
-        } => modes(preset.as_deref(), &set).map(|s| println!("{s}")),
+        } => modes(preset.as_deref(), &set, plot.as_deref(), count).map(|s| println!("{s}")),
         Command::Frf {
             input,
             output,

@@ -482,6 +482,114 @@ pub fn bode(stem: &Path, b: &Bode) -> Result<Vec<PathBuf>, String> {
     )
 }
 
+/// Blue (-1) through white (0) to red (+1).
+fn diverging(v: f64) -> RGBColor {
+    let v = v.clamp(-1.0, 1.0);
+    let mix = |a: f64, b: f64, t: f64| (a + (b - a) * t).round() as u8;
+    if v < 0.0 {
+        let t = -v;
+        RGBColor(
+            mix(255.0, 33.0, t),
+            mix(255.0, 102.0, t),
+            mix(255.0, 172.0, t),
+        )
+    } else {
+        RGBColor(
+            mix(255.0, 178.0, v),
+            mix(255.0, 24.0, v),
+            mix(255.0, 43.0, v),
+        )
+    }
+}
+
+fn draw_modes<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    title: &str,
+    shapes: &[super::modeshape::ModeShape],
+    columns: usize,
+) -> Result<(), String> {
+    area.fill(&WHITE).map_err(err)?;
+    let area = area.titled(title, (FONT, 22)).map_err(err)?;
+    let rows = shapes.len().div_ceil(columns);
+    for (shape, cell) in shapes.iter().zip(area.split_evenly((rows, columns)).iter()) {
+        let (nx, ny) = (shape.x.len(), shape.y.len());
+        let (a, b) = (shape.x[nx - 1], shape.y[ny - 1]);
+        let mut chart = ChartBuilder::on(cell)
+            .caption(
+                format!(
+                    "({},{})  {:.2} Hz",
+                    shape.label.0, shape.label.1, shape.f_hz
+                ),
+                (FONT, 16),
+            )
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(40)
+            .build_cartesian_2d(0.0..a, 0.0..b)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("x [m]")
+            .y_desc("y [m]")
+            .label_style((FONT, 11))
+            .axis_desc_style((FONT, 12))
+            .x_labels(4)
+            .y_labels(3)
+            .draw()
+            .map_err(err)?;
+        let (dx, dy) = (a / (nx - 1) as f64, b / (ny - 1) as f64);
+        chart
+            .draw_series((0..ny).flat_map(|iy| {
+                (0..nx).map(move |ix| {
+                    let (x0, y0) = (
+                        (shape.x[ix] - dx / 2.0).max(0.0),
+                        (shape.y[iy] - dy / 2.0).max(0.0),
+                    );
+                    let (x1, y1) = (
+                        (shape.x[ix] + dx / 2.0).min(a),
+                        (shape.y[iy] + dy / 2.0).min(b),
+                    );
+                    Rectangle::new([(x0, y0), (x1, y1)], diverging(shape.w[iy][ix]).filled())
+                })
+            }))
+            .map_err(err)?;
+    }
+    area.present().map_err(err)
+}
+
+/// Mode shapes as colour maps, one per mode (red and blue: opposite deflections, white: nodal
+/// lines), labelled (n,m) with the frequency: writes `stem.png` and `stem.svg`.
+pub fn mode_shapes(
+    stem: &Path,
+    title: &str,
+    shapes: &[super::modeshape::ModeShape],
+) -> Result<Vec<PathBuf>, String> {
+    if shapes.is_empty() {
+        return Err("no elastic mode to draw".into());
+    }
+    let columns = shapes.len().min(3);
+    let rows = shapes.len().div_ceil(columns) as u32;
+    write_both(
+        stem,
+        (1100, 260 * rows + 60),
+        (
+            |a| draw_modes(a, title, shapes, columns),
+            |a| draw_modes(a, title, shapes, columns),
+        ),
+    )
+}
+
+/// The stem of a `--plot FILE` argument: `FILE` without a `.png`/`.svg` extension (both are
+/// written).
+pub fn stem_of(file: &str) -> PathBuf {
+    let p = PathBuf::from(file);
+    match p.extension().and_then(|e| e.to_str()) {
+        Some("png") | Some("svg") => p.with_extension(""),
+        _ => p,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -504,15 +612,5 @@ mod tests {
         let (lo, hi) = padded_range([2.0, 2.0].iter());
         assert!(lo < 2.0 && hi > 2.0);
         assert_eq!(padded_range([].iter()), (-1.0, 1.0));
-    }
-}
-
-/// The stem of a `--plot FILE` argument: `FILE` without a `.png`/`.svg` extension (both are
-/// written).
-pub fn stem_of(file: &str) -> PathBuf {
-    let p = PathBuf::from(file);
-    match p.extension().and_then(|e| e.to_str()) {
-        Some("png") | Some("svg") => p.with_extension(""),
-        _ => p,
     }
 }

@@ -355,7 +355,7 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         let knee = LINEAR_FRACTION * p.controller.e_max;
         let e = col("controller.e_out");
         format!(
-            "amplifier beyond its linear range (|e_out| > {knee} V) for {:.3} s, peak |e_out| {:.2} V of {} V",
+            "amplifier beyond its linear range (|e_out| > {knee:.2} V) for {:.3} s, peak |e_out| {:.2} V of {} V",
             time_where(t, &e, |v| v.abs() > knee),
             max_abs(&e),
             p.controller.e_max
