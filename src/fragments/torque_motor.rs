@@ -26,7 +26,7 @@
 //! The flapper displacement is a signal ([`TorqueMotorPorts::x_f`]) that modulates the nozzle
 //! restrictions of BG2: as in the paper, the fragments are coupled through control signals; the
 //! nozzle jet reaction force on the flapper is not modelled. The feedback wire from the spool
-//! (see [`super::flapper_nozzle::add_feedback_wire`]) bonds onto the flapper junction.
+//! (see [`super::flapper_nozzle::add_spring_field`]) bonds onto the flapper junction.
 //!
 //! Sign conventions: a positive amplifier voltage drives a positive current, a positive force and
 //! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).

@@ -20,7 +20,7 @@ pub struct ServoValveParameters {
     /// Discharge coefficient of every orifice \[-\] (`Cd`): 0.61, sharp-edged.
     pub cd: f64,
     /// Laminar-transition pressure drop of the orifice law \[Pa\] (`dp_cr`): 0.05 bar, from
-    /// `Re_cr` = 10 at the inlet orifice, rounded up (see [`super::orifice`]).
+    /// `Re_cr` = 10 at the inlet orifice, rounded up (see [`crate::fragments::orifice`]).
     pub dp_cr: f64,
     /// Coil resistance \[ohm\] (`R_bob`): 80, bottom of the 80-200 range.
     pub r_bob: f64,
