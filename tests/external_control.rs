@@ -42,7 +42,13 @@ const EXTERNAL: (&str, &str) = ("controller.external", "true");
 
 #[test]
 fn with_e_in_zero_the_motor_stays_at_rest_whatever_r() {
-    for preset in ["loes-motor", "loes-coupled", "servo-valve-motor"] {
+    for preset in [
+        "loes-motor",
+        "loes-coupled",
+        "servo-valve-motor",
+        "complete",
+        "complete-hub-locked",
+    ] {
         for r in [-5.0, 0.0, 3.0] {
             let (p, sys) = model(preset, &[EXTERNAL], &[("r", r), ("e_in", 0.0)]);
             let y = run(&p, &sys, 0.5);

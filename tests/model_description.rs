@@ -7,10 +7,17 @@ use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::LoesParameters;
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{idx, VARIABLES};
 
 fn defaults() -> Parameters {
     Parameters::from_values(&Values::from_start(&VARIABLES), &Experiment::default()).unwrap()
+}
+
+fn with_preset(name: &str) -> Parameters {
+    let mut values = Values::from_start(&VARIABLES);
+    presets::apply(&mut values, name).unwrap();
+    Parameters::from_values(&values, &Experiment::default()).unwrap()
 }
 
 #[test]
@@ -23,20 +30,22 @@ fn xml_start_values_are_the_documented_defaults() {
 
 #[test]
 fn every_model_input_and_output_is_an_fmu_variable() {
-    let system = Assembled::new(&defaults()).unwrap();
-    for name in system.compiled().input_names() {
-        let v = VARIABLES.iter().find(|v| v.name == name).unwrap();
-        assert_eq!(v.causality, Causality::Input, "{name}");
-    }
-    for name in system.compiled().output_names() {
-        let v = VARIABLES.iter().find(|v| v.name == name).unwrap();
-        assert_eq!(v.causality, Causality::Output, "{name}");
+    for preset in presets::PRESETS {
+        let system = Assembled::new(&with_preset(preset.name)).unwrap();
+        for name in system.compiled().input_names() {
+            let v = VARIABLES.iter().find(|v| v.name == name).unwrap();
+            assert_eq!(v.causality, Causality::Input, "{name}");
+        }
+        for name in system.compiled().output_names() {
+            let v = VARIABLES.iter().find(|v| v.name == name).unwrap();
+            assert_eq!(v.causality, Causality::Output, "{name}");
+        }
     }
 }
 
 #[test]
 fn linearisation_through_the_model_is_eq_1() {
-    let p = defaults();
+    let p = with_preset("loes-motor");
     let system = Assembled::new(&p).unwrap();
     let lin = system
         .compiled()

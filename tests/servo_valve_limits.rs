@@ -22,6 +22,8 @@ fn coupled_parameters(sets: &[(&str, &str)]) -> Parameters {
 #[derive(Debug)]
 struct Extremes {
     x_v: f64,
+    /// Largest |y_pot| \[V\].
+    y_pot: f64,
     p_min: f64,
     p_max: f64,
 }
@@ -36,6 +38,7 @@ fn square_wave(p: &Parameters, amplitude: f64, stop: f64) -> Extremes {
     let mut u = vec![0.0; m.input_names().len()];
     let mut e = Extremes {
         x_v: 0.0,
+        y_pot: 0.0,
         p_min: f64::MAX,
         p_max: f64::MIN,
     };
@@ -55,6 +58,7 @@ fn square_wave(p: &Parameters, amplitude: f64, stop: f64) -> Extremes {
         m.outputs(integ.x(), &u, &mut y);
         let get = |name: &str| y[m.output_index(name).unwrap()];
         e.x_v = e.x_v.max(get("servo_valve.x_v").abs());
+        e.y_pot = e.y_pot.max(get("y_pot").abs());
         for name in [
             "servo_valve.p_1",
             "servo_valve.p_2",
@@ -70,9 +74,9 @@ fn square_wave(p: &Parameters, amplitude: f64, stop: f64) -> Extremes {
 
 #[test]
 fn square_wave_keeps_spool_and_pressures_within_limits() {
-    // +-2 V of reference is 40 V of valve command on each reversal (A1 A2 = 20): far beyond the
-    // 10 V that bring the spool to its stroke, so the spool runs into its stops and the hub,
-    // swinging on the bar, pumps the chambers.
+    // +-2 V of reference asks for 80 V of valve command on each reversal (A1 A2 = 20), which the
+    // amplifier limits to 12 V: beyond the 10 V that bring the spool to its stroke, so the spool
+    // runs into its stops and the hub, swinging on the bar, pumps the chambers.
     let p = coupled_parameters(&[]);
     let e = square_wave(&p, 2.0, 8.0);
     let sv = &p.servo_valve;
@@ -90,4 +94,6 @@ fn square_wave_keeps_spool_and_pressures_within_limits() {
     // ... and a chamber did cavitate: the floor held it, not the absence of suction.
     assert!(e.p_min < CAVITATION_PRESSURE + 1e4, "p_min {}", e.p_min);
     assert!(e.p_max <= 2.0 * sv.p_supply, "p_max {}", e.p_max);
+    // The position loop does not overshoot wildly: |y_pot| within 1.5 x the command.
+    assert!(e.y_pot <= 1.5 * 2.0, "|y_pot| up to {} V", e.y_pot);
 }

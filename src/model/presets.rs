@@ -185,6 +185,18 @@ mod tests {
     }
 
     #[test]
+    fn the_fmu_defaults_are_the_complete_preset() {
+        let start = Values::from_start(&VARIABLES);
+        let mut values = start.clone();
+        apply(&mut values, COMPLETE).unwrap();
+        let e = Experiment::default();
+        assert_eq!(
+            Parameters::from_values(&values, &e).unwrap(),
+            Parameters::from_values(&start, &e).unwrap()
+        );
+    }
+
+    #[test]
     fn the_loes_motor_preset_is_the_identification_setup() {
         let mut values = Values::from_start(&VARIABLES);
         apply(&mut values, "loes-motor").unwrap();

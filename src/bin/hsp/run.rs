@@ -36,11 +36,12 @@ pub struct RunArgs {
     /// Size of the step of the external coil drive e_in, V (used with controller.external=true)
     #[arg(long, default_value_t = 0.0)]
     e_in: f64,
-    /// Stop time, s
-    #[arg(long, default_value_t = 20.0)]
+    /// Stop time, s (the default lets the hub of the complete system settle: its slowest mode,
+    /// 1.3 Hz, decays with a time constant of about 32 s)
+    #[arg(long, default_value_t = 150.0)]
     stop: f64,
     /// Communication step, s
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 5e-3)]
     step: f64,
     /// Relative tolerance passed to fmi2SetupExperiment (default: the FMU's solver.rtol)
     #[arg(long)]
@@ -355,7 +356,7 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         let knee = LINEAR_FRACTION * p.controller.e_max;
         let e = col("controller.e_out");
         format!(
-            "amplifier beyond its linear range (|e_out| > {knee:.2} V) for {:.3} s, peak |e_out| {:.2} V of {} V",
+            "amplifier beyond its linear range (|e_out| > {knee:.1} V) for {:.3} s, peak |e_out| {:.2} V of {} V",
             time_where(t, &e, |v| v.abs() > knee),
             max_abs(&e),
             p.controller.e_max
@@ -367,6 +368,19 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         )
     };
     writeln!(s, "  limits  {amplifier}").unwrap();
+    if p.hydraulics == HydraulicsModel::ServoValve {
+        // The end-stop force rises over the last twentieth of the stroke.
+        let x_max = p.servo_valve.x_v_max;
+        let x_v = col("servo_valve.x_v");
+        writeln!(
+            s,
+            "          spool at its stop (|x_v| > 0.95 x_v_max = {:.3} mm) for {:.3} s, peak |x_v| {:.3} mm",
+            0.95 * x_max * 1e3,
+            time_where(t, &x_v, |v| v.abs() > 0.95 * x_max),
+            max_abs(&x_v) * 1e3
+        )
+        .unwrap();
+    }
     let st = &info.stats;
     writeln!(
         s,
