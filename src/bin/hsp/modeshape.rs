@@ -27,8 +27,8 @@ pub fn mode_shapes(
     ny: usize,
 ) -> Result<Vec<ModeShape>, String> {
     let model = PlateModel::new(p)?;
-    let modes = natural_modes(&model);
-    let (vals, vecs) = generalized_eigen(&model.stiffness, &model.mass);
+    let modes = natural_modes(&model)?;
+    let (vals, vecs) = generalized_eigen(&model.stiffness, &model.mass)?;
     let scale = vals.iter().fold(0.0f64, |s, v| s.max(v.abs()));
     // The same filter as natural_modes: the free hub's rigid-body mode is left out.
     let elastic: Vec<usize> = (0..vals.len())
