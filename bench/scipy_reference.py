@@ -12,6 +12,20 @@ analytic Jacobians, for rtol = 1e-3 ... 1e-10. Records scd (same definition as t
 accepted steps (len(sol.t) - 1), f evaluations, Jacobian evaluations and LU factorisations as
 scipy reports them, and wall-clock time (Python; not comparable with Rust times).
 `cargo run --release --bin work-precision` merges the JSON into bench/work_precision.md.
+
+Second use, by the FMU speed benchmark (`cargo run --release --bin bench-fmu`):
+
+    .venv/bin/python bench/scipy_reference.py --linear MODEL.json
+
+MODEL.json holds a linear configuration of the FMU's model as `hsp linearize --json` gives it
+(A, B, and the rows C, D of the outputs whose error is measured), the start state x0, the held
+input u, each state's nominal value, the stop time and the communication step. One solve_ivp
+call per method (Radau, BDF, LSODA) and rtol (1e-3 ... 1e-10; atol = 1e-2 rtol nominal, as the
+FMU), with the constant Jacobian A (sparse when A is large and sparse), output at every
+communication point. Each run's delivered error is the largest deviation of each output from the
+exact discretisation x_{k+1} = expm(A h) x_k + (int_0^h expm(A s) ds) B u, relative to that
+output's largest magnitude (the worst output). Prints {"Radau": [{rtol, err, wall, nfev, njev,
+nlu}, ...], ...} as JSON on stdout.
 """
 import json
 import math
@@ -176,5 +190,65 @@ def main():
     print(f"wrote {path}", file=sys.stderr)
 
 
+def linear(path):
+    from scipy.linalg import expm
+    from scipy.sparse import csc_matrix
+
+    with open(path) as fh:
+        m = json.load(fh)
+    a, b = np.array(m["A"]), np.array(m["B"])
+    c, d = np.array(m["C"]), np.array(m["D"])
+    x0, u = np.array(m["x0"]), np.array(m["u"])
+    nominal = np.array(m["nominal"])
+    stop, step = m["stop"], m["step"]
+    n = int(round(stop / step))
+    nx, nu = b.shape
+    aug = np.zeros((nx + nu, nx + nu))
+    aug[:nx, :nx] = a * step
+    aug[:nx, nx:] = b * step
+    e = expm(aug)
+    phi, gu = e[:nx, :nx], e[:nx, nx:] @ u
+    x = x0.copy()
+    exact = np.empty((n, c.shape[0]))
+    for k in range(n):
+        x = phi @ x + gu
+        exact[k] = c @ x + d @ u
+    scale = np.abs(exact).max(axis=0)
+    keep = scale > 0
+    bu = b @ u
+    jac = csc_matrix(a) if nx > 100 and np.count_nonzero(a) < 0.1 * a.size else a
+    t_eval = np.arange(1, n + 1) * step
+
+    def f(t, x):
+        return a @ x + bu
+
+    out = {}
+    for method in ["Radau", "BDF", "LSODA"]:
+        runs = []
+        for rtol in RTOLS:
+            t0 = time.perf_counter()
+            try:
+                sol = solve_ivp(f, (0.0, stop), x0, method=method, rtol=rtol,
+                                atol=1e-2 * rtol * nominal, jac=jac, t_eval=t_eval)
+            except Exception as ex:  # noqa: BLE001 - record any failure
+                print(f"{method} rtol {rtol}: {ex}", file=sys.stderr)
+                continue
+            wall = time.perf_counter() - t0
+            if not sol.success:
+                continue
+            y = (c @ sol.y).T + d @ u
+            err = float((np.abs(y - exact).max(axis=0)[keep] / scale[keep]).max())
+            runs.append(dict(rtol=rtol, err=err, wall=wall, nfev=int(sol.nfev),
+                             njev=int(sol.njev), nlu=int(sol.nlu)))
+            print(f"{method:6} rtol {rtol:7.0e} err {err:.2e} {wall:.2f}s", file=sys.stderr)
+            if wall > 60:
+                break  # tighter tolerances only take longer
+        out[method] = runs
+    json.dump(out, sys.stdout)
+
+
 if __name__ == "__main__":
-    main()
+    if len(sys.argv) == 3 and sys.argv[1] == "--linear":
+        linear(sys.argv[2])
+    else:
+        main()

@@ -5,7 +5,9 @@ use hydraulic_slewing_plate::fragments::plate::beam_functions::{
     product_integral, BeamFunction, BeamKind,
 };
 use hydraulic_slewing_plate::fragments::plate::modes::natural_modes;
-use hydraulic_slewing_plate::fragments::plate::{Formulation, PlateModel, PlateParameters, Root};
+use hydraulic_slewing_plate::fragments::plate::{
+    Formulation, PlateModel, PlateParameters, Root, MAX_FUNCTIONS,
+};
 
 fn freq_of(p: &PlateParameters, label: (usize, usize)) -> f64 {
     let model = PlateModel::new(p).unwrap();
@@ -87,9 +89,10 @@ fn beam_functions_are_orthogonal_and_normalised() {
         BeamKind::ClampedFree,
         BeamKind::FreeFree,
     ] {
-        let f = BeamFunction::family(kind, 8);
-        for i in 0..8 {
-            for j in 0..8 {
+        // Up to the largest count the FMU accepts (plate.N, plate.M <= 20).
+        let f = BeamFunction::family(kind, MAX_FUNCTIONS);
+        for i in 0..MAX_FUNCTIONS {
+            for j in 0..MAX_FUNCTIONS {
                 let v = product_integral(&f[i], 0, &f[j], 0);
                 let want = if i == j { 1.0 } else { 0.0 };
                 assert!((v - want).abs() < 1e-12, "{kind:?} {i} {j}: {v}");
@@ -109,7 +112,7 @@ fn beam_functions_are_orthogonal_and_normalised() {
 fn consistent_ritz_frequencies_converge_from_above() {
     // Rayleigh-Ritz: adding functions can only lower each frequency (the bases are nested).
     let mut previous: Option<Vec<f64>> = None;
-    for (n, m) in [(2, 2), (3, 3), (4, 4), (5, 5), (6, 6)] {
+    for (n, m) in [(2, 2), (3, 3), (4, 4), (5, 5), (6, 6), (12, 12), (20, 20)] {
         let p = PlateParameters {
             formulation: Formulation::Consistent,
             root: Root::Locked,

@@ -1,131 +1,20 @@
 //! Compilation of a causal bond graph into a flat evaluation plan, and the compiled model.
 
 use std::cell::RefCell;
-use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use nalgebra::DMatrix;
 
 use super::causality::{self, Causality};
+use super::dual::{Dual, Scalar};
 use super::element::*;
 use super::error::BondGraphError;
 use super::graph::{BondGraph, StateOwner};
+use super::structure::{analyse, Structure};
 use super::validate::validate;
-
-// ------------------------------------------------------------------ scalar types
-
-/// Scalar type the plan is evaluated in: `f64`, or a forward-mode dual number for the exact
-/// Jacobian.
-pub(crate) trait Scalar:
-    Copy
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
-{
-    fn cst(c: f64) -> Self;
-    fn scale(self, k: f64) -> Self;
-    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self;
-}
-
-impl Scalar for f64 {
-    #[inline]
-    fn cst(c: f64) -> Self {
-        c
-    }
-    #[inline]
-    fn scale(self, k: f64) -> Self {
-        self * k
-    }
-    #[inline]
-    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self {
-        (law.f)(x, m).0
-    }
-}
-
-/// A dual number `v + d eps`, `eps^2 = 0`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Dual {
-    pub v: f64,
-    pub d: f64,
-}
-
-impl Add for Dual {
-    type Output = Dual;
-    #[inline]
-    fn add(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v + o.v,
-            d: self.d + o.d,
-        }
-    }
-}
-impl Sub for Dual {
-    type Output = Dual;
-    #[inline]
-    fn sub(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v - o.v,
-            d: self.d - o.d,
-        }
-    }
-}
-impl Mul for Dual {
-    type Output = Dual;
-    #[inline]
-    fn mul(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v * o.v,
-            d: self.d * o.v + self.v * o.d,
-        }
-    }
-}
-impl Div for Dual {
-    type Output = Dual;
-    #[inline]
-    fn div(self, o: Dual) -> Dual {
-        let v = self.v / o.v;
-        Dual {
-            v,
-            d: (self.d - v * o.d) / o.v,
-        }
-    }
-}
-impl Neg for Dual {
-    type Output = Dual;
-    #[inline]
-    fn neg(self) -> Dual {
-        Dual {
-            v: -self.v,
-            d: -self.d,
-        }
-    }
-}
-impl Scalar for Dual {
-    #[inline]
-    fn cst(c: f64) -> Self {
-        Dual { v: c, d: 0.0 }
-    }
-    #[inline]
-    fn scale(self, k: f64) -> Self {
-        Dual {
-            v: self.v * k,
-            d: self.d * k,
-        }
-    }
-    #[inline]
-    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self {
-        let (y, dx, dm) = (law.f)(x.v, m.v);
-        Dual {
-            v: y,
-            d: dx * x.d + dm * m.d,
-        }
-    }
-}
 
 // ------------------------------------------------------------------ equations and plan
 
-const NONE: u32 = u32::MAX;
+pub(super) const NONE: u32 = u32::MAX;
 
 /// One equation `slot = expr`, before sorting.
 #[derive(Clone, Debug)]
@@ -177,7 +66,7 @@ struct Equation {
 
 /// A flat operation of the evaluation plan.
 #[derive(Clone, Copy, Debug)]
-enum Op {
+pub(super) enum Op {
     Const {
         dst: u32,
         c: f64,
@@ -333,6 +222,8 @@ pub struct CompiledModel {
     /// The plan before copy elimination, for [`CompiledModel::plan_listing`].
     listing_ops: Vec<Op>,
     listing_terms: Vec<(f64, u32)>,
+    /// Derivative plan, Jacobian pattern and colouring, constancy of J.
+    structure: Structure,
 }
 
 thread_local! {
@@ -471,8 +362,8 @@ impl CompiledModel {
     }
 
     #[inline]
-    fn run<T: Scalar>(&self, s: &mut [T]) {
-        for op in &self.ops {
+    fn run<T: Scalar>(&self, ops: &[Op], s: &mut [T]) {
+        for op in ops {
             match *op {
                 Op::Const { dst, c } => s[dst as usize] = T::cst(c),
                 Op::Copy { dst, src } => s[dst as usize] = s[src as usize],
@@ -514,7 +405,8 @@ impl CompiledModel {
         assert_eq!(u.len(), self.n_inputs(), "input vector length");
     }
 
-    fn with_f64<R>(&self, x: &[f64], u: &[f64], f: impl FnOnce(&[f64]) -> R) -> R {
+    /// Runs the full plan (`ops`) or the derivative plan at `(x, u)` and hands the slots to `f`.
+    fn with_f64<R>(&self, ops: &[Op], x: &[f64], u: &[f64], f: impl FnOnce(&[f64]) -> R) -> R {
         self.check_dims(x, u);
         WS_F64.with(|ws| {
             let mut ws = ws.borrow_mut();
@@ -525,13 +417,21 @@ impl CompiledModel {
             let n = x.len();
             s[..n].copy_from_slice(x);
             s[n..n + u.len()].copy_from_slice(u);
-            self.run(s);
+            self.run(ops, s);
             f(s)
         })
     }
 
-    /// Evaluates with dual numbers seeded on state `seed` (`seed < n`) or input `seed - n`.
-    fn with_dual<R>(&self, x: &[f64], u: &[f64], seed: usize, f: impl FnOnce(&[Dual]) -> R) -> R {
+    /// Evaluates `ops` with dual numbers seeded on the states and inputs `seeds` (index `i < n`
+    /// is state `i`, `n + k` input `k`), ascending.
+    fn with_dual<R>(
+        &self,
+        ops: &[Op],
+        x: &[f64],
+        u: &[f64],
+        seeds: &[u32],
+        f: impl FnOnce(&[Dual]) -> R,
+    ) -> R {
         self.check_dims(x, u);
         WS_DUAL.with(|ws| {
             let mut ws = ws.borrow_mut();
@@ -540,12 +440,12 @@ impl CompiledModel {
             }
             let s = &mut ws[..self.n_slots];
             for (i, v) in x.iter().chain(u.iter()).enumerate() {
-                s[i] = Dual {
-                    v: *v,
-                    d: if i == seed { 1.0 } else { 0.0 },
-                };
+                s[i] = Dual { v: *v, d: 0.0 };
             }
-            self.run(s);
+            for &k in seeds {
+                s[k as usize].d = 1.0;
+            }
+            self.run(ops, s);
             f(s)
         })
     }
@@ -553,7 +453,7 @@ impl CompiledModel {
     /// State derivatives `dx = f(x, u)`.
     pub fn derivatives(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
         assert_eq!(dx.len(), self.n_states(), "derivative vector length");
-        self.with_f64(x, u, |s| {
+        self.with_f64(&self.structure.deriv_ops, x, u, |s| {
             for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
                 *d = s[k as usize];
             }
@@ -564,7 +464,7 @@ impl CompiledModel {
     pub fn evaluate(&self, x: &[f64], u: &[f64], dx: &mut [f64], y: &mut [f64]) {
         assert_eq!(dx.len(), self.n_states(), "derivative vector length");
         assert_eq!(y.len(), self.n_outputs(), "output vector length");
-        self.with_f64(x, u, |s| {
+        self.with_f64(&self.ops, x, u, |s| {
             for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
                 *d = s[k as usize];
             }
@@ -577,16 +477,26 @@ impl CompiledModel {
     /// Outputs `y = g(x, u)`, in [`CompiledModel::output_names`] order.
     pub fn outputs(&self, x: &[f64], u: &[f64], y: &mut [f64]) {
         assert_eq!(y.len(), self.n_outputs(), "output vector length");
-        self.with_f64(x, u, |s| {
+        self.with_f64(&self.ops, x, u, |s| {
             for (d, &k) in y.iter_mut().zip(&self.output_slots) {
                 *d = s[k as usize];
             }
         })
     }
 
+    /// Calls `each(k, y_k)` for every output, in [`CompiledModel::output_names`] order (no
+    /// allocation).
+    pub fn for_each_output(&self, x: &[f64], u: &[f64], mut each: impl FnMut(usize, f64)) {
+        self.with_f64(&self.ops, x, u, |s| {
+            for (k, &slot) in self.output_slots.iter().enumerate() {
+                each(k, s[slot as usize]);
+            }
+        })
+    }
+
     /// Efforts and flows of all bonds (bond creation order), for inspection.
     pub fn bond_values(&self, x: &[f64], u: &[f64], e: &mut [f64], f: &mut [f64]) {
-        self.with_f64(x, u, |s| {
+        self.with_f64(&self.ops, x, u, |s| {
             for (i, &(se, sf)) in self.bond_slots.iter().enumerate() {
                 e[i] = s[se as usize];
                 f[i] = s[sf as usize];
@@ -594,17 +504,48 @@ impl CompiledModel {
         })
     }
 
-    /// Exact Jacobian `df/dx` (forward-mode dual numbers through the plan, one pass per state).
+    /// Exact Jacobian `df/dx`: forward-mode dual numbers through the derivative plan, one pass
+    /// per group of structurally independent columns (see [`CompiledModel::jacobian_colours`]).
+    /// Entries outside [`CompiledModel::jacobian_pattern`] are zero.
     pub fn jacobian(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
         let n = self.n_states();
         assert_eq!(jac.shape(), (n, n), "jacobian shape");
-        for j in 0..n {
-            self.with_dual(x, u, j, |s| {
+        jac.fill(0.0);
+        let st = &self.structure;
+        for (group, row_column) in st.colours.iter().zip(&st.row_column) {
+            self.with_dual(&st.deriv_ops, x, u, group, |s| {
                 for (i, &k) in self.deriv_slots.iter().enumerate() {
-                    jac[(i, j)] = s[k as usize].d;
+                    let j = row_column[i];
+                    if j != NONE {
+                        jac[(i, j as usize)] = s[k as usize].d;
+                    }
                 }
             });
         }
+    }
+
+    /// True if the Jacobian is the same at every `(x, u)`: the derivatives are affine in the
+    /// states with constant coefficients (no product of two state-dependent quantities, of a
+    /// state-dependent quantity and an input, no division by a state-dependent quantity, no
+    /// nonlinear law of a state).
+    pub fn jacobian_is_constant(&self) -> bool {
+        self.structure.constant
+    }
+
+    /// For each row `i` of the Jacobian, the states `dx_i/dt` depends on structurally.
+    pub fn jacobian_pattern(&self) -> &[Vec<u32>] {
+        &self.structure.pattern
+    }
+
+    /// Number of dual-number passes one Jacobian takes (groups of columns with no row in common).
+    pub fn jacobian_colours(&self) -> usize {
+        self.structure.colours.len()
+    }
+
+    /// Number of operations of the derivative plan (the full plan's is
+    /// [`CompiledModel::plan_len`]).
+    pub fn derivative_plan_len(&self) -> usize {
+        self.structure.deriv_ops.len()
     }
 
     /// Exact linearisation at `(x, u)`.
@@ -615,7 +556,7 @@ impl CompiledModel {
         let mut c = DMatrix::zeros(p, n);
         let mut d = DMatrix::zeros(p, m);
         for j in 0..n + m {
-            self.with_dual(x, u, j, |s| {
+            self.with_dual(&self.ops, x, u, &[j as u32], |s| {
                 for (i, &k) in self.deriv_slots.iter().enumerate() {
                     if j < n {
                         a[(i, j)] = s[k as usize].d;
@@ -670,7 +611,7 @@ impl CompiledModel {
     pub fn power_balance(&self, x: &[f64], u: &[f64]) -> PowerBalance {
         let mut dx = vec![0.0; self.n_states()];
         self.derivatives(x, u, &mut dx);
-        self.with_f64(x, u, |s| {
+        self.with_f64(&self.ops, x, u, |s| {
             let mut elements = Vec::new();
             let mut stored_rate = 0.0;
             for st in &self.storages {
@@ -1302,7 +1243,16 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     let bond_slots = (0..g.bonds.len())
         .map(|i| (al(b.e(BondId(i)) as u32), al(b.f(BondId(i)) as u32)))
         .collect();
+    let structure = analyse(
+        &ops,
+        &terms,
+        n_slots,
+        state_names.len(),
+        input_names.len(),
+        &deriv_slots,
+    );
     Ok(CompiledModel {
+        structure,
         name: g.name.clone(),
         state_names,
         input_names,
@@ -1404,28 +1354,6 @@ fn sort_equations(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn dual_arithmetic_is_exact() {
-        let x = Dual { v: 3.0, d: 1.0 };
-        let c = Dual::cst(2.0);
-        // f(x) = (x * x - 2) / (x + 2) * (-1) scaled by 0.5
-        let f = (-((x * x - c) / (x + c))).scale(0.5);
-        let v = -0.5 * (9.0 - 2.0) / 5.0;
-        let d = -0.5 * (2.0 * 3.0 * 5.0 - 7.0) / 25.0;
-        assert!((f.v - v).abs() < 1e-15 && (f.d - d).abs() < 1e-15);
-        let law = NonlinearLaw::modulated("xm", |x, m| (x * m, m, x));
-        let m = Dual { v: 4.0, d: 0.5 };
-        let y = Dual::law(&law, x, m);
-        assert_eq!(
-            y,
-            Dual {
-                v: 12.0,
-                d: 4.0 + 1.5
-            }
-        );
-        assert_eq!(f64::law(&law, 3.0, 4.0), 12.0);
-    }
 
     #[test]
     fn quadrature_energy_is_accurate() {

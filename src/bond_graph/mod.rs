@@ -74,6 +74,13 @@
 //! derivatives and the outputs. [`CompiledModel`] gives `dx/dt = f(x, u)`, outputs, the exact
 //! Jacobian (forward-mode dual numbers through the same plan), linearisation `A, B, C, D`, the
 //! stored energy and the power balance `dE/dt = P_sources - P_dissipated`.
+//!
+//! `f` and the Jacobian run only the part of the plan the derivatives need (outputs and bond
+//! variables that feed no derivative are left out), and the Jacobian seeds several columns per
+//! dual-number pass: columns that share no row, by a colouring of the sparsity pattern read off
+//! the plan. The plan also tells whether the Jacobian is constant (affine equations with constant
+//! coefficients, as the LOES with the plate), which lets the solver factorise it once per step
+//! size ([`CompiledModel::jacobian_is_constant`]).
 //! [`BondGraph::to_dot`] draws the graph with its causal strokes.
 //!
 //! `CompiledModel` is `Clone + Send + Sync`; evaluation uses a per-thread scratch buffer, so one
@@ -86,9 +93,11 @@
 mod causality;
 mod compile;
 mod dot;
+mod dual;
 mod element;
 mod error;
 mod graph;
+mod structure;
 mod validate;
 
 pub use compile::{matrix_json, CompiledModel, Linearization, PowerBalance};

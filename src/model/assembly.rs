@@ -144,6 +144,9 @@ pub struct Assembled {
     nominal: Vec<f64>,
     /// The state at rest (all zero for the LOES; null pressures for the full servo valve).
     rest: Vec<f64>,
+    /// The Jacobian and its stamp (a hash of its bits) when it is constant (the LOES with the
+    /// plate: linear with constant coefficients), evaluated once per parameter set.
+    constant_jacobian: Option<(u64, DMatrix<f64>)>,
 }
 
 impl Assembled {
@@ -180,7 +183,14 @@ impl Assembled {
                 &nominal,
             )?,
         };
+        let constant_jacobian = compiled.jacobian_is_constant().then(|| {
+            let n = compiled.n_states();
+            let mut jac = DMatrix::zeros(n, n);
+            compiled.jacobian(&rest, &inputs, &mut jac);
+            (stamp(&jac), jac)
+        });
         Ok(Assembled {
+            constant_jacobian,
             inputs,
             rest,
             compiled,
@@ -232,15 +242,24 @@ impl Assembled {
 
     /// Writes the outputs (and the stored energy) for state `x` into the FMU's values.
     pub fn write_outputs(&self, x: &[f64], values: &mut Values) {
-        let mut y = vec![0.0; self.output_index.len()];
-        self.compiled.outputs(x, &self.inputs, &mut y);
-        for (v, i) in y.into_iter().zip(&self.output_index) {
-            if let Some(i) = i {
-                values.set_real(*i, v);
+        self.compiled.for_each_output(x, &self.inputs, |k, v| {
+            if let Some(i) = self.output_index[k] {
+                values.set_real(i, v);
             }
-        }
+        });
         values.set_real(idx::ENERGY, self.compiled.stored_energy(x));
     }
+}
+
+/// FNV-1a hash of a matrix's bits: identifies a constant Jacobian for the solver's cache.
+fn stamp(m: &DMatrix<f64>) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for v in m.iter() {
+        for b in v.to_bits().to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
 }
 
 /// A typical magnitude of a plate state, whose fragment states none: modes at 1 mm and 0.1 m/s.
@@ -267,8 +286,15 @@ impl OdeSystem for Assembled {
     }
 
     fn jacobian(&self, _t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> bool {
-        self.compiled.jacobian(x, &self.inputs, jac);
+        match &self.constant_jacobian {
+            Some((_, j)) => jac.copy_from(j),
+            None => self.compiled.jacobian(x, &self.inputs, jac),
+        }
         true
+    }
+
+    fn constant_jacobian(&self) -> Option<u64> {
+        self.constant_jacobian.as_ref().map(|(s, _)| *s)
     }
 
     fn is_autonomous(&self) -> bool {

@@ -6,7 +6,7 @@ use crate::fmi2::variables::{check_value, Value, Values};
 use crate::fmi2::{Causality, Experiment, Kind};
 use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
-use crate::fragments::plate::{Formulation, PlateParameters, Root};
+use crate::fragments::plate::{Formulation, PlateParameters, Root, MAX_FUNCTIONS};
 use crate::fragments::servo_valve::ServoValveParameters;
 use crate::solver::{Atol, Method, SolverOptions};
 
@@ -160,10 +160,10 @@ impl Parameters {
         };
         let count = |i: usize, name: &str| -> Result<usize, String> {
             let v = values.integer(i);
-            if (1..=12).contains(&v) {
+            if (1..=MAX_FUNCTIONS as i32).contains(&v) {
                 Ok(v as usize)
             } else {
-                Err(format!("{name}: must be in 1..=12, got {v}"))
+                Err(format!("{name}: must be in 1..={MAX_FUNCTIONS}, got {v}"))
             }
         };
         let plate = PlateParameters {

@@ -144,7 +144,12 @@ impl<'a> Outputs<'a> {
         Outputs {
             times,
             next,
-            buf: vec![0.0; n],
+            // No allocation when there are no output times (the FMU's case).
+            buf: if times.is_empty() {
+                Vec::new()
+            } else {
+                vec![0.0; n]
+            },
         }
     }
 
@@ -187,7 +192,8 @@ pub(crate) enum NextStep {
     Step { h: f64, last: bool, proposed: f64 },
 }
 
-/// Plans the next step attempt, the same way for both methods: covers a rounding remnant before
+/// Plans the next step attempt, the same way for both methods (with `quantise`, a step shorter
+/// than what is left before `t_end` is an equal share of it, see below): covers a rounding remnant before
 /// `t_end` (a few ulp of t) with an explicit Euler step, error O(remaining^2); counts the attempt
 /// against `max_steps`; clips h to `max_step` and to `t_end`; and fails when h has fallen below
 /// the minimum step, with the kind and reason `why_small` gives. A final step shorter than the
@@ -197,6 +203,7 @@ pub(crate) fn plan_step(
     t_end: f64,
     f0: &[f64],
     attempts: &mut u64,
+    quantise: bool,
     why_small: impl FnOnce() -> (SolverErrorKind, &'static str),
 ) -> Result<NextStep, SolverError> {
     let t = integ.t;
@@ -222,6 +229,12 @@ pub(crate) fn plan_step(
     let h_proposed = integ.h.min(integ.options.max_step);
     let (h, last) = if h_proposed >= remaining {
         (remaining, true)
+    } else if quantise && h_proposed * 64.0 >= remaining {
+        // An equal share of what is left, not larger than proposed: the same few step sizes
+        // recur from one communication step to the next, and so do their factorisations (with
+        // a constant Jacobian, which is when this is asked for).
+        let k = (remaining / h_proposed).ceil();
+        (remaining / k, false)
     } else {
         (h_proposed, false)
     };

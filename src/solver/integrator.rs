@@ -1,5 +1,6 @@
 //! The [`Integrator`]: the whole, serialisable solver state and the public driver API.
 
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use super::common::check_times;
@@ -41,6 +42,153 @@ impl History {
     }
 }
 
+/// What the counters know about a constant Jacobian (see [`OdeSystem::constant_jacobian`]):
+/// the stamp of the one last evaluated and the step size of the last factorisation with it.
+/// Saved with the integrator so that a restored copy, which must rebuild J and its LU in memory,
+/// counts exactly as the original did (once per stamp and per step size).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub(crate) struct Counted {
+    pub jac: Option<u64>,
+    /// Step sizes of the factorisations kept with `jac`, most recently used first (at most
+    /// [`KEPT_FACTORISATIONS`]).
+    pub lu_h: Vec<f64>,
+}
+
+/// How many factorisations of a constant Jacobian (for different step sizes) are kept: a
+/// communication step taken in one step, in two, and the odd one after a change.
+pub(crate) const KEPT_FACTORISATIONS: usize = 3;
+
+/// A factorisation made for a step size within this relative distance of the step to take is
+/// used for it, with the step taken at the factorisation's size: with a constant Jacobian the
+/// step to the next communication point, `t_end - t`, differs from the previous one only by the
+/// rounding of t (about 1e-12 relative for t up to 10 s), and that must not cost a new LU. The
+/// step is then an exact step of the factorisation's size; `t` is set to `t_end` afterwards as
+/// always, a shift below 1e-9 of a step.
+pub(crate) const SAME_STEP: f64 = 1e-9;
+
+impl Counted {
+    /// The step size to factorise for (or use the factorisation of) when the step is `h`: a
+    /// kept one within [`SAME_STEP`] of h (moved to the front), or h itself, counted as a new
+    /// factorisation (`count` is added to the LU counter) and kept.
+    pub fn factorisation_step(&mut self, h: f64, stats: &mut Stats, count: u64) -> f64 {
+        match self
+            .lu_h
+            .iter()
+            .position(|&k| (k - h).abs() <= SAME_STEP * h)
+        {
+            Some(i) => {
+                let k = self.lu_h.remove(i);
+                self.lu_h.insert(0, k);
+                k
+            }
+            None => {
+                stats.lu_decompositions += count;
+                self.lu_h.insert(0, h);
+                self.lu_h.truncate(KEPT_FACTORISATIONS);
+                h
+            }
+        }
+    }
+}
+
+/// Moves the factorisation for step size `h` to the front of `kept`, making it with `make` if
+/// it is not there (rebuilt after a restore: the same bits); keeps at most
+/// [`KEPT_FACTORISATIONS`]. False if `make` fails (a singular matrix).
+pub(crate) fn front_factorisation<F>(
+    kept: &mut Vec<F>,
+    h: f64,
+    step_of: impl Fn(&F) -> f64,
+    make: impl FnOnce() -> Option<F>,
+) -> bool {
+    match kept.iter().position(|f| step_of(f) == h) {
+        Some(i) => {
+            let f = kept.remove(i);
+            kept.insert(0, f);
+            true
+        }
+        None => match make() {
+            Some(f) => {
+                kept.insert(0, f);
+                kept.truncate(KEPT_FACTORISATIONS);
+                true
+            }
+            None => false,
+        },
+    }
+}
+
+/// Memory kept between `advance_to` calls that changes no result: buffers, and for a system
+/// with a constant Jacobian, J and its factorisations (rebuilt identically when absent). Not
+/// serialised, not cloned (a clone starts empty), ignored by `==`.
+#[derive(Default)]
+pub(crate) struct Cache {
+    /// Stamp of the constant Jacobian in `jac`, if any.
+    pub stamp: Option<u64>,
+    pub jac: DMatrix<f64>,
+    /// Rodas5P's workspace and its LU of I/(h γ) - J for `stamp` (with its h).
+    pub rodas: Option<Box<super::rodas5p::Work>>,
+    pub rodas_lu: Vec<super::rodas5p::Factor>,
+    /// Radau5's workspace and its real and complex LU for `stamp`.
+    pub radau: Option<Box<super::radau5::Work>>,
+    pub radau_lu: Vec<super::radau5::Lu>,
+}
+
+impl Clone for Cache {
+    fn clone(&self) -> Self {
+        Cache::default()
+    }
+}
+
+impl PartialEq for Cache {
+    fn eq(&self, _: &Cache) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for Cache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Cache {{ stamp: {:?} }}", self.stamp)
+    }
+}
+
+impl Cache {
+    /// Makes `jac` hold the constant Jacobian `stamp` of `sys` (evaluating it if the cache holds
+    /// another or none; the factorisations of another one are dropped). Counts the evaluation
+    /// unless `counted` says it was counted already. False if J is not finite.
+    pub fn constant_jacobian<S: OdeSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        stamp: u64,
+        t: f64,
+        x: &[f64],
+        stats: &mut Stats,
+        counted: &mut Counted,
+    ) -> bool {
+        if self.stamp != Some(stamp) {
+            let n = x.len();
+            self.stamp = None;
+            self.rodas_lu.clear();
+            self.radau_lu.clear();
+            if self.jac.shape() != (n, n) {
+                self.jac = DMatrix::zeros(n, n);
+            }
+            if !sys.jacobian(t, x, &mut self.jac) {
+                return false; // the stamp promises an analytic Jacobian
+            }
+            if !self.jac.iter().all(|v| v.is_finite()) {
+                return false;
+            }
+            self.stamp = Some(stamp);
+        }
+        if counted.jac != Some(stamp) {
+            stats.jac_evals += 1;
+            counted.jac = Some(stamp);
+            counted.lu_h.clear();
+        }
+        true
+    }
+}
+
 /// A stiff integrator: options, current point, next step size, history and statistics.
 ///
 /// It is `Clone` and serde-serialisable; a restored copy continues bit-identically (see the
@@ -54,6 +202,11 @@ pub struct Integrator {
     pub(crate) h: f64,
     pub(crate) stats: Stats,
     pub(crate) hist: History,
+    /// What the counters know about a constant Jacobian.
+    #[serde(default)]
+    pub(crate) counted: Counted,
+    #[serde(skip)]
+    pub(crate) cache: Cache,
 }
 
 impl Integrator {
@@ -71,6 +224,8 @@ impl Integrator {
             h: 0.0,
             stats: Stats::default(),
             hist: History::fresh(),
+            counted: Counted::default(),
+            cache: Cache::default(),
         })
     }
 
@@ -101,6 +256,7 @@ impl Integrator {
         })?;
         if options.method != self.options.method {
             self.h = 0.0;
+            self.counted = Counted::default();
         }
         self.options = options;
         self.notify_discontinuity();
@@ -171,7 +327,8 @@ impl Integrator {
 
     /// The inputs of the system jumped (zero-order hold at a communication point): forget
     /// whatever history assumes smoothness across this point (controller history, Newton
-    /// start polynomial; Jacobian and LU are never kept between calls). Keeps h as a guess.
+    /// start polynomial; Jacobian and LU are not kept between calls unless they are constant,
+    /// see [`OdeSystem::constant_jacobian`]). Keeps h as a guess.
     pub fn notify_discontinuity(&mut self) {
         self.hist = History::fresh();
     }
@@ -179,6 +336,10 @@ impl Integrator {
     /// Replace the state (e.g. re-initialisation); resets history like notify_discontinuity.
     /// A non-finite t or x, or a length change, is reported by the next `advance_to`.
     pub fn reset(&mut self, t: f64, x: Vec<f64>) {
+        if x.len() != self.x.len() {
+            self.cache = Cache::default();
+            self.counted = Counted::default();
+        }
         self.t = t;
         self.x = x;
         self.notify_discontinuity();

@@ -20,9 +20,13 @@
 //!   changes the inputs or tolerances).
 //! * **Checkpointing.** [`Integrator`] is `Clone + Serialize + Deserialize` and holds
 //!   everything that influences later results (t, x, h, controller history, Radau's Newton
-//!   start polynomial, statistics). Jacobians and LU factors are *not* kept between calls:
-//!   every `advance_to` call evaluates f and the Jacobian afresh at its start (the inputs may
-//!   have changed since), so a restored copy continues bit-identically. Serialise with
+//!   start polynomial, statistics). Jacobians and LU factors are *not* saved: every
+//!   `advance_to` call evaluates f and the Jacobian afresh at its start (the inputs may have
+//!   changed since), except for a system with a constant Jacobian
+//!   ([`OdeSystem::constant_jacobian`]), whose J and factorisations are kept in memory while the
+//!   step size is unchanged and rebuilt, bit-identically, by a restored copy. The work counters
+//!   count a factorisation once per (Jacobian, step size) in that case, so they too agree between
+//!   a restored copy and the original. Serialise with
 //!   `serde_json` (the crate enables `float_roundtrip`, so every f64 round-trips exactly); no
 //!   non-finite f64 is ever stored.
 //! * **Zero-order-hold input jumps.** Call [`Integrator::notify_discontinuity`] after the
@@ -98,6 +102,16 @@ pub trait OdeSystem {
     /// has none; the solver then uses finite differences.
     fn jacobian(&self, _t: f64, _x: &[f64], _jac: &mut DMatrix<f64>) -> bool {
         false
+    }
+    /// `Some(stamp)` if the Jacobian is the same at every (t, x) (a linear system with constant
+    /// coefficients, whatever its inputs), `stamp` identifying that matrix (a hash of its bits,
+    /// say). The integrator then evaluates J once, and keeps J and its factorisations across
+    /// steps and [`Integrator::advance_to`] calls for as long as the stamp and the step size stay
+    /// the same. `jacobian` must give bit-identical values under one stamp, so that a restored
+    /// integrator (which rebuilds them) continues bit-identically. Default `None`: J is evaluated
+    /// afresh at the start of every call and as the method requires.
+    fn constant_jacobian(&self) -> Option<u64> {
+        None
     }
     /// True if f does not depend on t explicitly (lets Rosenbrock skip df/dt). Default false.
     fn is_autonomous(&self) -> bool {

@@ -18,12 +18,20 @@
 //!   components; after a rejection or on the first step it is refined once with f(y0 + err).
 //! * Step control: Gustafsson's predictive controller (eq. IV.8.25) with safety factor
 //!   depending on the Newton iteration count.
-//! * Tolerances are transformed as in RADAU5: rtol' = 0.1 rtol^(2/3), atol' = rtol' atol/rtol,
-//!   because the local error estimate is O(h^4) while the method is of order 5.
+//! * Tolerances: the relative one is transformed as in RADAU5, rtol' = 0.1 rtol^(2/3), because
+//!   the local error estimate is O(h^4) while the method is of order 5. RADAU5 also sets
+//!   atol' = rtol' atol/rtol, which assumes the user scales atol with rtol; with a fixed atol
+//!   (the FMU's: a fraction of each state's nominal value) it loosens the absolute control by
+//!   0.1 rtol^(-1/3) (10x at rtol 1e-6, 215x at 1e-10) as rtol tightens, and the delivered error
+//!   grew as the tolerance fell (issue 10). Here atol' = min(1, rtol'/rtol) atol: the absolute
+//!   tolerance is never looser than the user's (only for rtol > 1e-3 is it scaled down, as
+//!   RADAU5 does).
 //! * Dense output: the collocation polynomial (CONTR5).
 //!
 //! Jacobian and LU live only within one `advance` call (the call starts with a fresh
-//! Jacobian), so a restored state continues bit-identically.
+//! Jacobian), so a restored state continues bit-identically; a constant Jacobian
+//! ([`OdeSystem::constant_jacobian`]) and its factorisations are kept across calls instead,
+//! rebuilt identically after a restore.
 
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
@@ -32,6 +40,7 @@ use nalgebra::{Complex, DMatrix, DVector};
 
 use super::common::{all_finite, eval, initial_step, plan_step, NextStep, Outputs};
 use super::integrator::Integrator;
+use super::integrator::{front_factorisation, SAME_STEP};
 use super::jacobian;
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
 
@@ -123,10 +132,64 @@ enum Why {
     Singular,
 }
 
-struct Lu {
+/// The real LU of (γ/h) I - J and the complex LU of ((α + iβ)/h) I - J for the step size `h`.
+pub(crate) struct Lu {
     real: nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
     complex: nalgebra::linalg::LU<Complex<f64>, nalgebra::Dyn, nalgebra::Dyn>,
     h: f64,
+}
+
+/// Factorises both iteration matrices for step size `h`; None if either is singular.
+fn factor(jac: &DMatrix<f64>, h: f64) -> Option<Lu> {
+    let n = jac.nrows();
+    let (u1, alph, beta) = inverse_eigenvalues();
+    let fac1 = u1 / h;
+    let (alphn, betan) = (alph / h, beta / h);
+    let mut e1 = -jac.clone();
+    let mut e2 = jac.map(|v| Complex::new(-v, 0.0));
+    for i in 0..n {
+        e1[(i, i)] += fac1;
+        e2[(i, i)] += Complex::new(alphn, betan);
+    }
+    let (real, complex) = (e1.lu(), e2.lu());
+    (real.is_invertible() && complex.is_invertible()).then_some(Lu { real, complex, h })
+}
+
+/// Buffers of `advance`, kept between calls in the integrator's cache (no allocation per call);
+/// overwritten before they are read.
+pub(crate) struct Work {
+    jac: DMatrix<f64>,
+    f0: Vec<f64>,
+    scal: Vec<f64>,
+    z: [Vec<f64>; 3],
+    w: [Vec<f64>; 3],
+    a: [Vec<f64>; 3],
+    ytmp: Vec<f64>,
+    f2: Vec<f64>,
+    x1: Vec<f64>,
+    atol: Vec<f64>,
+    rr: DVector<f64>,
+    rc: DVector<Complex<f64>>,
+}
+
+impl Work {
+    fn new(n: usize) -> Self {
+        let v = || vec![0.0; n];
+        Work {
+            jac: DMatrix::zeros(n, n),
+            f0: v(),
+            scal: v(),
+            z: [v(), v(), v()],
+            w: [v(), v(), v()],
+            a: [v(), v(), v()],
+            ytmp: v(),
+            f2: v(),
+            x1: v(),
+            atol: v(),
+            rr: DVector::zeros(n),
+            rc: DVector::zeros(n),
+        }
+    }
 }
 
 /// Advance `integ` to exactly `t_end` with Radau IIA (called by `Integrator::advance_to*`).
@@ -138,34 +201,79 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
     let n = integ.x.len();
+    let mut w = match integ.cache.radau.take() {
+        Some(w) if w.f0.len() == n => w,
+        _ => Box::new(Work::new(n)),
+    };
+    let stamp = sys.constant_jacobian();
+    // The factorisations of a constant Jacobian survive between calls; others live in one call.
+    let mut lus = std::mem::take(&mut integ.cache.radau_lu);
+    if stamp.is_none() || integ.cache.stamp != stamp {
+        lus.clear();
+    }
+    let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
+    integ.cache.radau = Some(w);
+    if stamp.is_none() {
+        lus.clear();
+    }
+    integ.cache.radau_lu = lus;
+    result
+}
+
+#[allow(clippy::too_many_arguments)]
+fn advance_with<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    t_end: f64,
+    times: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
+    work: &mut Work,
+    lus: &mut Vec<Lu>,
+    stamp: Option<u64>,
+) -> Result<(), SolverError> {
+    let n = integ.x.len();
+    let Work {
+        jac,
+        f0,
+        scal,
+        z: [z1, z2, z3],
+        w: [w1, w2, w3],
+        a: [a1, a2, a3],
+        ytmp,
+        f2,
+        x1,
+        atol,
+        rr,
+        rc,
+    } = work;
     let (c1, c2) = nodes();
     let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
     let (u1, alph, beta) = inverse_eigenvalues();
     let (dd1, dd2, dd3) = error_weights();
 
-    // Transformed tolerances (RADAU5: RTOL = 0.1 RTOL^(2/3), ATOL = RTOL * ATOL/RTOL_user).
+    // Transformed tolerances: RADAU5's RTOL = 0.1 RTOL^(2/3) for the relative part; the
+    // absolute part is the user's, scaled down with it but never up (see the module docs).
     let rtol_user = integ.options.rtol;
     let rtol = 0.1 * rtol_user.powf(2.0 / 3.0);
-    let atol: Vec<f64> = (0..n)
-        .map(|i| rtol * integ.options.atol.get(i) / rtol_user)
-        .collect();
+    let atol_factor = (rtol / rtol_user).min(1.0);
+    for (i, a) in atol.iter_mut().enumerate() {
+        *a = atol_factor * integ.options.atol.get(i);
+    }
     let atol_for_fd = Atol::Vector(atol.clone());
     // Newton stopping criterion (RADAU5 FNEWT default).
     let fnewt = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
     // CFAC: numerator of the Newton-count-dependent safety factor.
     let cfac = SAFE * (1 + 2 * NIT) as f64;
 
-    let mut scal = vec![0.0; n];
     let set_scal = |x: &[f64], scal: &mut [f64]| {
         for i in 0..n {
             scal[i] = (atol[i] + rtol * x[i].abs()).max(f64::MIN_POSITIVE);
         }
     };
-    set_scal(&integ.x, &mut scal);
+    set_scal(&integ.x, scal);
 
-    let mut f0 = vec![0.0; n];
-    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut f0);
-    if !all_finite(&f0) {
+    eval(sys, &mut integ.stats, integ.t, &integ.x, f0);
+    if !all_finite(f0) {
         return Err(nonfinite_here(integ.t));
     }
     if integ.h <= 0.0 {
@@ -176,26 +284,16 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             &mut integ.stats,
             integ.t,
             &integ.x,
-            &f0,
+            f0,
             t_end,
             3.0,
         );
     }
     let mut outputs = Outputs::new(times, integ.t, n);
 
-    let mut jac = DMatrix::<f64>::zeros(n, n);
     let mut need_jac = true;
     let mut jac_fresh = false; // J evaluated at the current point?
-    let mut lu: Option<Lu> = None;
     let mut theta = THET; // last Newton contraction estimate
-    let (mut z1, mut z2, mut z3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let (mut w1, mut w2, mut w3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let (mut a1, mut a2, mut a3) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut ytmp = vec![0.0; n];
-    let mut rr = DVector::<f64>::zeros(n);
-    let mut rc = DVector::<Complex<f64>>::zeros(n);
-    let mut f2 = vec![0.0; n];
-    let mut x1 = vec![0.0; n];
     let mut attempts: u64 = 0;
     let mut consecutive_rejections: u32 = 0;
     let mut why = Why::Error;
@@ -214,22 +312,39 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             ),
             Why::Error => (SolverErrorKind::StepTooSmall, "to meet the tolerances"),
         };
-        let (h, last, h_proposed) = match plan_step(integ, t_end, &f0, &mut attempts, why_small)? {
-            NextStep::Done => return Ok(()),
-            NextStep::Step { h, last, proposed } => (h, last, proposed),
-        };
+        let quantise = stamp.is_some();
+        let (h, last, h_proposed) =
+            match plan_step(integ, t_end, f0, &mut attempts, quantise, why_small)? {
+                NextStep::Done => return Ok(()),
+                NextStep::Step { h, last, proposed } => (h, last, proposed),
+            };
         let t = integ.t;
         if need_jac {
-            if !jacobian::evaluate(
-                sys,
-                &mut integ.stats,
-                t,
-                &integ.x,
-                &f0,
-                &atol_for_fd,
-                rtol,
-                &mut jac,
-            ) {
+            let ok = match stamp {
+                // A constant J is the same everywhere: kept, with its factorisations.
+                Some(stamp) => integ.cache.constant_jacobian(
+                    sys,
+                    stamp,
+                    t,
+                    &integ.x,
+                    &mut integ.stats,
+                    &mut integ.counted,
+                ),
+                None => {
+                    lus.clear();
+                    jacobian::evaluate(
+                        sys,
+                        &mut integ.stats,
+                        t,
+                        &integ.x,
+                        f0,
+                        &atol_for_fd,
+                        rtol,
+                        jac,
+                    )
+                }
+            };
+            if !ok {
                 return Err(SolverError::new(
                     SolverErrorKind::NonFinite,
                     t,
@@ -238,29 +353,30 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             }
             need_jac = false;
             jac_fresh = true;
-            lu = None;
         }
 
         // Outcome of this attempt: Ok(err) or a rejection reason with the factor for h.
         let attempt: Result<f64, (Why, f64)> = 'attempt: {
-            if lu.as_ref().is_none_or(|l| l.h != h) {
-                let fac1 = u1 / h;
-                let (alphn, betan) = (alph / h, beta / h);
-                let mut e1 = -jac.clone();
-                let mut e2 = jac.map(|v| Complex::new(-v, 0.0));
-                for i in 0..n {
-                    e1[(i, i)] += fac1;
-                    e2[(i, i)] += Complex::new(alphn, betan);
+            // The simplified Newton iteration converges with factorisations for a step size
+            // within SAME_STEP of h as with exact ones (the difference is rounding in t_end - t);
+            // with a constant J the factorisation in use is the one counted (also after a
+            // restore, which rebuilds it with the same bits).
+            let ok = match stamp {
+                Some(_) => {
+                    let lu_h = integ.counted.factorisation_step(h, &mut integ.stats, 2);
+                    let jac = &integ.cache.jac;
+                    front_factorisation(lus, lu_h, |l| l.h, || factor(jac, lu_h))
                 }
-                integ.stats.lu_decompositions += 2;
-                let (real, complex) = (e1.lu(), e2.lu());
-                if !real.is_invertible() || !complex.is_invertible() {
-                    lu = None;
-                    break 'attempt Err((Why::Singular, 0.5));
+                None => {
+                    if lus.first().is_none_or(|l| (l.h - h).abs() > SAME_STEP * h) {
+                        integ.stats.lu_decompositions += 2;
+                        lus.clear();
+                        lus.extend(factor(jac, h));
+                    }
+                    !lus.is_empty()
                 }
-                lu = Some(Lu { real, complex, h });
-            }
-            let Some(lu) = lu.as_ref() else {
+            };
+            let (true, Some(lu)) = (ok, lus.first()) else {
                 break 'attempt Err((Why::Singular, 0.5));
             };
             let fac1 = u1 / h;
@@ -303,16 +419,16 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                 for i in 0..n {
                     ytmp[i] = integ.x[i] + z1[i];
                 }
-                eval(sys, &mut integ.stats, t + c1 * h, &ytmp, &mut a1);
+                eval(sys, &mut integ.stats, t + c1 * h, ytmp, a1);
                 for i in 0..n {
                     ytmp[i] = integ.x[i] + z2[i];
                 }
-                eval(sys, &mut integ.stats, t + c2 * h, &ytmp, &mut a2);
+                eval(sys, &mut integ.stats, t + c2 * h, ytmp, a2);
                 for i in 0..n {
                     ytmp[i] = integ.x[i] + z3[i];
                 }
-                eval(sys, &mut integ.stats, t + h, &ytmp, &mut a3);
-                if !(all_finite(&a1) && all_finite(&a2) && all_finite(&a3)) {
+                eval(sys, &mut integ.stats, t + h, ytmp, a3);
+                if !(all_finite(a1) && all_finite(a2) && all_finite(a3)) {
                     break 'attempt Err((Why::NonFinite, 0.5));
                 }
                 // Transformed residual, then the two block solves (SLVRAD).
@@ -326,7 +442,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                         r3 - betan * w2[i] - alphn * w3[i],
                     );
                 }
-                if !lu.real.solve_mut(&mut rr) || !lu.complex.solve_mut(&mut rc) {
+                if !lu.real.solve_mut(rr) || !lu.complex.solve_mut(rc) {
                     break 'attempt Err((Why::Singular, 0.5));
                 }
                 newt += 1;
@@ -382,30 +498,30 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                 f2[i] = hee1 * z1[i] + hee2 * z2[i] + hee3 * z3[i];
                 rr[i] = f2[i] + f0[i];
             }
-            if !lu.real.solve_mut(&mut rr) {
+            if !lu.real.solve_mut(rr) {
                 break 'attempt Err((Why::Singular, 0.5));
             }
             let norm = |v: &DVector<f64>| {
                 let s: f64 = (0..n).map(|i| (v[i] / scal[i]).powi(2)).sum();
                 (s / n as f64).sqrt().max(1e-10)
             };
-            let mut err = norm(&rr);
+            let mut err = norm(rr);
             if err >= 1.0 && (integ.hist.first || integ.hist.last_rejected) {
                 // Refined estimate with one more f evaluation (stiff components).
                 for i in 0..n {
                     ytmp[i] = integ.x[i] + rr[i];
                 }
-                eval(sys, &mut integ.stats, t, &ytmp, &mut a1);
-                if !all_finite(&a1) {
+                eval(sys, &mut integ.stats, t, ytmp, a1);
+                if !all_finite(a1) {
                     break 'attempt Err((Why::NonFinite, 0.5));
                 }
                 for i in 0..n {
                     rr[i] = a1[i] + f2[i];
                 }
-                if !lu.real.solve_mut(&mut rr) {
+                if !lu.real.solve_mut(rr) {
                     break 'attempt Err((Why::Singular, 0.5));
                 }
-                err = norm(&rr);
+                err = norm(rr);
             }
             if err.is_finite() {
                 Ok(err)
@@ -437,7 +553,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                     for i in 0..n {
                         x1[i] = integ.x[i] + z3[i];
                     }
-                    if !all_finite(&x1) {
+                    if !all_finite(x1) {
                         return Err(nonfinite_here(t));
                     }
                     // Collocation polynomial of this step (CONT(N+1..4N) of RADAU5).
@@ -454,12 +570,12 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                     }
                     if outputs.pending(t1) {
                         let cref = &cont;
-                        let x1r = &x1;
+                        let x1r = &*x1;
                         outputs.emit(
                             t,
                             h,
                             t1,
-                            &x1,
+                            x1,
                             &mut |th, buf| {
                                 let s = th - 1.0;
                                 for i in 0..n {
@@ -475,12 +591,12 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                     integ.hist.cont = cont;
                     integ.hist.h_old = h;
                     integ.hist.first = false;
-                    integ.x.copy_from_slice(&x1);
+                    integ.x.copy_from_slice(x1);
                     integ.t = t1;
                     integ.stats.accepted += 1;
                     consecutive_rejections = 0;
                     why = Why::Error;
-                    set_scal(&integ.x, &mut scal);
+                    set_scal(&integ.x, scal);
                     if integ.hist.last_rejected {
                         hnew = hnew.min(h);
                     }
@@ -490,8 +606,8 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                         integ.h = hnew.max(h_proposed);
                         return Ok(());
                     }
-                    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut f0);
-                    if !all_finite(&f0) {
+                    eval(sys, &mut integ.stats, integ.t, &integ.x, f0);
+                    if !all_finite(f0) {
                         integ.h = hnew;
                         return Err(nonfinite_here(integ.t));
                     }

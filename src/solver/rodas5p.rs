@@ -28,12 +28,13 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::linalg::LU;
+use nalgebra::{DMatrix, DVector, Dyn};
 
 use super::common::{
     all_finite, eval, initial_step, plan_step, rms, scale_into, NextStep, Outputs,
 };
-use super::integrator::Integrator;
+use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
 use super::{OdeSystem, SolverError, SolverErrorKind};
 
@@ -252,8 +253,9 @@ enum Reject {
     Singular,
 }
 
-/// Workspace of one `advance` call (not part of the saved state: recomputed on every call).
-struct Work {
+/// Workspace of `advance`, kept between calls in the integrator's cache (no allocation per
+/// call); its contents are overwritten before they are read.
+pub(crate) struct Work {
     f0: Vec<f64>,
     dfdt: Vec<f64>,
     jac: DMatrix<f64>,
@@ -265,28 +267,52 @@ struct Work {
     rhs: DVector<f64>,
 }
 
+impl Work {
+    fn new(n: usize) -> Self {
+        Work {
+            f0: vec![0.0; n],
+            dfdt: vec![0.0; n],
+            jac: DMatrix::zeros(n, n),
+            u: vec![vec![0.0; n]; STAGES],
+            y: vec![0.0; n],
+            fy: vec![0.0; n],
+            x1: vec![0.0; n],
+            sc: vec![0.0; n],
+            rhs: DVector::zeros(n),
+        }
+    }
+}
+
+/// The LU of W = I/(h γ) - J for the step size `h`.
+pub(crate) struct Factor {
+    h: f64,
+    lu: LU<f64, Dyn, Dyn>,
+}
+
+/// Factorises W = I/(h γ) - J; None if W is singular.
+fn factor(jac: &DMatrix<f64>, h: f64) -> Option<Factor> {
+    let n = jac.nrows();
+    let fac = 1.0 / (h * GAMMA);
+    let mut wm = -jac.clone();
+    for i in 0..n {
+        wm[(i, i)] += fac;
+    }
+    let lu = wm.lu();
+    lu.is_invertible().then_some(Factor { h, lu })
+}
+
 /// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
 /// ∂f/∂t already in `w`. On success `w.x1` holds y1 and the return value is the error norm.
 fn step<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     w: &mut Work,
+    lu: &LU<f64, Dyn, Dyn>,
     h: f64,
     autonomous: bool,
 ) -> Result<f64, Reject> {
     let n = integ.x.len();
     let t = integ.t;
-    // W = I/(h γ) - J, one LU for all 8 stages.
-    let fac = 1.0 / (h * GAMMA);
-    let mut wm = -w.jac.clone();
-    for i in 0..n {
-        wm[(i, i)] += fac;
-    }
-    integ.stats.lu_decompositions += 1;
-    let lu = wm.lu();
-    if !lu.is_invertible() {
-        return Err(Reject::Singular);
-    }
     for s in 0..STAGES {
         // Stage argument Y_s and f(Y_s) (stage 1 is f0).
         if s == 0 {
@@ -385,18 +411,38 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
     let n = integ.x.len();
-    let autonomous = sys.is_autonomous();
-    let mut w = Work {
-        f0: vec![0.0; n],
-        dfdt: vec![0.0; n],
-        jac: DMatrix::zeros(n, n),
-        u: vec![vec![0.0; n]; STAGES],
-        y: vec![0.0; n],
-        fy: vec![0.0; n],
-        x1: vec![0.0; n],
-        sc: vec![0.0; n],
-        rhs: DVector::zeros(n),
+    let mut w = match integ.cache.rodas.take() {
+        Some(w) if w.f0.len() == n => w,
+        _ => Box::new(Work::new(n)),
     };
+    let stamp = sys.constant_jacobian();
+    // The factorisations of a constant Jacobian survive between calls; any other is per step.
+    let mut lus = std::mem::take(&mut integ.cache.rodas_lu);
+    if stamp.is_none() || integ.cache.stamp != stamp {
+        lus.clear();
+    }
+    let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
+    integ.cache.rodas = Some(w);
+    if stamp.is_none() {
+        lus.clear();
+    }
+    integ.cache.rodas_lu = lus;
+    result
+}
+
+#[allow(clippy::too_many_arguments)]
+fn advance_with<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    t_end: f64,
+    times: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
+    w: &mut Work,
+    lus: &mut Vec<Factor>,
+    stamp: Option<u64>,
+) -> Result<(), SolverError> {
+    let n = integ.x.len();
+    let autonomous = sys.is_autonomous();
     let mut outputs = Outputs::new(times, integ.t, n);
     eval_f0(integ, sys, &mut w.f0)?;
     if integ.h <= 0.0 {
@@ -424,24 +470,35 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
                 (SolverErrorKind::StepTooSmall, "to meet the tolerances")
             }
         };
-        let (h, last, h_proposed) = match plan_step(integ, t_end, &w.f0, &mut attempts, why_small)?
-        {
-            NextStep::Done => return Ok(()),
-            NextStep::Step { h, last, proposed } => (h, last, proposed),
-        };
+        let quantise = stamp.is_some();
+        let (h, last, h_proposed) =
+            match plan_step(integ, t_end, &w.f0, &mut attempts, quantise, why_small)? {
+                NextStep::Done => return Ok(()),
+                NextStep::Step { h, last, proposed } => (h, last, proposed),
+            };
         let t = integ.t;
         if !jac_ok {
             let opts = &integ.options;
-            let ok = jacobian::evaluate(
-                sys,
-                &mut integ.stats,
-                t,
-                &integ.x,
-                &w.f0,
-                &opts.atol,
-                opts.rtol,
-                &mut w.jac,
-            ) && (autonomous
+            let ok = match stamp {
+                Some(stamp) => integ.cache.constant_jacobian(
+                    sys,
+                    stamp,
+                    t,
+                    &integ.x,
+                    &mut integ.stats,
+                    &mut integ.counted,
+                ),
+                None => jacobian::evaluate(
+                    sys,
+                    &mut integ.stats,
+                    t,
+                    &integ.x,
+                    &w.f0,
+                    &opts.atol,
+                    opts.rtol,
+                    &mut w.jac,
+                ),
+            } && (autonomous
                 || jacobian::time_derivative(
                     sys,
                     &mut integ.stats,
@@ -459,7 +516,27 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             }
             jac_ok = true;
         }
-        match step(integ, sys, &mut w, h, autonomous) {
+        // W = I/(h γ) - J, one LU for all 8 stages: with a constant J a kept one if it was
+        // made for this step size (to within SAME_STEP; see there), else a new one.
+        let (h, ok) = match stamp {
+            Some(_) => {
+                let h_lu = integ.counted.factorisation_step(h, &mut integ.stats, 1);
+                let jac = &integ.cache.jac;
+                let ok = front_factorisation(lus, h_lu, |f| f.h, || factor(jac, h_lu));
+                (h_lu, ok)
+            }
+            None => {
+                integ.stats.lu_decompositions += 1;
+                lus.clear();
+                lus.extend(factor(&w.jac, h));
+                (h, !lus.is_empty())
+            }
+        };
+        let result = match lus.first() {
+            Some(f) if ok => step(integ, sys, w, &f.lu, h, autonomous),
+            _ => Err(Reject::Singular),
+        };
+        match result {
             Ok(err) if err <= 1.0 => {
                 let t1 = if last { t_end } else { t + h };
                 if outputs.pending(t1) {
