@@ -148,7 +148,11 @@ fn sequence(seed: u64, cov: &mut Coverage) -> Result<(), String> {
             }
             6..=8 => {
                 let h = rng.pick(&[1e-3, 1e-3, 1e-3, 2e-3, 1e-15, 0.0, -1e-3, f64::NAN]);
-                let at = if rng.below(8) == 0 { t + 1.0 + 1e-6 * t.abs() } else { t };
+                let at = if rng.below(8) == 0 {
+                    t + 1.0 + 1e-6 * t.abs()
+                } else {
+                    t
+                };
                 let st = f.step(at, h);
                 let bad = h.is_nan() || h <= 0.0 || at != t || t + h == t;
                 if st == Fmi2Status::Ok {
