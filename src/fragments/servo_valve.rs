@@ -11,7 +11,7 @@
 //!
 //! This module composes them ([`add_servo_valve`], the closed loop [`build_loop`] and the
 //! direct path [`build_open_loop`]); [`parameters`] holds the constants and their reasons,
-//! [`rest`] the null state, [`g_est`] the comparison with the identified `G_est` (the fit
+//! [`rest`] the null state, [`g_est`](mod@g_est) the comparison with the identified `G_est` (the fit
 //! itself is the tool `servo-valve-fit`).
 //!
 //! Supply `Se p_s` (`<prefix>.supply`) and tank `Se p_t` (`<prefix>.tank`) are effort sources on
