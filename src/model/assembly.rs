@@ -169,8 +169,7 @@ impl Assembled {
         let nominal = graph
             .state_nominals()
             .into_iter()
-            .zip(compiled.state_names())
-            .map(|(n, name)| n.unwrap_or_else(|| plate_nominal(name, p)))
+            .map(|n| n.unwrap_or(1.0))
             .collect::<Vec<f64>>();
         let inputs = vec![0.0; input_index.len()];
         let rest = match p.hydraulics {
@@ -260,20 +259,6 @@ fn stamp(m: &DMatrix<f64>) -> u64 {
         }
     }
     h
-}
-
-/// A typical magnitude of a plate state, whose fragment states none: modes at 1 mm and 0.1 m/s.
-/// Every other fragment states its nominals with its elements ([`BondGraph::set_nominal`]);
-/// states without one count as 1.
-fn plate_nominal(state: &str, p: &Parameters) -> f64 {
-    let element = state.rsplit_once('.').map_or(state, |(e, _)| e);
-    let plate_momentum = p.plate.areal_mass() * p.plate.a * p.plate.b * 0.1;
-    match element {
-        e if e.starts_with("plate.C[") => 1e-3,
-        e if e.starts_with("plate.I[") => plate_momentum,
-        "plate.inertia" => plate_momentum.max(1e-3 * p.plate.hub_total_inertia()),
-        _ => 1.0,
-    }
 }
 
 impl OdeSystem for Assembled {

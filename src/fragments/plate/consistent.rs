@@ -170,5 +170,6 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         forces,
         tip,
         accelerometers,
+        nominal: super::PlateNominal::of(p),
     }
 }

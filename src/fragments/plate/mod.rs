@@ -213,6 +213,32 @@ pub struct PlateModel {
     /// Displacement of each accelerometer point per unit coordinate, including the rigid
     /// rotation `x theta` (what an accelerometer on the slewing plate measures).
     pub accelerometers: Vec<DVector<f64>>,
+    /// Typical magnitudes of the plate's states, scaling the integrator's absolute tolerance.
+    pub nominal: PlateNominal,
+}
+
+/// Typical magnitudes of the plate's states, stated by [`add_plate`] on the elements that own
+/// them ([`BondGraph::set_nominal`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlateNominal {
+    /// A modal displacement \[m\]: 1 mm.
+    pub displacement: f64,
+    /// A modal momentum: the arm's mass `m a b` moving at 0.1 m/s \[kg m/s\].
+    pub momentum: f64,
+    /// A momentum of the I-field (hub and modes together, consistent formulation): the modal
+    /// momentum, or the hub's at 1 mrad/s if larger.
+    pub field_momentum: f64,
+}
+
+impl PlateNominal {
+    pub fn of(p: &PlateParameters) -> Self {
+        let momentum = p.areal_mass() * p.a * p.b * 0.1;
+        PlateNominal {
+            displacement: 1e-3,
+            momentum,
+            field_momentum: momentum.max(1e-3 * p.hub_total_inertia()),
+        }
+    }
 }
 
 impl PlateModel {
@@ -308,10 +334,12 @@ pub fn add_plate(
                 format!("{prefix}.I[{}]", j + 1),
                 model.mass[(first + j, first + j)],
             );
+            g.set_nominal(i, &[model.nominal.momentum]);
             inertia_bonds.push(g.bond(coord[first + j], i));
         }
     } else {
         let field = g.add_i_field(format!("{prefix}.inertia"), model.mass.clone());
+        g.set_nominal(field, &vec![model.nominal.field_momentum; n]);
         for (k, &c) in coord.iter().enumerate() {
             let b = g.bond(c, field);
             if k == 0 {
@@ -333,6 +361,7 @@ pub fn add_plate(
             );
         }
         let c = g.add_c(format!("{prefix}.C[{}]", j + 1), 1.0 / k);
+        g.set_nominal(c, &[model.nominal.displacement]);
         g.bond(coord[first + j], c);
         c_elems.push(c);
         if model.damping[j] > 0.0 {

@@ -101,5 +101,6 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         forces,
         tip,
         accelerometers,
+        nominal: super::PlateNominal::of(p),
     }
 }
