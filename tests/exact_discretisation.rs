@@ -5,14 +5,17 @@
 use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{idx, VARIABLES};
 use hydraulic_slewing_plate::solver::{Integrator, Method, OdeSystem};
 use nalgebra::{DMatrix, DVector};
 
 const STEP: f64 = 1e-3;
 
+/// The LOES on the motor alone (preset `loes-motor`: linear, no amplifier limit) with `sets`.
 fn model(sets: &[&str], method: Method) -> (Assembled, Integrator) {
     let mut values = Values::from_start(&VARIABLES);
+    presets::apply(&mut values, "loes-motor").unwrap();
     for s in sets {
         let (name, value) = s.split_once('=').unwrap();
         set_by_name(&mut values, name, value).unwrap();

@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 bash tests/setup.sh || exit 1
 cargo run --release --quiet --bin hsp -- package --require-portable || exit 1
 
-cargo test --release
+cargo test --release --no-fail-fast
 rust=$?
 .venv/bin/python -m pytest tests/python -q
 python=$?

@@ -58,6 +58,7 @@ typedef void (*FreeInstanceFn)(fmi2Component);
 typedef fmi2Status (*SetRealFn)(fmi2Component, const fmi2ValueReference *, size_t, const fmi2Real *);
 typedef fmi2Status (*GetRealFn)(fmi2Component, const fmi2ValueReference *, size_t, fmi2Real *);
 typedef fmi2Status (*GetIntegerFn)(fmi2Component, const fmi2ValueReference *, size_t, fmi2Integer *);
+typedef fmi2Status (*SetIntegerFn)(fmi2Component, const fmi2ValueReference *, size_t, const fmi2Integer *);
 typedef fmi2Status (*DoStepFn)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
 
 static void logger(fmi2ComponentEnvironment env, const char *instance, fmi2Status status,
@@ -97,8 +98,10 @@ static size_t parse_vrs(const char *text, fmi2ValueReference *vrs) {
     }
 
 int main(int argc, char **argv) {
-    if (argc != 9) {
-        fprintf(stderr, "usage: %s LIBRARY GUID STOP STEP R EVERY REAL_VRS INTEGER_VRS\n", argv[0]);
+    if (argc != 9 && argc != 10) {
+        fprintf(stderr, "usage: %s LIBRARY GUID STOP STEP R EVERY REAL_VRS INTEGER_VRS [SETTINGS]\n"
+                        "  SETTINGS: VR:TYPE:VALUE,... set before initialisation; TYPE r (Real),\n"
+                        "  i (Integer) or b (Boolean, 0 or 1)\n", argv[0]);
         return 1;
     }
     double stop = atof(argv[3]), step = atof(argv[4]), r = atof(argv[5]);
@@ -122,6 +125,8 @@ int main(int argc, char **argv) {
     LOAD(SetRealFn, SetReal)
     LOAD(GetRealFn, GetReal)
     LOAD(GetIntegerFn, GetInteger)
+    LOAD(SetIntegerFn, SetInteger)
+    LOAD(SetIntegerFn, SetBoolean)
     LOAD(DoStepFn, DoStep)
 
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
@@ -133,6 +138,28 @@ int main(int argc, char **argv) {
     CHECK(SetupExperiment(c, 0, 0.0, 0.0, 1, stop))
     CHECK(EnterInitializationMode(c))
     CHECK(SetReal(c, &r_vr, 1, &r))
+    for (const char *p = argc == 10 ? argv[9] : ""; *p;) {
+        char *end, type;
+        fmi2ValueReference vr = (fmi2ValueReference)strtoul(p, &end, 10);
+        if (*end != ':' || !end[1] || end[2] != ':') {
+            fprintf(stderr, "bad setting at '%s'\n", p);
+            return 1;
+        }
+        type = end[1];
+        p = end + 3;
+        if (type == 'r') {
+            fmi2Real v = strtod(p, &end);
+            CHECK(SetReal(c, &vr, 1, &v))
+        } else {
+            fmi2Integer v = (fmi2Integer)strtol(p, &end, 10);
+            if (type == 'i') {
+                CHECK(SetInteger(c, &vr, 1, &v))
+            } else {
+                CHECK(SetBoolean(c, &vr, 1, &v))
+            }
+        }
+        p = *end == ',' ? end + 1 : end;
+    }
     CHECK(ExitInitializationMode(c))
     long n = (long)(stop / step + 0.5);
     for (long k = 0; k <= n; k++) {
