@@ -1,5 +1,6 @@
-//! Rough timing of the compiled plan (run with `cargo test --release --test bond_graph_bench
-//! -- --ignored --nocapture`); ignored by default.
+//! Rough timing of the compiled plan: derivatives and Jacobian of the LOES and of a chain of 20
+//! masses (`cargo run --release --bin bench-plan`). A benchmark, not a test: it prints figures
+//! and asserts nothing.
 
 use std::time::Instant;
 
@@ -61,9 +62,7 @@ fn time(label: &str, m: &CompiledModel) {
     );
 }
 
-#[test]
-#[ignore]
-fn bench_plan() {
+fn main() {
     let l = loes::build_loop(&LoesParameters::default(), &ControllerParameters::default())
         .compile()
         .unwrap();
