@@ -46,7 +46,8 @@ use nalgebra::{DMatrix, DVector};
 const STOP: f64 = 10.0;
 const STEP: f64 = 1e-3;
 const RTOL: f64 = 1e-6;
-const PYTHON: &str = "/work/main/.venv/bin/python";
+/// The project's virtual environment (made by `tests/setup.sh`), which has scipy.
+const PYTHON: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/.venv/bin/python");
 
 /// A benchmark configuration: a name, `--set` assignments, and whether the model is linear.
 struct Config {
@@ -57,38 +58,64 @@ struct Config {
 
 const CONFIGS: &[Config] = &[
     Config {
-        name: "LOES motor alone (defaults)",
-        sets: &[],
+        name: "LOES motor alone (preset loes-motor)",
+        sets: &[
+            "hydraulics.model=1",
+            "controller.saturation=false",
+            "hydraulics.motor_coupled=false",
+        ],
         linear: true,
     },
     Config {
         name: "LOES coupled 3x5",
-        sets: &["hydraulics.motor_coupled=true"],
+        sets: &[
+            "hydraulics.model=1",
+            "controller.saturation=false",
+            "hydraulics.motor_coupled=true",
+        ],
         linear: true,
     },
     Config {
         name: "servo valve uncoupled",
-        sets: &["hydraulics.model=2"],
+        sets: &["hydraulics.model=2", "hydraulics.motor_coupled=false"],
         linear: false,
     },
     Config {
-        name: "servo valve coupled",
+        name: "servo valve coupled (defaults)",
         sets: &["hydraulics.model=2", "hydraulics.motor_coupled=true"],
         linear: false,
     },
     Config {
         name: "LOES coupled 6x6",
-        sets: &["hydraulics.motor_coupled=true", "plate.N=6", "plate.M=6"],
+        sets: &[
+            "hydraulics.model=1",
+            "controller.saturation=false",
+            "hydraulics.motor_coupled=true",
+            "plate.N=6",
+            "plate.M=6",
+        ],
         linear: true,
     },
     Config {
         name: "LOES coupled 12x12",
-        sets: &["hydraulics.motor_coupled=true", "plate.N=12", "plate.M=12"],
+        sets: &[
+            "hydraulics.model=1",
+            "controller.saturation=false",
+            "hydraulics.motor_coupled=true",
+            "plate.N=12",
+            "plate.M=12",
+        ],
         linear: true,
     },
     Config {
         name: "LOES coupled 20x20",
-        sets: &["hydraulics.motor_coupled=true", "plate.N=20", "plate.M=20"],
+        sets: &[
+            "hydraulics.model=1",
+            "controller.saturation=false",
+            "hydraulics.motor_coupled=true",
+            "plate.N=20",
+            "plate.M=20",
+        ],
         linear: true,
     },
 ];
