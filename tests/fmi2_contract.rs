@@ -111,6 +111,12 @@ fn never_ok_with_non_finite(name: &str, value: f64, hydraulics: i32) {
         f.set_integer("hydraulics.model", hydraulics),
         Fmi2Status::Ok
     );
+    // Without the amplifier's output limit, which would clip a huge r to its 12 V (with it the
+    // outputs stay finite and fmi2OK is right: see the test below).
+    assert_eq!(
+        f.set_boolean("controller.saturation", false),
+        Fmi2Status::Ok
+    );
     assert_eq!(f.set_real(name, value), Fmi2Status::Ok);
     assert_eq!(f.setup(0.0), Fmi2Status::Ok);
     assert_eq!(f.enter(), Fmi2Status::Ok);
@@ -143,6 +149,28 @@ fn never_ok_with_non_finite(name: &str, value: f64, hydraulics: i32) {
 fn d4_huge_inputs_give_no_ok_with_infinite_outputs() {
     never_ok_with_non_finite("F1", 1e300, 1);
     never_ok_with_non_finite("r", 1e300, 1);
+}
+
+#[test]
+fn d4_with_the_amplifier_limit_a_huge_r_drives_at_the_limit_with_finite_outputs() {
+    // The defaults (the complete system) limit the power amplifier: r = 1e300 asks for an
+    // infinite drive and gets e_max, so the steps are fmi2OK and every output stays finite.
+    let f = Fmu::new();
+    assert_eq!(f.set_real("r", 1e300), Fmi2Status::Ok);
+    assert_eq!(f.init(0.0), Fmi2Status::Ok);
+    for k in 0..20 {
+        assert_eq!(
+            f.step(k as f64 * 1e-3, 1e-3),
+            Fmi2Status::Ok,
+            "{}",
+            f.last()
+        );
+        for out in ["energy", "y_pot", "w_tip", "theta_hub", "controller.e_out"] {
+            assert!(f.get_real(out).1.is_finite(), "{out}");
+        }
+    }
+    let (_, e_max) = f.get_real("controller.e_max");
+    assert!((f.get_real("controller.e_out").1 - e_max).abs() <= 1e-12 * e_max);
 }
 
 #[test]

@@ -29,6 +29,30 @@ pub(crate) fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
+/// The method's factorisations kept in `slot` from the last call, for a call with Jacobian stamp
+/// `stamp`: they survive only while the Jacobian is constant and the same (`cached` is the stamp
+/// they were made with); otherwise the call starts with none.
+pub(crate) fn take_factorisations<L>(
+    slot: &mut Vec<L>,
+    cached: Option<u64>,
+    stamp: Option<u64>,
+) -> Vec<L> {
+    let mut lus = std::mem::take(slot);
+    if stamp.is_none() || cached != stamp {
+        lus.clear();
+    }
+    lus
+}
+
+/// Puts the factorisations back into `slot` after a call: those of a constant Jacobian are kept
+/// for the next call, any other lived for this call only.
+pub(crate) fn keep_factorisations<L>(slot: &mut Vec<L>, mut lus: Vec<L>, stamp: Option<u64>) {
+    if stamp.is_none() {
+        lus.clear();
+    }
+    *slot = lus;
+}
+
 /// Evaluate f, counting it.
 #[inline]
 pub(crate) fn eval<S: OdeSystem + ?Sized>(

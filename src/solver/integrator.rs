@@ -48,6 +48,9 @@ impl History {
 /// counts exactly as the original did (once per stamp and per step size).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub(crate) struct Counted {
+    /// Left out of the serialised form while there is none, so that the only `null` a saved
+    /// state may hold is `initial_step`'s (any other would be a non-finite number).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub jac: Option<u64>,
     /// Step sizes of the factorisations kept with `jac`, most recently used first (at most
     /// [`KEPT_FACTORISATIONS`]).

@@ -38,7 +38,10 @@
 
 use nalgebra::{Complex, DMatrix, DVector};
 
-use super::common::{all_finite, eval, initial_step, plan_step, NextStep, Outputs};
+use super::common::{
+    all_finite, eval, initial_step, keep_factorisations, plan_step, take_factorisations, NextStep,
+    Outputs,
+};
 use super::integrator::Integrator;
 use super::integrator::{front_factorisation, SAME_STEP};
 use super::jacobian;
@@ -206,17 +209,10 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         _ => Box::new(Work::new(n)),
     };
     let stamp = sys.constant_jacobian();
-    // The factorisations of a constant Jacobian survive between calls; others live in one call.
-    let mut lus = std::mem::take(&mut integ.cache.radau_lu);
-    if stamp.is_none() || integ.cache.stamp != stamp {
-        lus.clear();
-    }
+    let mut lus = take_factorisations(&mut integ.cache.radau_lu, integ.cache.stamp, stamp);
     let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
     integ.cache.radau = Some(w);
-    if stamp.is_none() {
-        lus.clear();
-    }
-    integ.cache.radau_lu = lus;
+    keep_factorisations(&mut integ.cache.radau_lu, lus, stamp);
     result
 }
 

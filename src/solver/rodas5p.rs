@@ -32,7 +32,8 @@ use nalgebra::linalg::LU;
 use nalgebra::{DMatrix, DVector, Dyn};
 
 use super::common::{
-    all_finite, eval, initial_step, plan_step, rms, scale_into, NextStep, Outputs,
+    all_finite, eval, initial_step, keep_factorisations, plan_step, rms, scale_into,
+    take_factorisations, NextStep, Outputs,
 };
 use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
@@ -416,17 +417,10 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         _ => Box::new(Work::new(n)),
     };
     let stamp = sys.constant_jacobian();
-    // The factorisations of a constant Jacobian survive between calls; any other is per step.
-    let mut lus = std::mem::take(&mut integ.cache.rodas_lu);
-    if stamp.is_none() || integ.cache.stamp != stamp {
-        lus.clear();
-    }
+    let mut lus = take_factorisations(&mut integ.cache.rodas_lu, integ.cache.stamp, stamp);
     let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
     integ.cache.rodas = Some(w);
-    if stamp.is_none() {
-        lus.clear();
-    }
-    integ.cache.rodas_lu = lus;
+    keep_factorisations(&mut integ.cache.rodas_lu, lus, stamp);
     result
 }
 

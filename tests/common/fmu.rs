@@ -85,6 +85,11 @@ impl Fmu {
         unsafe { fmi2SetInteger(self.c, &Self::vr(name), 1, &v) }
     }
 
+    pub fn set_boolean(&self, name: &str, v: bool) -> Fmi2Status {
+        let v = Fmi2Boolean::from(v);
+        unsafe { fmi2SetBoolean(self.c, &Self::vr(name), 1, &v) }
+    }
+
     pub fn get_real(&self, name: &str) -> (Fmi2Status, f64) {
         let mut v = f64::NAN;
         let s = unsafe { fmi2GetReal(self.c, &Self::vr(name), 1, &mut v) };
