@@ -79,6 +79,10 @@ def main():
     text = text.replace('guid=""', f'guid="{guid_for(text)}"', 1)
     XML.write_text(text)
     print(f"{XML}: {len(variables)} variables, {len(outputs)} outputs, guid {guid_for(text)}")
+    # The FMI 3.0 description is derived from this one.
+    import fmi3
+
+    fmi3.main()
 
 
 if __name__ == "__main__":

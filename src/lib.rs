@@ -15,12 +15,16 @@
 //! | [`fragments`] | the paper's physical parts as bond-graph fragments | physics, no FMI |
 //! | [`model`] | the assembled model behind the FMU, its parameters and outputs | fragments, solver |
 //! | [`fmi2`] | the FMI 2.0 co-simulation C ABI, generic over a model | FMI, no physics |
+//! | [`fmi3`] | the FMI 3.0 C ABI over the same core | FMI, no physics |
 
 pub mod bond_graph;
 pub mod fmi2;
+pub mod fmi3;
 pub mod fragments;
 pub mod model;
 pub mod solver;
 
 // The FMI 2.0 co-simulation C API of the shipped FMU.
 export_fmi2_cosimulation!(crate::model::HydraulicSlewingPlate);
+// The FMI 3.0 C API of the same model, for the FMI 3.0 FMU (the same binary).
+export_fmi3!(crate::model::HydraulicSlewingPlate);

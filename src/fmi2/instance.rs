@@ -84,6 +84,19 @@ impl<M: FmuModel> Instance<M> {
         logging_on: bool,
     ) -> Result<Self, (Logger, String)> {
         let logger = Logger::new(instance_name, callbacks, logging_on);
+        let resources = resource_location.and_then(file_uri_to_path);
+        Self::with_logger(instance_name, guid, resources, logger)
+    }
+
+    /// The checks of `fmi2Instantiate` (and FMI 3.0's `fmi3Instantiate*`, whose instantiation
+    /// token is this GUID) with a logger made by the caller. `resource_location` is the
+    /// resources directory as a path (FMI 2.0 gives a URI, FMI 3.0 a path).
+    pub fn with_logger(
+        instance_name: &str,
+        guid: &str,
+        resource_location: Option<PathBuf>,
+        logger: Logger,
+    ) -> Result<Self, (Logger, String)> {
         if instance_name.is_empty() {
             return Err((logger, "fmi2Instantiate: instanceName is empty".into()));
         }
@@ -96,7 +109,6 @@ impl<M: FmuModel> Instance<M> {
                 ),
             ));
         }
-        let resource_location = resource_location.and_then(file_uri_to_path);
         Ok(Instance {
             magic: INSTANCE_MAGIC,
             logger,

@@ -1,8 +1,11 @@
 //! What the FMU tells its environment: the logger with its categories, numbers printed short, and
 //! the panic hook that keeps panic messages off the host's stderr.
 //!
-//! Nothing here is FMI-2-specific but the callback's signature: an FMI 3.0 layer shares the
-//! category filter, [`Short`], [`shorten_numbers`] and [`guarded`].
+//! Both FMI layers share it: a [`Logger`] sends to an FMI 2.0 logger callback or to an FMI 3.0
+//! `logMessage` callback ([`Sink`]). The shared core writes its messages once, naming the FMI 2.0
+//! functions; for an FMI 3.0 instance [`fmi3_names`] renames them at the boundary
+//! (`fmi2GetFMUstate` becomes `fmi3GetFMUState`, `fmi2GetReal` `fmi3GetFloat64`, ...), so a user
+//! of either version reads the names of the functions they called.
 
 use std::cell::{Cell, RefCell};
 use std::ffi::CString;
@@ -12,20 +15,37 @@ use std::sync::Once;
 
 use super::ffi::{Fmi2CallbackFunctions, Fmi2Status};
 use super::LogCategory;
+use crate::fmi3::ffi::{Fmi3InstanceEnvironment, Fmi3LogMessageCallback, Fmi3Status};
+
+/// Where messages go: the callback of the FMI version the instance was made by.
+#[derive(Clone, Copy)]
+pub enum Sink {
+    /// FMI 2.0: `fmi2CallbackLogger`, a printf-style function that gets the instance name.
+    Fmi2(Fmi2CallbackFunctions),
+    /// FMI 3.0: `fmi3LogMessageCallback`, plain text and no instance name.
+    Fmi3 {
+        environment: Fmi3InstanceEnvironment,
+        log_message: Fmi3LogMessageCallback,
+    },
+}
 
 /// The environment's side: logger callback, instance name and which categories it wants.
 pub struct Logger {
     instance_name: CString,
-    callbacks: Fmi2CallbackFunctions,
+    sink: Sink,
     /// Which debug categories are on, indexed by `LogCategory as usize`.
     enabled: [bool; LogCategory::ALL.len()],
 }
 
 impl Logger {
     pub fn new(instance_name: &str, callbacks: Fmi2CallbackFunctions, logging_on: bool) -> Self {
+        Self::with_sink(instance_name, Sink::Fmi2(callbacks), logging_on)
+    }
+
+    pub fn with_sink(instance_name: &str, sink: Sink, logging_on: bool) -> Self {
         Logger {
             instance_name: CString::new(instance_name.replace('\0', " ")).unwrap_or_default(),
-            callbacks,
+            sink,
             // fmi2Instantiate's loggingOn switches every category (FMI 2.0.4, 2.1.5).
             enabled: [logging_on; LogCategory::ALL.len()],
         }
@@ -60,28 +80,93 @@ impl Logger {
         if !self.enabled(category) {
             return;
         }
-        let Some(logger) = self.callbacks.logger else {
-            return;
-        };
         let category = CString::new(category.name()).unwrap_or_default();
-        // The logger's message is a printf format. Importers that format it and importers that
-        // print it as it is both exist; passing the message itself, with '%' doubled, reads right
-        // in the first and nearly right in the second, and never lets a '%' in a message be taken
-        // for a conversion.
-        let message = shorten_numbers(message)
-            .replace('\0', " ")
-            .replace('%', "%%");
-        let message = CString::new(message).unwrap_or_default();
-        unsafe {
-            logger(
-                self.callbacks.component_environment,
-                self.instance_name.as_ptr(),
-                status,
-                category.as_ptr(),
-                message.as_ptr(),
-            );
+        match self.sink {
+            Sink::Fmi2(callbacks) => {
+                let Some(logger) = callbacks.logger else {
+                    return;
+                };
+                // The logger's message is a printf format. Importers that format it and importers
+                // that print it as it is both exist; passing the message itself, with '%' doubled,
+                // reads right in the first and nearly right in the second, and never lets a '%' in
+                // a message be taken for a conversion.
+                let message = shorten_numbers(message)
+                    .replace('\0', " ")
+                    .replace('%', "%%");
+                let message = CString::new(message).unwrap_or_default();
+                unsafe {
+                    logger(
+                        callbacks.component_environment,
+                        self.instance_name.as_ptr(),
+                        status,
+                        category.as_ptr(),
+                        message.as_ptr(),
+                    );
+                }
+            }
+            Sink::Fmi3 {
+                environment,
+                log_message,
+            } => {
+                let Some(log_message) = log_message else {
+                    return;
+                };
+                let status = match status {
+                    Fmi2Status::Ok | Fmi2Status::Pending => Fmi3Status::Ok,
+                    Fmi2Status::Warning => Fmi3Status::Warning,
+                    Fmi2Status::Discard => Fmi3Status::Discard,
+                    Fmi2Status::Error => Fmi3Status::Error,
+                    Fmi2Status::Fatal => Fmi3Status::Fatal,
+                };
+                let message = fmi3_names(&shorten_numbers(message)).replace('\0', " ");
+                let message = CString::new(message).unwrap_or_default();
+                unsafe { log_message(environment, status, category.as_ptr(), message.as_ptr()) };
+            }
         }
     }
+}
+
+/// FMI 2.0 names that are not the FMI 3.0 name with `fmi3` for `fmi2`.
+const FMI3_RENAMED: [(&str, &str); 14] = [
+    ("fmi2Instantiate", "fmi3Instantiate"),
+    ("fmi2SetupExperiment", "fmi3EnterInitializationMode"),
+    ("fmi2GetReal", "fmi3GetFloat64"),
+    ("fmi2SetReal", "fmi3SetFloat64"),
+    ("fmi2GetInteger", "fmi3GetInt32"),
+    ("fmi2SetInteger", "fmi3SetInt32"),
+    ("fmi2GetFMUstate", "fmi3GetFMUState"),
+    ("fmi2SetFMUstate", "fmi3SetFMUState"),
+    ("fmi2FreeFMUstate", "fmi3FreeFMUState"),
+    ("fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize"),
+    ("fmi2SerializeFMUstate", "fmi3SerializeFMUState"),
+    ("fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"),
+    ("fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"),
+    ("fmi2NewDiscreteStates", "fmi3UpdateDiscreteStates"),
+];
+
+/// Renames the FMI 2.0 function and status names in a message of the shared core to their FMI 3.0
+/// names (`fmi2DoStep` -> `fmi3DoStep`, `fmi2GetReal` -> `fmi3GetFloat64`, `fmi2OK` -> `fmi3OK`).
+pub fn fmi3_names(message: &str) -> String {
+    let mut out = String::with_capacity(message.len() + 16);
+    let mut rest = message;
+    while let Some(at) = rest.find("fmi2") {
+        out.push_str(&rest[..at]);
+        let word = &rest[at..];
+        let end = word
+            .find(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+            .unwrap_or(word.len());
+        let name = &word[..end];
+        match FMI3_RENAMED.iter().find(|(old, _)| *old == name) {
+            Some((_, new)) => out.push_str(new),
+            None => {
+                out.push_str("fmi3");
+                out.push_str(&name[4..]);
+            }
+        }
+        rest = &word[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// A number printed short: as Rust prints it (shortest round trip) between 1e-4 and 1e15, in
@@ -217,6 +302,17 @@ mod tests {
         assert_eq!(shorten_numbers("plate.f[12] é"), "plate.f[12] é");
         let range = format!("(0..{}, 0..{})", 1.41, 1e-49);
         assert_eq!(shorten_numbers(&range), "(0..1.41, 0..1e-49)");
+    }
+
+    #[test]
+    fn fmi3_messages_name_fmi3_functions() {
+        assert_eq!(
+            fmi3_names(
+                "fmi2GetReal: bad; fmi2DoStep returned fmi2Error, see fmi2DeSerializeFMUstate."
+            ),
+            "fmi3GetFloat64: bad; fmi3DoStep returned fmi3Error, see fmi3DeserializeFMUState."
+        );
+        assert_eq!(fmi3_names("no names"), "no names");
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! `hsp`: the project's command-line tool.
 //!
-//! - `hsp package`: builds the release library and writes `fmu/HydraulicSlewingPlate.fmu`.
+//! - `hsp package`: builds the release library and writes `fmu/HydraulicSlewingPlate.fmu` (FMI 2.0)
+//!   and `fmu/fmi3/HydraulicSlewingPlate.fmu` (FMI 3.0).
 //! - `hsp run [--preset NAME]`: builds the FMU if needed, loads it through its C ABI, runs the
 //!   default experiment (a slewing manoeuvre of the complete system: a step in the reference `r`),
 //!   prints a summary and writes the results as CSV.
@@ -291,8 +292,10 @@ fn main() -> ExitCode {
         Command::Package {
             output,
             require_portable,
-        } => package::package_with(&output, require_portable).map(|path| {
-            println!("wrote {path}");
+        } => package::package_with(&output, require_portable).map(|paths| {
+            for path in paths {
+                println!("wrote {path}");
+            }
         }),
         Command::Run(args) => run::run(&args),
         Command::DocFigures { fmu, out } => {

@@ -2,6 +2,11 @@
 //! (verbatim from `modelDescription/`), `binaries/linux64/HydraulicSlewingPlate.so` (glibc 2.17),
 //! `binaries/win64/HydraulicSlewingPlate.dll` (where the binaries come from: [`binaries`]) and
 //! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU).
+//!
+//! Beside it, in `fmi3/` of the same folder, the FMI 3.0 FMU: the same binaries (they export the
+//! `fmi3*` functions too) under FMI 3.0's platform names (`x86_64-linux`, `x86_64-windows`), the
+//! FMI 3.0 `modelDescription.xml` written by `modelDescription/fmi3.py`, and the same
+//! documentation.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -16,14 +21,32 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Builds and writes the FMU with every binary the installed toolchains allow; returns its path.
+/// Builds and writes the FMUs with every binary the installed toolchains allow; returns the FMI 2.0
+/// one's path.
 pub fn package(output: &str) -> Result<String, String> {
-    package_with(output, false)
+    package_with(output, false).map(|[fmi2, _]| fmi2)
 }
 
-/// Builds and writes the FMU; with `require_portable`, fails unless both the glibc-2.17 Linux
-/// binary and the Windows binary are built (see [`binaries`]). Returns its path.
-pub fn package_with(output: &str, require_portable: bool) -> Result<String, String> {
+/// FMI 3.0's name of an FMI 2.0 platform folder.
+fn fmi3_platform(fmi2: &str) -> &str {
+    match fmi2 {
+        "linux64" => "x86_64-linux",
+        "win64" => "x86_64-windows",
+        "darwin64" => "x86_64-darwin",
+        other => other,
+    }
+}
+
+/// Where the FMI 3.0 FMU goes: `fmi3/` beside the FMI 2.0 one.
+pub fn fmi3_path(fmi2: &Path) -> PathBuf {
+    let name = fmi2.file_name().unwrap_or_default();
+    fmi2.with_file_name("fmi3").join(name)
+}
+
+/// Builds and writes the FMI 2.0 FMU at `output` and the FMI 3.0 FMU beside it (see
+/// [`fmi3_path`]); with `require_portable`, fails unless both the glibc-2.17 Linux binary and the
+/// Windows binary are built (see [`binaries`]). Returns both paths.
+pub fn package_with(output: &str, require_portable: bool) -> Result<[String; 2], String> {
     let binaries = binaries::build(require_portable)?;
     let xml_path = root().join("modelDescription/modelDescription.xml");
     let xml = std::fs::read(&xml_path).map_err(|e| format!("{}: {e}", xml_path.display()))?;
@@ -56,8 +79,31 @@ pub fn package_with(output: &str, require_portable: bool) -> Result<String, Stri
             .map(|(name, bytes)| (format!("documentation/{name}"), bytes)),
     );
     write_archive(&tmp, &entries)?;
+
+    // FMI 3.0: the same entries but the model description, under FMI 3.0's platform names.
+    let xml3_path = root().join("modelDescription/fmi3/modelDescription.xml");
+    let xml3 = std::fs::read(&xml3_path).map_err(|e| format!("{}: {e}", xml3_path.display()))?;
+    let entries3: Vec<(String, Vec<u8>)> = std::iter::once(("modelDescription.xml".into(), xml3))
+        .chain(entries.iter().skip(1).map(|(name, bytes)| {
+            let name = match name
+                .strip_prefix("binaries/")
+                .and_then(|r| r.split_once('/'))
+            {
+                Some((platform, file)) => format!("binaries/{}/{file}", fmi3_platform(platform)),
+                None => name.clone(),
+            };
+            (name, bytes.clone())
+        }))
+        .collect();
+    let out3 = fmi3_path(&out);
+    if let Some(dir) = out3.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let tmp3 = out3.with_extension("fmu.partial");
+    write_archive(&tmp3, &entries3)?;
     std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
-    Ok(out.display().to_string())
+    std::fs::rename(&tmp3, &out3).map_err(|e| format!("{}: {e}", out3.display()))?;
+    Ok([out.display().to_string(), out3.display().to_string()])
 }
 
 /// The platform folders under `binaries/` of an archive's entries.
