@@ -1,0 +1,398 @@
+//! The FMI 3.0 twins of `fmi2_contract.rs` (every rule the two standards share: bad parameters
+//! rejected by name, never OK with non-finite outputs, a step that cannot advance time, hostile or
+//! foreign FMU states, the error state), and the rules of FMI 3.0 alone: arrays and `nValues`,
+//! the independent variable `time`, one-byte Booleans, the types the model has no variable of,
+//! `eventModeUsed`, and messages that name FMI 3.0's functions.
+
+#[path = "common/fmu.rs"]
+mod fmu;
+#[path = "common/fmu3.rs"]
+mod fmu3;
+
+use fmu::{blob, payload};
+use fmu3::Fmu3;
+use hydraulic_slewing_plate::fmi3::ffi::*;
+use hydraulic_slewing_plate::fmi3_exports::*;
+
+/// A message is short: numbers printed short (1e-300 in 6 characters, not 302), and it names no
+/// FMI 2.0 function.
+fn assert_short(message: &str) {
+    assert!(
+        message.len() < 400,
+        "{} characters: {message}",
+        message.len()
+    );
+    let longest_number = message
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(longest_number <= 24, "{message}");
+    assert!(
+        !message.contains("fmi2"),
+        "an FMI 3.0 message names FMI 2.0: {message}"
+    );
+}
+
+/// Initialisation with one parameter set fails with fmi3Error naming `name`.
+fn init_rejects(name: &str, value: f64, expect_in_message: &str) {
+    let f = Fmu3::new();
+    let set = f.set_real(name, value);
+    let status = if set == Fmi3Status::Ok {
+        assert_eq!(f.enter(0.0), Fmi3Status::Ok);
+        f.exit()
+    } else {
+        set
+    };
+    assert_eq!(status, Fmi3Status::Error, "{name} = {value}");
+    let last = f.last();
+    assert!(
+        last.contains(name) && last.contains(expect_in_message),
+        "{name} = {value}: {last}"
+    );
+    assert_short(&last);
+}
+
+#[test]
+fn absurd_parameters_are_rejected_by_name() {
+    init_rejects("plate.rho", 1e-300, "physically absurd");
+    init_rejects("plate.E", 1e-49, "flexural rigidity");
+    init_rejects("servo_valve.p_supply", 1e300, "physically absurd");
+    init_rejects("servo_valve.p_supply", 1e40, "hydraulic energy");
+    init_rejects("plate.a", 1e40, "the hub's total inertia");
+}
+
+#[test]
+fn a_state_taken_before_initialisation_restores_as_such() {
+    let f = Fmu3::new();
+    let (s, early) = f.get_state();
+    assert_eq!(s, Fmi3Status::Ok);
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    assert_eq!(f.step(0.0, 1e-3), Fmi3Status::Ok);
+    assert_eq!(f.set_state(early), Fmi3Status::Ok);
+    assert_eq!(f.step(0.0, 1e-3), Fmi3Status::Error);
+    assert!(f.last().contains("illegal call sequence"), "{}", f.last());
+    assert!(f.last().starts_with("fmi3DoStep"), "{}", f.last());
+    assert_eq!(f.free_state(early), Fmi3Status::Ok);
+}
+
+#[test]
+fn a_state_taken_in_the_error_state_is_refused() {
+    let f = Fmu3::new();
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    assert_eq!(f.step(0.0, 1e-3), Fmi3Status::Ok);
+    let (_, good) = f.get_state();
+    assert_eq!(f.step(5.0, 1e-3), Fmi3Status::Error);
+    let (s, bad) = f.get_state();
+    assert_eq!(s, Fmi3Status::Ok);
+    assert_eq!(f.set_state(good), Fmi3Status::Ok);
+    assert_eq!(f.set_state(bad), Fmi3Status::Error);
+    assert!(f.last().contains("taken in state 'error'"), "{}", f.last());
+    assert!(f.last().starts_with("fmi3SetFMUState"), "{}", f.last());
+    assert_eq!(f.set_state(good), Fmi3Status::Ok);
+    assert_eq!(f.step(1e-3, 1e-3), Fmi3Status::Ok);
+    f.free_state(good);
+    f.free_state(bad);
+}
+
+#[test]
+fn a_tiny_step_does_not_spoil_the_next() {
+    let f = Fmu3::new();
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    assert_eq!(f.step(0.0, 1e-15), Fmi3Status::Ok);
+    assert_eq!(f.step(1e-15, 1e-3), Fmi3Status::Ok, "{}", f.last());
+    assert_eq!(f.last_successful_time(), 1e-15 + 1e-3);
+}
+
+fn never_ok_with_non_finite(name: &str, value: f64, hydraulics: i32) {
+    let f = Fmu3::new();
+    assert_eq!(
+        f.set_integer("hydraulics.model", hydraulics),
+        Fmi3Status::Ok
+    );
+    assert_eq!(
+        f.set_boolean("controller.saturation", false),
+        Fmi3Status::Ok
+    );
+    assert_eq!(f.set_real(name, value), Fmi3Status::Ok);
+    assert_eq!(f.enter(0.0), Fmi3Status::Ok);
+    let mut status = f.exit();
+    let mut t = 0.0;
+    while status == Fmi3Status::Ok && t < 0.05 {
+        for out in ["energy", "y_pot", "w_tip", "theta_hub"] {
+            assert!(f.get_real(out).1.is_finite(), "{name} = {value}: {out}");
+        }
+        status = f.step(t, 1e-3);
+        t += 1e-3;
+    }
+    assert!(
+        matches!(status, Fmi3Status::Error | Fmi3Status::Discard),
+        "{name} = {value}: {status:?}"
+    );
+    let last = f.last();
+    assert!(last.contains(name), "{name} = {value}: {last}");
+    assert_short(&last);
+    if status == Fmi3Status::Discard {
+        // lastSuccessfulTime says where the FMU stopped; its outputs there are finite.
+        assert!(f.last_successful_time() < t);
+        assert!(f.get_real("energy").1.is_finite());
+    }
+}
+
+#[test]
+fn huge_inputs_and_absurd_hydraulics_give_no_ok_with_infinite_outputs() {
+    never_ok_with_non_finite("F1", 1e300, 1);
+    never_ok_with_non_finite("r", 1e300, 1);
+    for hydraulics in [1, 2] {
+        never_ok_with_non_finite("servo_valve.beta", 1e-300, hydraulics);
+    }
+}
+
+#[test]
+fn edited_states_are_validated_not_trusted() {
+    let f = Fmu3::new();
+    assert_eq!(f.set_integer("hydraulics.model", 1), Fmi3Status::Ok);
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    for k in 0..50 {
+        assert_eq!(f.step(k as f64 * 1e-3, 1e-3), Fmi3Status::Ok);
+    }
+    let (_, s) = f.get_state();
+    let good = payload(&f.serialize(s));
+    f.free_state(s);
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit, &str); 3] = [
+        (
+            "rtol = 0",
+            |p| p["model"]["integrator"]["options"]["rtol"] = 0.0.into(),
+            "solver options differ",
+        ),
+        (
+            "a saved Fatal state",
+            |p| p["state"] = "Fatal".into(),
+            "taken in state 'fatal'",
+        ),
+        (
+            "integrator time -5 against FMU time 0.05",
+            |p| p["model"]["integrator"]["t"] = (-5.0).into(),
+            "its integrator is at t = -5, the FMU at t = 0.05",
+        ),
+    ];
+    for (what, edit, expected) in edits {
+        let mut p = good.clone();
+        edit(&mut p);
+        let (s, state) = f.deserialize(&blob(&p));
+        assert_eq!(s, Fmi3Status::Ok, "{what}: the checksum was recomputed");
+        assert_eq!(f.set_state(state), Fmi3Status::Error, "{what}");
+        assert!(f.last().contains(expected), "{what}: {}", f.last());
+        assert_short(&f.last());
+        assert_eq!(f.step(0.05, 1e-3), Fmi3Status::Error, "{what}");
+        f.free_state(state);
+    }
+    let (_, state) = f.deserialize(&blob(&good));
+    assert_eq!(f.set_state(state), Fmi3Status::Ok);
+    assert_eq!(f.step(0.05, 1e-3), Fmi3Status::Ok);
+    f.free_state(state);
+}
+
+#[test]
+fn a_step_that_cannot_advance_time_is_an_error() {
+    let f = Fmu3::new();
+    assert_eq!(f.init(1e15), Fmi3Status::Ok);
+    assert_eq!(f.step(1e15, 1e-3), Fmi3Status::Error);
+    assert!(
+        f.last().contains("cannot advance the time 1e15"),
+        "{}",
+        f.last()
+    );
+    assert_short(&f.last());
+}
+
+#[test]
+fn fmu_state_pointers_are_checked() {
+    let f = Fmu3::new();
+    let other = Fmu3::new();
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    let mut junk = vec![0u8; 4096];
+    let junk = junk.as_mut_ptr() as Fmi3FmuState;
+    for bad in [other.c, junk] {
+        assert_eq!(f.set_state(bad), Fmi3Status::Error);
+        assert!(f.last().contains("not an FMU state"), "{}", f.last());
+        assert_eq!(f.free_state(bad), Fmi3Status::Error);
+        let mut size = 0usize;
+        assert_eq!(
+            unsafe { fmi3SerializedFMUStateSize(f.c, bad, &mut size) },
+            Fmi3Status::Error
+        );
+        assert_eq!(unsafe { fmi3Reset(f.c) }, Fmi3Status::Ok);
+        assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    }
+    let (_, mut s) = f.get_state();
+    assert_eq!(unsafe { fmi3FreeFMUState(f.c, &mut s) }, Fmi3Status::Ok);
+    assert!(s.is_null());
+}
+
+#[test]
+fn calls_in_the_error_state_are_refused_with_a_log_line() {
+    let f = Fmu3::new();
+    assert_eq!(f.step(0.0, 1e-3), Fmi3Status::Error);
+    let n = f.log_len();
+    assert_eq!(f.enter(0.0), Fmi3Status::Error);
+    assert!(f.log_len() > n);
+    assert!(
+        f.last().starts_with("fmi3EnterInitializationMode"),
+        "{}",
+        f.last()
+    );
+}
+
+#[test]
+fn arrays_are_read_whole_and_n_values_is_checked() {
+    let f = Fmu3::new();
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    assert_eq!(f.step(0.0, 1e-3), Fmi3Status::Ok);
+    let acc = Fmu3::vr("acc[1]");
+    let y = Fmu3::vr("y_pot");
+    // y_pot, the 12 accelerometers and time: 14 values from 3 value references.
+    let mut v = [f64::NAN; 14];
+    let s = unsafe { fmi3GetFloat64(f.c, [y, acc, 0].as_ptr(), 3, v.as_mut_ptr(), 14) };
+    assert_eq!(s, Fmi3Status::Ok, "{}", f.last());
+    assert_eq!(v[0], f.get_real("y_pot").1);
+    // The array alone gives the same 12 values, which are the FMI 2.0 scalars acc[1..12].
+    let mut alone = [f64::NAN; 12];
+    let s = unsafe { fmi3GetFloat64(f.c, &acc, 1, alone.as_mut_ptr(), 12) };
+    assert_eq!(s, Fmi3Status::Ok);
+    assert_eq!(&v[1..13], &alone[..]);
+    assert!(alone.iter().all(|a| a.is_finite()));
+    for k in 0..12 {
+        assert_eq!(fmu::Fmu::vr(&format!("acc[{}]", k + 1)), acc + k as u32);
+    }
+    assert_eq!(v[13], 1e-3, "time");
+    // One value short, one too many: an error naming both counts.
+    for n in [13, 15] {
+        let mut w = [0.0; 15];
+        let s = unsafe { fmi3GetFloat64(f.c, [y, acc, 0].as_ptr(), 3, w.as_mut_ptr(), n) };
+        assert_eq!(s, Fmi3Status::Error);
+        assert!(
+            f.last().contains(&format!("nValues is {n}")) && f.last().contains("14 values"),
+            "{}",
+            f.last()
+        );
+        assert_eq!(unsafe { fmi3Reset(f.c) }, Fmi3Status::Ok);
+        assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    }
+    // acc[2]'s FMI 2.0 value reference is no FMI 3.0 variable.
+    let mut w = [0.0; 1];
+    let s = unsafe { fmi3GetFloat64(f.c, &(acc + 1), 1, w.as_mut_ptr(), 1) };
+    assert_eq!(s, Fmi3Status::Error);
+    assert!(
+        f.last()
+            .contains(&format!("unknown value reference {}", acc + 1)),
+        "{}",
+        f.last()
+    );
+}
+
+#[test]
+fn time_is_read_not_set_and_types_are_checked() {
+    let f = Fmu3::new();
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    let t = 1.0;
+    assert_eq!(
+        unsafe { fmi3SetFloat64(f.c, &0, 1, &t, 1) },
+        Fmi3Status::Error
+    );
+    assert!(
+        f.last().contains("'time' is the independent variable"),
+        "{}",
+        f.last()
+    );
+    let f = Fmu3::new();
+    assert_eq!(f.enter(0.0), Fmi3Status::Ok);
+    // A Float64 read as Int32, and an Int8 the model does not have.
+    let mut i = 0i32;
+    let r = Fmu3::vr("r");
+    assert_eq!(
+        unsafe { fmi3GetInt32(f.c, &r, 1, &mut i, 1) },
+        Fmi3Status::Error
+    );
+    assert!(
+        f.last().contains("'r', a Float64, not a Int32"),
+        "{}",
+        f.last()
+    );
+    let f = Fmu3::new();
+    assert_eq!(f.enter(0.0), Fmi3Status::Ok);
+    let mut b = 0i8;
+    assert_eq!(
+        unsafe { fmi3GetInt8(f.c, &r, 1, &mut b, 1) },
+        Fmi3Status::Error
+    );
+    assert!(
+        f.last().contains("'r', a Float64, not a Int8"),
+        "{}",
+        f.last()
+    );
+    // No value references: nothing to do, whatever the type.
+    let f = Fmu3::new();
+    assert_eq!(f.enter(0.0), Fmi3Status::Ok);
+    assert_eq!(
+        unsafe { fmi3GetInt8(f.c, std::ptr::null(), 0, &mut b, 0) },
+        Fmi3Status::Ok
+    );
+}
+
+#[test]
+fn any_nonzero_byte_is_true() {
+    // C's bool holds 0 or 1, but an importer may pass any byte; it must not be undefined
+    // behaviour, and it means true.
+    let f = Fmu3::new();
+    let vr = Fmu3::vr("controller.saturation");
+    let byte = 2u8;
+    assert_eq!(
+        unsafe { fmi3SetBoolean(f.c, &vr, 1, &byte, 1) },
+        Fmi3Status::Ok
+    );
+    assert_eq!(f.enter(0.0), Fmi3Status::Ok);
+    let mut out = 7u8;
+    assert_eq!(
+        unsafe { fmi3GetBoolean(f.c, &vr, 1, &mut out, 1) },
+        Fmi3Status::Ok
+    );
+    assert_eq!(out, 1);
+}
+
+#[test]
+fn event_mode_is_refused_at_instantiation_with_a_reason() {
+    let log = Fmu3::try_new(true)
+        .err()
+        .expect("eventModeUsed = true must be refused");
+    let (status, category, message) = log.last().cloned().expect("a log line");
+    assert_eq!(status, Fmi3Status::Error);
+    assert_eq!(category, "logStatusError");
+    assert!(
+        message.contains("eventModeUsed") && message.contains("no events"),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_wrong_instantiation_token_is_refused() {
+    let token = c"{00000000-0000-0000-0000-000000000000}";
+    let c = unsafe {
+        fmi3InstantiateCoSimulation(
+            c"x".as_ptr(),
+            token.as_ptr(),
+            std::ptr::null(),
+            false,
+            false,
+            false,
+            false,
+            std::ptr::null(),
+            0,
+            std::ptr::null_mut(),
+            None,
+            None,
+        )
+    };
+    assert!(c.is_null());
+}
