@@ -30,13 +30,16 @@ def test_archive_layout(fmu_path, md):
     assert "documentation/index.html" in names
 
 
-def test_only_fmi2_symbols_exported_and_only_libc_needed(unzipped, md):
+def test_only_fmi_symbols_exported_and_only_libc_needed(unzipped, md):
+    """The binary serves the FMI 2.0 and the FMI 3.0 FMU: it exports fmi2* and fmi3* functions and
+    nothing else."""
     so = pathlib.Path(unzipped) / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
     nm = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True)
     symbols = [line.split()[-1] for line in nm.stdout.splitlines() if line.split()[-2] in ("T", "W")]
     assert symbols, nm.stdout
-    assert all(s.startswith("fmi2") for s in symbols), [s for s in symbols if not s.startswith("fmi2")]
-    for f in ["fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate", "fmi2GetRealStatus", "fmi2CancelStep"]:
+    assert all(s.startswith(("fmi2", "fmi3")) for s in symbols), [s for s in symbols if not s.startswith(("fmi2", "fmi3"))]
+    for f in ["fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate", "fmi2GetRealStatus", "fmi2CancelStep",
+              "fmi3InstantiateCoSimulation", "fmi3DoStep", "fmi3SerializeFMUState", "fmi3GetFloat64"]:
         assert f in symbols
     ldd = subprocess.run(["ldd", str(so)], capture_output=True, text=True, check=True).stdout
     allowed = ("linux-vdso", "libc.so", "libm.so", "libgcc_s.so", "ld-linux", "libpthread", "libdl")
