@@ -607,6 +607,34 @@ impl CompiledModel {
         &self.structure.pattern
     }
 
+    /// The structural dependencies of the derivatives and of the outputs: for each derivative
+    /// (state order) and each output, the states `i < n` and inputs `n + k` it depends on
+    /// through the plan, ascending. A superset of the non-zero pattern of the linearisation at
+    /// any point.
+    pub fn dependencies(&self) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
+        let known = self.n_states() + self.n_inputs();
+        let run = |targets: &[u32]| {
+            super::structure::dependencies(&self.ops, &self.terms, self.n_slots, known, targets)
+        };
+        (run(&self.deriv_slots), run(&self.output_slots))
+    }
+
+    /// The states that hold energy (of I, C and field elements), ascending: those the stored
+    /// energy depends on.
+    pub fn storage_states(&self) -> Vec<usize> {
+        let mut states: Vec<usize> = self
+            .storages
+            .iter()
+            .flat_map(|st| match st {
+                Storage::One { state, .. } => vec![*state],
+                Storage::Field { states, .. } => states.clone(),
+            })
+            .collect();
+        states.sort_unstable();
+        states.dedup();
+        states
+    }
+
     /// Number of dual-number passes one Jacobian takes (groups of columns with no row in common).
     pub fn jacobian_colours(&self) -> usize {
         self.structure.colours.len()
