@@ -1,8 +1,17 @@
 #!/usr/bin/env python3
-"""Rewrites the derived parts of modelDescription.xml after its variables were edited:
-<ModelStructure> (Outputs and InitialUnknowns, by 1-based position, with their dependencies) and
-the GUID (a hash of the file with the GUID left out, as build.rs computes it). build.rs stays the
-judge: it fails the build if either is stale. Usage: python3 modelDescription/update.py
+"""Rewrites the derived parts of modelDescription.xml after its variables were edited: the
+continuous states and their derivatives (the last variables, from model_structure.json),
+<ModelStructure> (Outputs, Derivatives and InitialUnknowns, by 1-based position, with their
+dependencies) and the GUID (a hash of the file with the GUID left out, as build.rs computes it).
+build.rs stays the judge: it fails the build if any is stale. Usage:
+python3 modelDescription/update.py
+
+Continuous states (Model Exchange): FMI 2.0 fixes their number in the XML, while the model's
+states depend on its structural parameters. model_structure.json, written by
+tests/model_structure.rs from the compiled model, lists the union of the states of every
+configuration with at most `plate_modes` plate modes, and the structural dependencies of each
+derivative (on states and inputs) and of each output (on states). A state a configuration does not
+have keeps its value with derivative 0.
 
 Dependencies: an output depends directly on an input only where FEEDTHROUGH says so: the plate's
 accelerations on the shaker forces (Newton's law: a force changes the acceleration at once), and
@@ -14,10 +23,52 @@ configuration. Initially the outputs depend on the parameters and the same input
 starts from the rest state); the calculated plate frequencies plate.f[k] on the plate.*
 parameters and hub.I_H."""
 
+import json
 import pathlib
 import re
 
 XML = pathlib.Path(__file__).with_name("modelDescription.xml")
+STRUCTURE = pathlib.Path(__file__).with_name("model_structure.json")
+STATES_MARK = "    <!-- continuous states and their derivatives: written by update.py from model_structure.json -->\n"
+# Value references of the states and their derivatives: STATE_VR + k, DERIVATIVE_VR + k, k from 1.
+STATE_VR, DERIVATIVE_VR = 10000, 20000
+
+
+def state_description(name, plate_modes):
+    element, _, variable = name.rpartition(".")
+    kinds = {"p": "momentum p", "q": "displacement q"}
+    kind = kinds.get(re.sub(r"\[\d+\]$", "", variable))
+    what = f"{kind}{variable[1:]} of the bond-graph element {element}" if kind else f"{name} (integrated signal)"
+    return (
+        f"Continuous state (Model Exchange): {what}; stays at its value with derivative 0 in "
+        f"configurations without it (Model Exchange declares the states of every configuration with up "
+        f"to {plate_modes} plate modes)"
+    )
+
+
+def state_variables(structure):
+    lines = [STATES_MARK]
+    for k, state in enumerate(structure["states"], start=1):
+        description = state_description(state, structure["plate_modes"])
+        lines.append(
+            f'    <ScalarVariable name="x.{state}" valueReference="{STATE_VR + k}" variability="continuous" initial="calculated"\n'
+            f'      description="{description}">\n'
+            f"      <Real/>\n"
+            f"    </ScalarVariable>\n"
+        )
+    return lines
+
+
+def derivative_variables(structure, position):
+    lines = []
+    for k, state in enumerate(structure["states"], start=1):
+        lines.append(
+            f'    <ScalarVariable name="der(x.{state})" valueReference="{DERIVATIVE_VR + k}" variability="continuous" initial="calculated"\n'
+            f'      description="Time derivative of x.{state}">\n'
+            f'      <Real derivative="{position[f"x.{state}"]}"/>\n'
+            f"    </ScalarVariable>\n"
+        )
+    return lines
 
 # Output name pattern -> the inputs it depends on directly.
 FEEDTHROUGH = {
@@ -42,14 +93,34 @@ def guid_for(text: str) -> str:
     return "{%08x-%04x-%04x-%04x-%012x}" % (a >> 32, (a >> 16) & 0xFFFF, a & 0xFFFF, b >> 48, b & 0xFFFFFFFFFFFF)
 
 
+def write_states(text, structure):
+    """Replaces the generated state and derivative variables at the end of ModelVariables."""
+    if STATES_MARK in text:
+        text = text[: text.index(STATES_MARK)] + text[text.index("  </ModelVariables>") :]
+    before = re.findall(r'<ScalarVariable\b[^>]*?name="([^"]*)"', text[: text.index("  </ModelVariables>")], flags=re.S)
+    position = {f"x.{s}": len(before) + k for k, s in enumerate(structure["states"], start=1)}
+    block = "".join(state_variables(structure) + derivative_variables(structure, position))
+    at = text.index("  </ModelVariables>")
+    return text[:at] + block + text[at:]
+
+
 def main():
-    text = XML.read_text()
+    structure = json.loads(STRUCTURE.read_text())
+    text = write_states(XML.read_text(), structure)
     variables = re.findall(r"<ScalarVariable\b(.*?)>", text, flags=re.S)
     names = [re.search(r'name="([^"]*)"', attrs).group(1) for attrs in variables]
     position = {name: i for i, name in enumerate(names, start=1)}
 
     def feedthrough(name):
         return sorted(position[u] for pattern, inputs in FEEDTHROUGH.items() if re.fullmatch(pattern, name) for u in inputs)
+
+    def known(name):
+        return position[name] if name in position and name in inputs else position[f"x.{name}"]
+
+    inputs = {n for n, attrs in zip(names, variables) if 'causality="input"' in attrs}
+
+    def on_states(name):
+        return [known(s) for s in structure["outputs"].get(name, [])]
 
     outputs, initial, parameters, plate = [], [], [], []
     for i, attrs in enumerate(variables, start=1):
@@ -58,7 +129,7 @@ def main():
         causality = causality.group(1) if causality else "local"
         init = re.search(r'initial="(\w+)"', attrs)
         if causality == "output":
-            outputs.append((i, feedthrough(name)))
+            outputs.append((i, sorted(feedthrough(name) + on_states(name))))
         if (causality == "output" and not (init and init.group(1) == "exact")) or causality == "calculatedParameter":
             initial.append((i, name))
         if causality == "parameter":
@@ -66,6 +137,16 @@ def main():
             if name.startswith("plate.") or name == "hub.I_H":
                 plate.append(i)
     initial = [(i, plate if name.startswith("plate.f[") else sorted(parameters + feedthrough(name))) for i, name in initial]
+    # The states start at rest, a function of the parameters; the derivatives there depend on the
+    # inputs as well.
+    derivatives = []
+    for state in structure["states"]:
+        deps = sorted(known(d) for d in structure["derivatives"][state])
+        derivatives.append((position[f"der(x.{state})"], deps))
+        on_inputs = [d for d in deps if names[d - 1] in inputs]
+        initial.append((position[f"x.{state}"], parameters))
+        initial.append((position[f"der(x.{state})"], sorted(parameters + on_inputs)))
+    initial.sort()
 
     def block(tag, unknowns):
         lines = "".join(
@@ -73,12 +154,20 @@ def main():
         )
         return f"    <{tag}>\n{lines}    </{tag}>\n" if unknowns else ""
 
-    structure = "  <ModelStructure>\n" + block("Outputs", outputs) + block("InitialUnknowns", initial) + "  </ModelStructure>"
-    text = re.sub(r"  <ModelStructure>.*?</ModelStructure>", lambda _: structure, text, flags=re.S)
+    model_structure = (
+        "  <ModelStructure>\n"
+        + block("Outputs", outputs)
+        + block("Derivatives", derivatives)
+        + block("InitialUnknowns", initial)
+        + "  </ModelStructure>"
+    )
+    text = re.sub(r"  <ModelStructure>.*?</ModelStructure>", lambda _: model_structure, text, flags=re.S)
     text = re.sub(r'guid="[^"]*"', 'guid=""', text, count=1)
     text = text.replace('guid=""', f'guid="{guid_for(text)}"', 1)
     XML.write_text(text)
-    print(f"{XML}: {len(variables)} variables, {len(outputs)} outputs, guid {guid_for(text)}")
+    print(
+        f"{XML}: {len(variables)} variables, {len(outputs)} outputs, {len(derivatives)} continuous states, guid {guid_for(text)}"
+    )
     # The FMI 3.0 description is derived from this one.
     import fmi3
 

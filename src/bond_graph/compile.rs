@@ -432,6 +432,29 @@ impl CompiledModel {
         seeds: &[u32],
         f: impl FnOnce(&[Dual]) -> R,
     ) -> R {
+        self.with_tangent(
+            ops,
+            x,
+            u,
+            |s| {
+                for &k in seeds {
+                    s[k as usize].d = 1.0;
+                }
+            },
+            f,
+        )
+    }
+
+    /// Evaluates `ops` with dual numbers whose tangents on the states and inputs `seed` sets
+    /// (slot `i < n` is state `i`, `n + k` input `k`; all start at 0).
+    fn with_tangent<R>(
+        &self,
+        ops: &[Op],
+        x: &[f64],
+        u: &[f64],
+        seed: impl FnOnce(&mut [Dual]),
+        f: impl FnOnce(&[Dual]) -> R,
+    ) -> R {
         self.check_dims(x, u);
         WS_DUAL.with(|ws| {
             let mut ws = ws.borrow_mut();
@@ -442,9 +465,7 @@ impl CompiledModel {
             for (i, v) in x.iter().chain(u.iter()).enumerate() {
                 s[i] = Dual { v: *v, d: 0.0 };
             }
-            for &k in seeds {
-                s[k as usize].d = 1.0;
-            }
+            seed(s);
             self.run(ops, s);
             f(s)
         })
@@ -482,6 +503,55 @@ impl CompiledModel {
                 *d = s[k as usize];
             }
         })
+    }
+
+    /// Calls `output(k, y_k)` for every output and `derivative(i, dx_i/dt)` for every state,
+    /// from one pass through the plan (no allocation).
+    pub fn for_each_output_and_derivative(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        mut output: impl FnMut(usize, f64),
+        mut derivative: impl FnMut(usize, f64),
+    ) {
+        self.with_f64(&self.ops, x, u, |s| {
+            for (k, &slot) in self.output_slots.iter().enumerate() {
+                output(k, s[slot as usize]);
+            }
+            for (i, &slot) in self.deriv_slots.iter().enumerate() {
+                derivative(i, s[slot as usize]);
+            }
+        })
+    }
+
+    /// Exact directional derivatives at `(x, u)` in the direction `(vx, vu)`: `ddx = A vx + B vu`
+    /// and `dy = C vx + D vu`, from one forward pass of dual numbers through the plan (the
+    /// Jacobian is never formed).
+    pub fn directional(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        (vx, vu): (&[f64], &[f64]),
+        ddx: &mut [f64],
+        dy: &mut [f64],
+    ) {
+        assert_eq!(vx.len(), self.n_states(), "state direction length");
+        assert_eq!(vu.len(), self.n_inputs(), "input direction length");
+        assert_eq!(ddx.len(), self.n_states(), "derivative vector length");
+        assert_eq!(dy.len(), self.n_outputs(), "output vector length");
+        let seed = |s: &mut [Dual]| {
+            for (slot, v) in s.iter_mut().zip(vx.iter().chain(vu)) {
+                slot.d = *v;
+            }
+        };
+        self.with_tangent(&self.ops, x, u, seed, |s| {
+            for (d, &k) in ddx.iter_mut().zip(&self.deriv_slots) {
+                *d = s[k as usize].d;
+            }
+            for (d, &k) in dy.iter_mut().zip(&self.output_slots) {
+                *d = s[k as usize].d;
+            }
+        });
     }
 
     /// Calls `each(k, y_k)` for every output, in [`CompiledModel::output_names`] order (no
@@ -535,6 +605,34 @@ impl CompiledModel {
     /// For each row `i` of the Jacobian, the states `dx_i/dt` depends on structurally.
     pub fn jacobian_pattern(&self) -> &[Vec<u32>] {
         &self.structure.pattern
+    }
+
+    /// The structural dependencies of the derivatives and of the outputs: for each derivative
+    /// (state order) and each output, the states `i < n` and inputs `n + k` it depends on
+    /// through the plan, ascending. A superset of the non-zero pattern of the linearisation at
+    /// any point.
+    pub fn dependencies(&self) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
+        let known = self.n_states() + self.n_inputs();
+        let run = |targets: &[u32]| {
+            super::structure::dependencies(&self.ops, &self.terms, self.n_slots, known, targets)
+        };
+        (run(&self.deriv_slots), run(&self.output_slots))
+    }
+
+    /// The states that hold energy (of I, C and field elements), ascending: those the stored
+    /// energy depends on.
+    pub fn storage_states(&self) -> Vec<usize> {
+        let mut states: Vec<usize> = self
+            .storages
+            .iter()
+            .flat_map(|st| match st {
+                Storage::One { state, .. } => vec![*state],
+                Storage::Field { states, .. } => states.clone(),
+            })
+            .collect();
+        states.sort_unstable();
+        states.dedup();
+        states
     }
 
     /// Number of dual-number passes one Jacobian takes (groups of columns with no row in common).
@@ -607,6 +705,14 @@ impl CompiledModel {
             .collect()
     }
 
+    /// The derivative of the stored energy at `x` in the direction `v`, `sum(dH/dx_i v_i)`: the
+    /// co-energy variables (efforts of C, flows of I elements) are the exact gradient of H.
+    pub fn stored_energy_derivative(&self, x: &[f64], v: &[f64]) -> f64 {
+        assert_eq!(x.len(), self.n_states(), "state vector length");
+        assert_eq!(v.len(), self.n_states(), "direction length");
+        self.storages.iter().map(|st| storage_rate(st, x, v)).sum()
+    }
+
     /// Power balance at `(x, u)`.
     pub fn power_balance(&self, x: &[f64], u: &[f64]) -> PowerBalance {
         let mut dx = vec![0.0; self.n_states()];
@@ -615,34 +721,12 @@ impl CompiledModel {
             let mut elements = Vec::new();
             let mut stored_rate = 0.0;
             for st in &self.storages {
-                match st {
-                    Storage::One {
-                        name, state, law, ..
-                    } => {
-                        let co = match law {
-                            Law::Linear(k) => x[*state] / k,
-                            Law::Nonlinear(l) | Law::Conductance(l) => l.eval(x[*state], 0.0).0,
-                        };
-                        let r = co * dx[*state];
-                        stored_rate += r;
-                        elements.push((name.clone(), r));
-                    }
-                    Storage::Field {
-                        name, states, w, ..
-                    } => {
-                        let mut r = 0.0;
-                        for (i, &si) in states.iter().enumerate() {
-                            let co: f64 = states
-                                .iter()
-                                .enumerate()
-                                .map(|(j, &sj)| w[(i, j)] * x[sj])
-                                .sum();
-                            r += co * dx[si];
-                        }
-                        stored_rate += r;
-                        elements.push((name.clone(), r));
-                    }
-                }
+                let name = match st {
+                    Storage::One { name, .. } | Storage::Field { name, .. } => name,
+                };
+                let r = storage_rate(st, x, &dx);
+                stored_rate += r;
+                elements.push((name.clone(), r));
             }
             let mut source_power = 0.0;
             let mut dissipated_power = 0.0;
@@ -689,6 +773,32 @@ fn quad_energy(law: &NonlinearLaw, x: f64) -> f64 {
         }
     }
     sum * 0.5 * h
+}
+
+/// `dH/dt` of one storage element at `x` when the states move at `v`: the co-energy variables
+/// (`dH/dx`) dotted with `v`.
+fn storage_rate(st: &Storage, x: &[f64], v: &[f64]) -> f64 {
+    match st {
+        Storage::One { state, law, .. } => {
+            let co = match law {
+                Law::Linear(k) => x[*state] / k,
+                Law::Nonlinear(l) | Law::Conductance(l) => l.eval(x[*state], 0.0).0,
+            };
+            co * v[*state]
+        }
+        Storage::Field { states, w, .. } => {
+            let mut r = 0.0;
+            for (i, &si) in states.iter().enumerate() {
+                let co: f64 = states
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &sj)| w[(i, j)] * x[sj])
+                    .sum();
+                r += co * v[si];
+            }
+            r
+        }
+    }
 }
 
 fn storage_energy(st: &Storage, x: &[f64]) -> f64 {

@@ -217,3 +217,40 @@ mod tests {
         assert_eq!(all, [0, 1, 2, 3]);
     }
 }
+
+/// For each of the `targets` slots, the first `n_known` slots (states, then inputs) it depends
+/// on through `ops`, ascending: a structural dependency (a path through the plan), which holds
+/// at every `(x, u)` where a numerical zero of the Jacobian may hide one.
+pub(crate) fn dependencies(
+    ops: &[Op],
+    terms: &[(f64, u32)],
+    n_slots: usize,
+    n_known: usize,
+    targets: &[u32],
+) -> Vec<Vec<u32>> {
+    let words = n_known.div_ceil(64).max(1);
+    let mut deps = vec![0u64; n_slots * words];
+    for k in 0..n_known {
+        deps[k * words + k / 64] |= 1 << (k % 64);
+    }
+    let mut acc = vec![0u64; words];
+    for op in ops {
+        acc.fill(0);
+        for_each_read(op, terms, |s| {
+            for (a, d) in acc.iter_mut().zip(&deps[s as usize * words..]) {
+                *a |= d;
+            }
+        });
+        let d = dst(op) as usize;
+        deps[d * words..(d + 1) * words].copy_from_slice(&acc);
+    }
+    targets
+        .iter()
+        .map(|&t| {
+            (0..n_known)
+                .filter(|&k| deps[t as usize * words + k / 64] >> (k % 64) & 1 == 1)
+                .map(|k| k as u32)
+                .collect()
+        })
+        .collect()
+}

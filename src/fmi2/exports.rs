@@ -1,5 +1,5 @@
 //! The `extern "C"` entry points. [`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation)
-//! emits one `#[no_mangle]` function per FMI 2.0 co-simulation function, each forwarding to a
+//! emits one `#[no_mangle]` function per FMI 2.0 function (Co-Simulation and Model Exchange), each forwarding to a
 //! generic function here. Every entry point checks its pointers (instances and FMU states carry a
 //! magic number), runs under [`guarded`], and turns a panic into `fmi2Fatal` with a log line: a
 //! panic must never unwind into the host, and its message goes to the FMU's logger, not to the
@@ -10,7 +10,7 @@ use super::fmu_state::SavedState;
 use super::instance::{c_str, Instance};
 use super::logging::guarded;
 use super::variables::Value;
-use super::FmuModel;
+use super::{FmuModel, Interface};
 
 /// Runs `f` on the instance behind `c`, with the checks and the panic guard every call needs.
 ///
@@ -108,16 +108,28 @@ pub unsafe fn instantiate<M: FmuModel>(
         let name = c_str(instance_name).unwrap_or("");
         let guid = c_str(guid).unwrap_or("");
         let resources = c_str(resource_location);
-        match Instance::<M>::new(name, guid, resources, callbacks, logging_on != FMI2_FALSE) {
+        let interface = match fmu_type {
+            FMI2_CO_SIMULATION => Interface::CoSimulation,
+            FMI2_MODEL_EXCHANGE => Interface::ModelExchange,
+            other => {
+                let logger = super::logging::Logger::new(name, callbacks, true);
+                logger.log(
+                    Fmi2Status::Error,
+                    super::LogCategory::StatusError,
+                    &format!("fmi2Instantiate: fmuType {other} is neither fmi2ModelExchange (0) nor fmi2CoSimulation (1)"),
+                );
+                return std::ptr::null_mut();
+            }
+        };
+        let logging_on = logging_on != FMI2_FALSE;
+        match Instance::<M>::new(name, guid, resources, callbacks, logging_on, interface) {
             Ok(inst) => {
-                if fmu_type != FMI2_CO_SIMULATION {
-                    let mut inst = inst;
-                    inst.error(
-                        "fmi2Instantiate: this FMU supports co-simulation only, not model exchange",
-                    );
-                    return std::ptr::null_mut();
-                }
-                inst.log_call(|| format!("fmi2Instantiate(instanceName=\"{name}\")"));
+                inst.log_call(|| {
+                    format!(
+                        "fmi2Instantiate(instanceName=\"{name}\", fmuType={})",
+                        interface.name()
+                    )
+                });
                 Box::into_raw(Box::new(inst)) as Fmi2Component
             }
             Err((logger, message)) => {
@@ -439,6 +451,130 @@ pub unsafe fn do_step<M: FmuModel>(
     })
 }
 
+/// # Safety
+/// As `fmi2SetTime`.
+pub unsafe fn set_time<M: FmuModel>(c: Fmi2Component, time: Fmi2Real) -> Fmi2Status {
+    with_instance::<M>(c, "fmi2SetTime", |inst| {
+        inst.log_call(|| format!("fmi2SetTime(time={time})"));
+        inst.set_time(time)
+    })
+}
+
+/// # Safety
+/// As `fmi2SetContinuousStates`: `x` holds `nx` elements.
+pub unsafe fn set_continuous_states<M: FmuModel>(
+    c: Fmi2Component,
+    x: *const Fmi2Real,
+    nx: usize,
+) -> Fmi2Status {
+    with_instance::<M>(c, "fmi2SetContinuousStates", |inst| {
+        let x = slice(x, nx);
+        null_check!(inst, "fmi2SetContinuousStates", x);
+        inst.log_call(|| format!("fmi2SetContinuousStates(x={x:?})"));
+        inst.set_continuous_states(x)
+    })
+}
+
+/// The Model Exchange getters of a Real array of the states' size: `fmi2GetContinuousStates`,
+/// `fmi2GetDerivatives`, `fmi2GetNominalsOfContinuousStates`.
+///
+/// # Safety
+/// `out` holds `n` elements.
+pub unsafe fn get_state_array<M: FmuModel>(
+    c: Fmi2Component,
+    function: &'static str,
+    out: *mut Fmi2Real,
+    n: usize,
+    f: fn(&mut Instance<M>, &mut [f64]) -> Fmi2Status,
+) -> Fmi2Status {
+    with_instance::<M>(c, function, |inst| {
+        let out = slice_mut(out, n);
+        null_check!(inst, function, out);
+        inst.log_call(|| format!("{function}(n={n})"));
+        f(inst, out)
+    })
+}
+
+/// # Safety
+/// As `fmi2GetEventIndicators`.
+pub unsafe fn get_event_indicators<M: FmuModel>(
+    c: Fmi2Component,
+    indicators: *mut Fmi2Real,
+    ni: usize,
+) -> Fmi2Status {
+    with_instance::<M>(c, "fmi2GetEventIndicators", |inst| {
+        let indicators = slice_mut(indicators, ni);
+        null_check!(inst, "fmi2GetEventIndicators", indicators);
+        inst.log_call(|| format!("fmi2GetEventIndicators(ni={ni})"));
+        inst.event_indicators(indicators.len())
+    })
+}
+
+/// # Safety
+/// As `fmi2NewDiscreteStates`.
+pub unsafe fn new_discrete_states<M: FmuModel>(
+    c: Fmi2Component,
+    info: *mut Fmi2EventInfo,
+) -> Fmi2Status {
+    with_instance::<M>(c, "fmi2NewDiscreteStates", |inst| {
+        if info.is_null() {
+            return inst.error("fmi2NewDiscreteStates: argument 'eventInfo' is NULL");
+        }
+        inst.log_call(|| "fmi2NewDiscreteStates()".into());
+        inst.new_discrete_states(&mut *info)
+    })
+}
+
+/// # Safety
+/// As `fmi2CompletedIntegratorStep`.
+pub unsafe fn completed_integrator_step<M: FmuModel>(
+    c: Fmi2Component,
+    _no_set_fmu_state_prior: Fmi2Boolean,
+    enter_event_mode: *mut Fmi2Boolean,
+    terminate_simulation: *mut Fmi2Boolean,
+) -> Fmi2Status {
+    with_instance::<M>(c, "fmi2CompletedIntegratorStep", |inst| {
+        if enter_event_mode.is_null() || terminate_simulation.is_null() {
+            return inst.error(
+                "fmi2CompletedIntegratorStep: argument 'enterEventMode' or 'terminateSimulation' is NULL",
+            );
+        }
+        inst.log_call(|| "fmi2CompletedIntegratorStep()".into());
+        match inst.completed_integrator_step() {
+            Ok((event, terminate)) => {
+                *enter_event_mode = if event { FMI2_TRUE } else { FMI2_FALSE };
+                *terminate_simulation = if terminate { FMI2_TRUE } else { FMI2_FALSE };
+                Fmi2Status::Ok
+            }
+            Err(s) => s,
+        }
+    })
+}
+
+/// # Safety
+/// As `fmi2GetDirectionalDerivative`: the unknown arrays hold `n_unknown` elements, the known
+/// ones `n_known`.
+pub unsafe fn get_directional_derivative<M: FmuModel>(
+    c: Fmi2Component,
+    unknown_vrs: *const Fmi2ValueReference,
+    n_unknown: usize,
+    known_vrs: *const Fmi2ValueReference,
+    n_known: usize,
+    dv_known: *const Fmi2Real,
+    dv_unknown: *mut Fmi2Real,
+) -> Fmi2Status {
+    const F: &str = "fmi2GetDirectionalDerivative";
+    with_instance::<M>(c, F, |inst| {
+        let v_unknown_ref = slice(unknown_vrs, n_unknown);
+        let v_known_ref = slice(known_vrs, n_known);
+        let dv_known = slice(dv_known, n_known);
+        let dv_unknown = slice_mut(dv_unknown, n_unknown);
+        null_check!(inst, F, v_unknown_ref, v_known_ref, dv_known, dv_unknown);
+        inst.log_call(|| format!("{F}(vUnknown_ref={v_unknown_ref:?}, vKnown_ref={v_known_ref:?}, dvKnown={dv_known:?})"));
+        inst.directional_derivative(v_unknown_ref, v_known_ref, dv_known, dv_unknown)
+    })
+}
+
 /// A function this FMU declares it does not support (capability flag false in the XML).
 ///
 /// # Safety
@@ -520,8 +656,9 @@ pub unsafe fn string_value(p: Fmi2String) -> Option<Value> {
     c_str(p).map(|s| Value::String(s.to_string()))
 }
 
-/// Emits the FMI 2.0 co-simulation C API for a model type implementing
-/// [`FmuModel`](crate::fmi2::FmuModel). Call it once, in the crate that builds the cdylib.
+/// Emits the FMI 2.0 C API (Co-Simulation and Model Exchange in one binary) for a model type
+/// implementing [`FmuModel`](crate::fmi2::FmuModel). Call it once, in the crate that builds the
+/// cdylib.
 #[macro_export]
 macro_rules! export_fmi2_cosimulation {
     ($model:ty) => {
@@ -742,18 +879,88 @@ macro_rules! export_fmi2_cosimulation {
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
                 c: Fmi2Component,
-                _u: *const Fmi2ValueReference,
-                _nu: usize,
-                _z: *const Fmi2ValueReference,
-                _nz: usize,
-                _dv: *const Fmi2Real,
-                _dz: *mut Fmi2Real,
+                u: *const Fmi2ValueReference,
+                nu: usize,
+                z: *const Fmi2ValueReference,
+                nz: usize,
+                dv: *const Fmi2Real,
+                dz: *mut Fmi2Real,
             ) -> Fmi2Status {
-                x::unsupported::<M>(
-                    c,
-                    "fmi2GetDirectionalDerivative",
-                    "providesDirectionalDerivative is false",
-                )
+                x::get_directional_derivative::<M>(c, u, nu, z, nz, dv, dz)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2EnterEventMode(c: Fmi2Component) -> Fmi2Status {
+                x::simple_call::<M>(c, "fmi2EnterEventMode", |i| i.enter_event_mode())
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2NewDiscreteStates(
+                c: Fmi2Component,
+                info: *mut Fmi2EventInfo,
+            ) -> Fmi2Status {
+                x::new_discrete_states::<M>(c, info)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: Fmi2Component) -> Fmi2Status {
+                x::simple_call::<M>(c, "fmi2EnterContinuousTimeMode", |i| {
+                    i.enter_continuous_time_mode()
+                })
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+                c: Fmi2Component,
+                no_prior: Fmi2Boolean,
+                enter_event_mode: *mut Fmi2Boolean,
+                terminate: *mut Fmi2Boolean,
+            ) -> Fmi2Status {
+                x::completed_integrator_step::<M>(c, no_prior, enter_event_mode, terminate)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetTime(c: Fmi2Component, t: Fmi2Real) -> Fmi2Status {
+                x::set_time::<M>(c, t)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetContinuousStates(
+                c: Fmi2Component,
+                v: *const Fmi2Real,
+                n: usize,
+            ) -> Fmi2Status {
+                x::set_continuous_states::<M>(c, v, n)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetDerivatives(
+                c: Fmi2Component,
+                v: *mut Fmi2Real,
+                n: usize,
+            ) -> Fmi2Status {
+                x::get_state_array::<M>(c, "fmi2GetDerivatives", v, n, |i, o| i.derivatives(o))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetEventIndicators(
+                c: Fmi2Component,
+                v: *mut Fmi2Real,
+                n: usize,
+            ) -> Fmi2Status {
+                x::get_event_indicators::<M>(c, v, n)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetContinuousStates(
+                c: Fmi2Component,
+                v: *mut Fmi2Real,
+                n: usize,
+            ) -> Fmi2Status {
+                x::get_state_array::<M>(c, "fmi2GetContinuousStates", v, n, |i, o| {
+                    i.continuous_states(o)
+                })
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+                c: Fmi2Component,
+                v: *mut Fmi2Real,
+                n: usize,
+            ) -> Fmi2Status {
+                x::get_state_array::<M>(c, "fmi2GetNominalsOfContinuousStates", v, n, |i, o| {
+                    i.nominals_of_continuous_states(o)
+                })
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(

@@ -101,3 +101,15 @@ impl Fmi2CallbackFunctions {
         }
     }
 }
+
+/// `fmi2EventInfo`, filled by `fmi2NewDiscreteStates`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Fmi2EventInfo {
+    pub new_discrete_states_needed: Fmi2Boolean,
+    pub terminate_simulation: Fmi2Boolean,
+    pub nominals_of_continuous_states_changed: Fmi2Boolean,
+    pub values_of_continuous_states_changed: Fmi2Boolean,
+    pub next_event_time_defined: Fmi2Boolean,
+    pub next_event_time: Fmi2Real,
+}

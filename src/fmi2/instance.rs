@@ -1,16 +1,21 @@
-//! One FMU instance: the FMI 2.0 co-simulation state machine over a model.
+//! One FMU instance: the FMI 2.0 state machines (Co-Simulation and Model Exchange) over a model.
 //!
 //! Every method returns the `fmi2Status` to hand back to the environment and logs why when it is
 //! not `fmi2OK`. Which call is allowed in which state is decided by one table,
-//! [`Operation::allowed_in`]. Any `fmi2Error` puts the instance into the error state, from which
-//! only `fmi2Reset`, the FMU-state functions, the getters and `fmi2FreeInstance` lead on (FMI
-//! 2.0.4, section 4.2.4).
+//! [`Operation::allowed_in`], and which interface it belongs to by [`Operation::interface`]: the
+//! instance knows the interface it was instantiated for and refuses the other's calls. Any
+//! `fmi2Error` puts the instance into the error state, from which only `fmi2Reset`, the FMU-state
+//! functions, the getters and `fmi2FreeInstance` lead on (FMI 2.0.4, sections 3.2.3 and 4.2.4).
+//!
+//! Model Exchange keeps the continuous states among the variable values: `fmi2SetContinuousStates`
+//! writes them there, and the model's [`FmuModel::evaluate`] brings the derivatives and outputs up
+//! to date lazily, on the first read after the time, a state or an input changed.
 
 use std::ffi::{CStr, CString};
 use std::path::PathBuf;
 
-use super::calls::{MachineState, Operation, RESTORABLE};
-use super::ffi::{Fmi2CallbackFunctions, Fmi2Status};
+use super::calls::{Interface, MachineState, Operation, RESTORABLE};
+use super::ffi::{Fmi2CallbackFunctions, Fmi2EventInfo, Fmi2Status, FMI2_FALSE};
 use super::fmu_state::{SavedState, Snapshot};
 use super::logging::{Logger, Short};
 use super::variables::{check_value, Causality, Value, Values};
@@ -63,6 +68,7 @@ pub struct Instance<M: FmuModel> {
     pub logger: Logger,
     pub resource_location: Option<PathBuf>,
     state: MachineState,
+    interface: Interface,
     experiment: Experiment,
     values: Values,
     model: M,
@@ -70,6 +76,9 @@ pub struct Instance<M: FmuModel> {
     last_successful_time: f64,
     /// A parameter or input changed since the model was last initialised.
     needs_initialize: bool,
+    /// Model Exchange: the time, a continuous state or an input changed since the model last
+    /// evaluated the derivatives and outputs.
+    needs_evaluate: bool,
     /// Strings handed out by `fmi2GetString`, valid until the next call.
     string_buffer: Vec<CString>,
 }
@@ -82,10 +91,11 @@ impl<M: FmuModel> Instance<M> {
         resource_location: Option<&str>,
         callbacks: Fmi2CallbackFunctions,
         logging_on: bool,
+        interface: Interface,
     ) -> Result<Self, (Logger, String)> {
         let logger = Logger::new(instance_name, callbacks, logging_on);
         let resources = resource_location.and_then(file_uri_to_path);
-        Self::with_logger(instance_name, guid, resources, logger)
+        Self::with_logger(instance_name, guid, resources, logger, interface)
     }
 
     /// The checks of `fmi2Instantiate` (and FMI 3.0's `fmi3Instantiate*`, whose instantiation
@@ -96,6 +106,7 @@ impl<M: FmuModel> Instance<M> {
         guid: &str,
         resource_location: Option<PathBuf>,
         logger: Logger,
+        interface: Interface,
     ) -> Result<Self, (Logger, String)> {
         if instance_name.is_empty() {
             return Err((logger, "fmi2Instantiate: instanceName is empty".into()));
@@ -109,17 +120,25 @@ impl<M: FmuModel> Instance<M> {
                 ),
             ));
         }
+        if interface == Interface::ModelExchange && M::continuous_states().is_empty() {
+            return Err((
+                logger,
+                "fmi2Instantiate: this FMU supports co-simulation only, not model exchange".into(),
+            ));
+        }
         Ok(Instance {
             magic: INSTANCE_MAGIC,
             logger,
             resource_location,
             state: Instantiated,
+            interface,
             experiment: Experiment::default(),
             values: Values::from_start(M::variables()),
             model: M::new(),
             time: 0.0,
             last_successful_time: 0.0,
             needs_initialize: true,
+            needs_evaluate: false,
             string_buffer: Vec::new(),
         })
     }
@@ -150,6 +169,11 @@ impl<M: FmuModel> Instance<M> {
         self.time
     }
 
+    /// The interface the instance was made for.
+    pub fn interface(&self) -> Interface {
+        self.interface
+    }
+
     /// Logs an error, enters the error state and returns `fmi2Error`.
     pub fn error(&mut self, message: &str) -> Fmi2Status {
         self.logger
@@ -177,6 +201,15 @@ impl<M: FmuModel> Instance<M> {
 
     /// Checks in the table of [`Operation::allowed_in`] that `function` may be called now.
     pub fn allowed(&mut self, function: &str, operation: Operation) -> Result<(), Fmi2Status> {
+        if let Some(interface) = operation.interface() {
+            if interface != self.interface && self.state != Fatal {
+                return Err(self.error(&format!(
+                    "{function}: belongs to {}, but this instance was instantiated for {}",
+                    interface.name(),
+                    self.interface.name()
+                )));
+            }
+        }
         if operation.allowed_in().contains(self.state) {
             Ok(())
         } else if self.state == Fatal {
@@ -293,9 +326,18 @@ impl<M: FmuModel> Instance<M> {
         if let Err(s) = self.ensure_initialized() {
             return s;
         }
-        self.state = StepComplete;
         self.time = self.experiment.start_time;
         self.last_successful_time = self.time;
+        self.state = match self.interface {
+            Interface::CoSimulation => StepComplete,
+            Interface::ModelExchange => {
+                if let Err(msg) = self.model.check_model_exchange() {
+                    return self.error(&format!("fmi2ExitInitializationMode: {msg}"));
+                }
+                // Event mode first: the importer may look at the point before integrating.
+                EventMode
+            }
+        };
         Fmi2Status::Ok
     }
 
@@ -319,6 +361,7 @@ impl<M: FmuModel> Instance<M> {
         self.time = 0.0;
         self.last_successful_time = 0.0;
         self.needs_initialize = true;
+        self.needs_evaluate = false;
         Fmi2Status::Ok
     }
 
@@ -363,10 +406,8 @@ impl<M: FmuModel> Instance<M> {
             Ok(i) => i,
             Err(s) => return s,
         };
-        if self.state == InitializationMode {
-            if let Err(s) = self.ensure_initialized() {
-                return s;
-            }
+        if let Err(s) = self.bring_up_to_date(function) {
+            return s;
         }
         for (slot, index) in out.iter_mut().zip(indices) {
             *slot = convert(self.values.get(index));
@@ -389,7 +430,7 @@ impl<M: FmuModel> Instance<M> {
             Ok(i) => i,
             Err(s) => return s,
         };
-        let running = self.state == StepComplete;
+        let running = matches!(self.state, StepComplete | EventMode | ContinuousTimeMode);
         for (&index, value) in indices.iter().zip(&new) {
             let var = &M::variables()[index];
             let allowed = if running {
@@ -418,6 +459,273 @@ impl<M: FmuModel> Instance<M> {
         }
         if !running {
             self.needs_initialize = true;
+        }
+        self.needs_evaluate = true;
+        Fmi2Status::Ok
+    }
+
+    /// Before values are read: builds the model in initialisation mode, and in Model Exchange
+    /// evaluates it at the current time, states and inputs if any changed.
+    fn bring_up_to_date(&mut self, function: &str) -> Result<(), Fmi2Status> {
+        if self.state == InitializationMode {
+            self.ensure_initialized()?;
+        }
+        let running = matches!(self.state, EventMode | ContinuousTimeMode);
+        if running && self.needs_evaluate {
+            if let Err(msg) = self.model.evaluate(&mut self.values, self.time) {
+                return Err(self.error(&format!("{function}: {msg}")));
+            }
+            self.needs_evaluate = false;
+        }
+        Ok(())
+    }
+
+    /// Checks that an array argument has as many elements as the model has continuous states.
+    fn check_state_count(
+        &mut self,
+        function: &str,
+        what: &str,
+        n: usize,
+    ) -> Result<(), Fmi2Status> {
+        let nx = M::continuous_states().len();
+        if n == nx {
+            Ok(())
+        } else {
+            Err(self.error(&format!(
+                "{function}: argument '{what}' has {n} elements, but the model has {nx} continuous states"
+            )))
+        }
+    }
+
+    /// `fmi2SetTime`.
+    pub fn set_time(&mut self, time: f64) -> Fmi2Status {
+        if let Err(s) = self.allowed("fmi2SetTime", Operation::SetTime) {
+            return s;
+        }
+        if !time.is_finite() {
+            return self.error(&format!("fmi2SetTime: time {} is not finite", Short(time)));
+        }
+        self.time = time;
+        self.last_successful_time = time;
+        self.needs_evaluate = true;
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2SetContinuousStates`: every state is set, or none.
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Fmi2Status {
+        const F: &str = "fmi2SetContinuousStates";
+        if let Err(s) = self.allowed(F, Operation::SetContinuousStates) {
+            return s;
+        }
+        if let Err(s) = self.check_state_count(F, "x", x.len()) {
+            return s;
+        }
+        let states = M::continuous_states();
+        if let Some((k, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            let name = M::variables()[states[k].0].name;
+            return self.error(&format!("{F}: x[{k}] ('{name}') = {v} is not finite"));
+        }
+        for (&(state, _), &v) in states.iter().zip(x) {
+            self.values.set_real(state, v);
+        }
+        self.needs_evaluate = true;
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2GetContinuousStates`.
+    pub fn continuous_states(&mut self, x: &mut [f64]) -> Fmi2Status {
+        const F: &str = "fmi2GetContinuousStates";
+        if let Err(s) = self.allowed(F, Operation::GetContinuousStates) {
+            return s;
+        }
+        if let Err(s) = self.check_state_count(F, "x", x.len()) {
+            return s;
+        }
+        if let Err(s) = self.bring_up_to_date(F) {
+            return s;
+        }
+        for (slot, &(state, _)) in x.iter_mut().zip(M::continuous_states()) {
+            *slot = self.values.real(state);
+        }
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2GetDerivatives`: `fmi2Discard` when a derivative is not finite (the importer's solver
+    /// should retry with a smaller step, FMI 2.0.4 section 2.1.3).
+    pub fn derivatives(&mut self, dx: &mut [f64]) -> Fmi2Status {
+        const F: &str = "fmi2GetDerivatives";
+        if let Err(s) = self.allowed(F, Operation::GetDerivatives) {
+            return s;
+        }
+        if let Err(s) = self.check_state_count(F, "derivatives", dx.len()) {
+            return s;
+        }
+        if let Err(s) = self.bring_up_to_date(F) {
+            return s;
+        }
+        for (slot, &(_, derivative)) in dx.iter_mut().zip(M::continuous_states()) {
+            *slot = self.values.real(derivative);
+        }
+        if let Some(k) = dx.iter().position(|d| !d.is_finite()) {
+            let name = M::variables()[M::continuous_states()[k].1].name;
+            self.logger.log(
+                Fmi2Status::Discard,
+                LogCategory::StatusDiscard,
+                &format!(
+                    "{F}: {name} = {} is not finite at t = {}; retry with a smaller step",
+                    dx[k],
+                    Short(self.time)
+                ),
+            );
+            return Fmi2Status::Discard;
+        }
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2GetNominalsOfContinuousStates`: 1 before the model is built (its nominals follow
+    /// from the parameters), the model's nominals after.
+    pub fn nominals_of_continuous_states(&mut self, out: &mut [f64]) -> Fmi2Status {
+        const F: &str = "fmi2GetNominalsOfContinuousStates";
+        if let Err(s) = self.allowed(F, Operation::GetNominals) {
+            return s;
+        }
+        if let Err(s) = self.check_state_count(F, "x_nominal", out.len()) {
+            return s;
+        }
+        if self.state == Instantiated {
+            out.fill(1.0);
+        } else {
+            self.model.nominals(out);
+        }
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2GetEventIndicators`: the model has none (its limits are smooth laws).
+    pub fn event_indicators(&mut self, n: usize) -> Fmi2Status {
+        const F: &str = "fmi2GetEventIndicators";
+        if let Err(s) = self.allowed(F, Operation::GetContinuousStates) {
+            return s;
+        }
+        if n != 0 {
+            return self.error(&format!(
+                "{F}: argument 'ni' is {n}, but the model has no event indicators (numberOfEventIndicators = 0)"
+            ));
+        }
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2EnterEventMode`.
+    pub fn enter_event_mode(&mut self) -> Fmi2Status {
+        if let Err(s) = self.allowed("fmi2EnterEventMode", Operation::EnterEventMode) {
+            return s;
+        }
+        self.state = EventMode;
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2NewDiscreteStates`: the model has no discrete states and no time events.
+    pub fn new_discrete_states(&mut self, info: &mut Fmi2EventInfo) -> Fmi2Status {
+        if let Err(s) = self.allowed("fmi2NewDiscreteStates", Operation::NewDiscreteStates) {
+            return s;
+        }
+        *info = Fmi2EventInfo {
+            new_discrete_states_needed: FMI2_FALSE,
+            terminate_simulation: FMI2_FALSE,
+            nominals_of_continuous_states_changed: FMI2_FALSE,
+            values_of_continuous_states_changed: FMI2_FALSE,
+            next_event_time_defined: FMI2_FALSE,
+            next_event_time: 0.0,
+        };
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2EnterContinuousTimeMode`.
+    pub fn enter_continuous_time_mode(&mut self) -> Fmi2Status {
+        if let Err(s) = self.allowed(
+            "fmi2EnterContinuousTimeMode",
+            Operation::EnterContinuousTimeMode,
+        ) {
+            return s;
+        }
+        self.state = ContinuousTimeMode;
+        Fmi2Status::Ok
+    }
+
+    /// `fmi2CompletedIntegratorStep`: `(enterEventMode, terminateSimulation)`, never either (no
+    /// step events, no end the model asks for).
+    pub fn completed_integrator_step(&mut self) -> Result<(bool, bool), Fmi2Status> {
+        self.allowed(
+            "fmi2CompletedIntegratorStep",
+            Operation::CompletedIntegratorStep,
+        )?;
+        Ok((false, false))
+    }
+
+    /// `fmi2GetDirectionalDerivative`: `dv_unknown = (d unknowns / d knowns) dv_known` from the
+    /// model's exact Jacobian, at the current point. Unknowns are outputs or state derivatives,
+    /// knowns inputs or continuous states (FMI 2.0.4, section 2.1.9), all Real.
+    pub fn directional_derivative(
+        &mut self,
+        unknown_vrs: &[u32],
+        known_vrs: &[u32],
+        dv_known: &[f64],
+        dv_unknown: &mut [f64],
+    ) -> Fmi2Status {
+        const F: &str = "fmi2GetDirectionalDerivative";
+        if let Err(s) = self.allowed(F, Operation::DirectionalDerivative) {
+            return s;
+        }
+        let unknowns = match self.resolve(F, unknown_vrs, "Real") {
+            Ok(i) => i,
+            Err(s) => return s,
+        };
+        let knowns = match self.resolve(F, known_vrs, "Real") {
+            Ok(i) => i,
+            Err(s) => return s,
+        };
+        let states = M::continuous_states();
+        for &u in &unknowns {
+            let var = &M::variables()[u];
+            let derivative = states.iter().any(|&(_, d)| d == u);
+            if !(var.causality == Causality::Output || derivative) {
+                return self.error(&format!(
+                    "{F}: unknown '{}' (value reference {}) is neither an output nor a state derivative",
+                    var.name, var.value_reference
+                ));
+            }
+        }
+        for &k in &knowns {
+            let var = &M::variables()[k];
+            let state = states.iter().any(|&(x, _)| x == k);
+            if !(var.causality == Causality::Input || state) {
+                return self.error(&format!(
+                    "{F}: known '{}' (value reference {}) is neither an input nor a continuous state",
+                    var.name, var.value_reference
+                ));
+            }
+        }
+        if let Some((k, v)) = dv_known.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return self.error(&format!("{F}: dvKnown[{k}] = {v} is not finite"));
+        }
+        if let Err(s) = self.bring_up_to_date(F) {
+            return s;
+        }
+        let result = self.model.directional_derivative(
+            &self.values,
+            &unknowns,
+            &knowns,
+            dv_known,
+            dv_unknown,
+        );
+        if let Err(msg) = result {
+            return self.error(&format!("{F}: {msg}"));
+        }
+        if let Some(k) = dv_unknown.iter().position(|d| !d.is_finite()) {
+            let name = M::variables()[unknowns[k]].name;
+            return self.error(&format!(
+                "{F}: the derivative of '{name}' is not finite at t = {}",
+                Short(self.time)
+            ));
         }
         Fmi2Status::Ok
     }
@@ -544,6 +852,12 @@ impl<M: FmuModel> Instance<M> {
     }
 
     pub fn check_fmu_state_call(&mut self, function: &str) -> Result<(), Fmi2Status> {
+        if self.interface == Interface::ModelExchange && self.state != Fatal {
+            // The importer's solver holds the continuous states: save them there.
+            return Err(self.error(&format!(
+                "{function}: not supported in Model Exchange (canGetAndSetFMUstate is false there)"
+            )));
+        }
         self.allowed(function, Operation::FmuState)
     }
 

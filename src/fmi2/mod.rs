@@ -1,7 +1,7 @@
-//! The FMI 2.0 co-simulation C ABI, generic over a model.
+//! The FMI 2.0 C ABI, Co-Simulation and Model Exchange, generic over a model.
 //!
-//! This layer knows FMI and nothing of physics: the state machine of the standard (section 4.2.4
-//! of FMI 2.0.4), argument checks, logging with categories, value-reference dispatch, FMU states
+//! This layer knows FMI and nothing of physics: the state machines of the standard (sections 3.2.3
+//! and 4.2.4 of FMI 2.0.4), argument checks, logging with categories, value-reference dispatch, FMU states
 //! and their serialisation, and `catch_unwind` around every entry point so that no panic crosses
 //! the C boundary. A model plugs in by implementing [`FmuModel`]; [`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation)
 //! then emits the `fmi2*` symbols for it. The same shape as the Modelica Reference FMUs: a generic
@@ -10,9 +10,11 @@
 //! - [`ffi`]: the C types, written by hand.
 //! - [`variables`]: variable metadata (generated from `modelDescription.xml` by `build.rs`) and the
 //!   value store.
-//! - [`calls`]: the one table of which call is allowed in which state (not FMI-2-specific).
+//! - [`calls`]: the one table of which call is allowed in which state (not FMI-2-specific), and
+//!   which interface each call belongs to.
 //! - [`logging`]: the logger with its categories, numbers printed short, the panic hook.
-//! - [`instance`]: one FMU instance: state machine, get/set, step, restoring FMU states.
+//! - [`instance`]: one FMU instance: state machine, get/set, step, Model Exchange's continuous
+//!   states and derivatives, directional derivatives, restoring FMU states.
 //! - [`fmu_state`]: what an FMU state holds and its serialised form.
 //! - [`exports`]: the `extern "C"` functions.
 
@@ -24,6 +26,7 @@ pub mod instance;
 pub mod logging;
 pub mod variables;
 
+pub use calls::Interface;
 use serde::{de::DeserializeOwned, Serialize};
 pub use variables::{Causality, Kind, Value, Values, Variability, Variable};
 
@@ -99,11 +102,16 @@ pub struct StepFailure {
     pub message: String,
 }
 
-/// What a model provides to be exported as an FMI 2.0 co-simulation FMU.
+/// What a model provides to be exported as an FMI 2.0 FMU.
 ///
 /// The generic layer owns the [`Values`] of all variables (checked against type, range and
 /// call-sequence rules before the model sees them); the model reads parameters and inputs from
 /// them and writes its outputs and calculated parameters into them.
+///
+/// For Model Exchange the continuous states are variables too (`<Derivatives>` of the XML names
+/// each state's derivative, [`FmuModel::continuous_states`]): the generic layer keeps the states
+/// the importer sets in [`Values`], and [`FmuModel::evaluate`] computes the derivatives and
+/// outputs from them. A model without continuous states offers co-simulation only.
 pub trait FmuModel: Sized + Send {
     /// The model's part of an FMU state: everything besides the variable values that the model
     /// needs to continue bit-identically (the integrator, say).
@@ -142,6 +150,46 @@ pub trait FmuModel: Sized + Send {
         t_end: f64,
         log: &mut StepLog,
     ) -> Result<(), StepFailure>;
+
+    /// The continuous states as `(state, derivative)` positions in [`FmuModel::variables`], in
+    /// the order of `<ModelStructure><Derivatives>` (the order of `fmi2GetContinuousStates`).
+    /// Empty: the model offers no Model Exchange.
+    fn continuous_states() -> &'static [(usize, usize)] {
+        &[]
+    }
+
+    /// Model Exchange: called once initialisation has built the model; fails with a message
+    /// naming the parameters when the built model does not fit the declared continuous states.
+    fn check_model_exchange(&self) -> Result<(), String> {
+        Err("this model offers co-simulation only".into())
+    }
+
+    /// Model Exchange: computes the derivatives, outputs and other continuous variables into
+    /// `values` from the continuous states and inputs in `values` at `time`. Called lazily, when
+    /// a value is read after the time, the states or an input changed.
+    fn evaluate(&mut self, _values: &mut Values, _time: f64) -> Result<(), String> {
+        Err("this model offers co-simulation only".into())
+    }
+
+    /// The nominal value of each continuous state (in [`FmuModel::continuous_states`] order) of
+    /// the built model.
+    fn nominals(&self, out: &mut [f64]) {
+        out.fill(1.0);
+    }
+
+    /// The directional derivative `dz = (d unknowns / d knowns) dv` at the point in `values`
+    /// (states and inputs), from the model's exact Jacobian. `unknowns` are positions of outputs
+    /// or state derivatives, `knowns` of inputs or continuous states (checked by the caller).
+    fn directional_derivative(
+        &mut self,
+        _values: &Values,
+        _unknowns: &[usize],
+        _knowns: &[usize],
+        _dv: &[f64],
+        _dz: &mut [f64],
+    ) -> Result<(), String> {
+        Err("the model provides no directional derivatives".into())
+    }
 
     /// The model's part of an FMU state.
     fn save_state(&self) -> Self::State;

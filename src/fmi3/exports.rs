@@ -9,6 +9,7 @@ use std::os::raw::c_char;
 
 use super::ffi::*;
 use super::variables::{fmi3_type_name, Fmi3Table, TIME_VALUE_REFERENCE};
+use crate::fmi2::calls::Interface;
 use crate::fmi2::exports::{self as fmi2, with_instance};
 use crate::fmi2::ffi::{Fmi2Component, Fmi2Status, FMI2_FALSE, FMI2_TRUE};
 use crate::fmi2::instance::{c_str, Instance};
@@ -138,7 +139,7 @@ pub unsafe fn instantiate_co_simulation<M: FmuModel>(
         if early_return_allowed || n_required_intermediate > 0 {
             // Allowed by the standard; the FMU simply never returns early nor calls back.
         }
-        match Instance::<M>::with_logger(name, token, resources, logger) {
+        match Instance::<M>::with_logger(name, token, resources, logger, Interface::CoSimulation) {
             Ok(inst) => {
                 inst.log_call(|| format!("fmi3InstantiateCoSimulation(instanceName=\"{name}\")"));
                 Box::into_raw(Box::new(inst)) as Fmi3Instance

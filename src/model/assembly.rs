@@ -12,7 +12,12 @@ use crate::fragments::{self, controller, hub, loes, servo_valve, torsion_bar};
 use crate::solver::OdeSystem;
 
 use super::parameters::{HydraulicsModel, Parameters};
-use super::variables::{idx, VARIABLES};
+use super::variables::{idx, CONTINUOUS_STATES, VARIABLES};
+
+/// The prefix of a continuous state's variable name before the compiled model's state name
+/// (`x.hub.theta`): the states form their own tree, apart from the parameters of the elements
+/// they belong to (`loes.C3` is a parameter, `x.loes.C3.q` the volume it stores).
+pub const STATE_PREFIX: &str = "x.";
 
 /// The bond graph of the whole model for a parameter set.
 ///
@@ -140,6 +145,10 @@ pub struct Assembled {
     input_index: Vec<usize>,
     /// For each compiled output, its position among the FMU's variables, if it is one.
     output_index: Vec<Option<usize>>,
+    /// For each compiled state, its place `k` among the continuous states the XML declares
+    /// ([`CONTINUOUS_STATES`]), if it has one (a plate with more modes than Model Exchange
+    /// declares has states without).
+    state_slot: Vec<Option<usize>>,
     /// A typical magnitude of each state, scaling the absolute tolerance.
     nominal: Vec<f64>,
     /// The state at rest (all zero for the LOES; null pressures for the full servo valve).
@@ -165,6 +174,16 @@ impl Assembled {
             .output_names()
             .iter()
             .map(|n| position(n))
+            .collect();
+        let state_slot = compiled
+            .state_names()
+            .iter()
+            .map(|n| {
+                let name = format!("{STATE_PREFIX}{n}");
+                CONTINUOUS_STATES
+                    .iter()
+                    .position(|&(x, _)| VARIABLES[x].name == name)
+            })
             .collect();
         let nominal = graph
             .state_nominals()
@@ -195,8 +214,44 @@ impl Assembled {
             compiled,
             input_index,
             output_index,
+            state_slot,
             nominal,
         })
+    }
+
+    /// For each compiled state, its place among the declared continuous states, if any.
+    pub fn state_slots(&self) -> &[Option<usize>] {
+        &self.state_slot
+    }
+
+    /// The first compiled state without a place among the declared continuous states.
+    pub fn state_without_slot(&self) -> Option<&str> {
+        let names = self.compiled.state_names();
+        (0..names.len())
+            .find(|&i| self.state_slot[i].is_none())
+            .map(|i| names[i].as_str())
+    }
+
+    /// The compiled state vector from the continuous states in the FMU's values (0 for a state
+    /// the XML does not declare).
+    pub fn state_from_values(&self, values: &Values, x: &mut Vec<f64>) {
+        x.clear();
+        x.resize(self.dim(), 0.0);
+        self.overlay_declared_states(values, x);
+    }
+
+    /// Overwrites the states of `x` that the XML declares with their values in `values`.
+    pub fn overlay_declared_states(&self, values: &Values, x: &mut [f64]) {
+        for (xi, slot) in x.iter_mut().zip(&self.state_slot) {
+            if let Some(k) = slot {
+                *xi = values.real(CONTINUOUS_STATES[*k].0);
+            }
+        }
+    }
+
+    /// The inputs in the FMU's values, in the compiled model's order (the held inputs unchanged).
+    pub fn inputs_from_values(&self, values: &Values) -> Vec<f64> {
+        self.input_index.iter().map(|&i| values.real(i)).collect()
     }
 
     pub fn compiled(&self) -> &CompiledModel {
@@ -239,14 +294,89 @@ impl Assembled {
         self.inputs.copy_from_slice(inputs);
     }
 
-    /// Writes the outputs (and the stored energy) for state `x` into the FMU's values.
+    /// Writes the outputs (and the stored energy), the continuous states and their derivatives
+    /// for state `x` into the FMU's values. A declared state the model does not have keeps its
+    /// value, with derivative 0.
     pub fn write_outputs(&self, x: &[f64], values: &mut Values) {
-        self.compiled.for_each_output(x, &self.inputs, |k, v| {
-            if let Some(i) = self.output_index[k] {
-                values.set_real(i, v);
+        let values = std::cell::RefCell::new(values);
+        self.compiled.for_each_output_and_derivative(
+            x,
+            &self.inputs,
+            |k, v| {
+                if let Some(i) = self.output_index[k] {
+                    values.borrow_mut().set_real(i, v);
+                }
+            },
+            |i, v| {
+                if let Some(k) = self.state_slot[i] {
+                    values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
+                }
+            },
+        );
+        let values = values.into_inner();
+        for (slot, &xi) in self.state_slot.iter().zip(x) {
+            if let Some(k) = slot {
+                values.set_real(CONTINUOUS_STATES[*k].0, xi);
             }
-        });
+        }
         values.set_real(idx::ENERGY, self.compiled.stored_energy(x));
+    }
+
+    /// Exact directional derivatives at state `x` and inputs `u`: `dz = (d unknowns / d
+    /// knowns) dv`, with `unknowns` positions of outputs or state derivatives among the FMU's
+    /// variables and `knowns` positions of inputs or continuous states (checked by the caller).
+    /// One forward pass of dual numbers through the plan.
+    pub fn directional_derivative(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        (unknowns, knowns): (&[usize], &[usize]),
+        dv: &[f64],
+        dz: &mut [f64],
+    ) -> Result<(), String> {
+        let c = &self.compiled;
+        let mut vx = vec![0.0; c.n_states()];
+        let mut vu = vec![0.0; c.n_inputs()];
+        for (&k, &v) in knowns.iter().zip(dv) {
+            if let Some(j) = self.input_index.iter().position(|&i| i == k) {
+                vu[j] += v;
+            } else if let Some(slot) = CONTINUOUS_STATES.iter().position(|&(s, _)| s == k) {
+                // A declared state the model does not have moves nothing.
+                if let Some(i) = self.state_slot.iter().position(|&s| s == Some(slot)) {
+                    vx[i] += v;
+                }
+            } else {
+                return Err(format!(
+                    "'{}' is neither an input nor a continuous state of the model",
+                    VARIABLES[k].name
+                ));
+            }
+        }
+        let mut ddx = vec![0.0; c.n_states()];
+        let mut dy = vec![0.0; c.n_outputs()];
+        c.directional(x, u, (&vx, &vu), &mut ddx, &mut dy);
+        for (&k, out) in unknowns.iter().zip(dz.iter_mut()) {
+            *out = if k == idx::ENERGY {
+                c.stored_energy_derivative(x, &vx)
+            } else if let Some(o) = self.output_index.iter().position(|&i| i == Some(k)) {
+                dy[o]
+            } else if let Some(slot) = CONTINUOUS_STATES.iter().position(|&(_, d)| d == k) {
+                match self.state_slot.iter().position(|&s| s == Some(slot)) {
+                    Some(i) => ddx[i],
+                    // The derivative of a declared state the model does not have is 0.
+                    None => 0.0,
+                }
+            } else if VARIABLES[k].causality == crate::fmi2::Causality::Output {
+                // An output of another configuration (the servo valve's with the LOES): 0.
+                0.0
+            } else {
+                return Err(format!(
+                    "'{}' is neither an output nor a state derivative of the model",
+                    VARIABLES[k].name
+                ));
+            };
+        }
+        Ok(())
     }
 }
 

@@ -38,6 +38,9 @@ pub struct HydraulicSlewingPlate {
     /// The state at the start of the current step, kept to go back to when the step ends on
     /// non-finite outputs (allocated once, reused every step).
     step_start: Vec<f64>,
+    /// Model Exchange: the compiled state vector gathered from the declared continuous states
+    /// (allocated once, reused every evaluation).
+    state: Vec<f64>,
 }
 
 /// The model's part of an FMU state.
@@ -221,6 +224,77 @@ impl FmuModel for HydraulicSlewingPlate {
             });
         }
         Ok(())
+    }
+
+    fn continuous_states() -> &'static [(usize, usize)] {
+        &variables::CONTINUOUS_STATES
+    }
+
+    fn check_model_exchange(&self) -> Result<(), String> {
+        let (Some(system), Some(p)) = (&self.system, &self.parameters) else {
+            return Err("the model was not built".into());
+        };
+        match system.state_without_slot() {
+            None => Ok(()),
+            Some(name) => {
+                let declared = variables::CONTINUOUS_STATES
+                    .iter()
+                    .filter(|&&(x, _)| variables::VARIABLES[x].name.starts_with("x.plate.I["))
+                    .count();
+                Err(format!(
+                    "the model's state '{name}' is not among the {} continuous states Model Exchange declares: with plate.N = {} and plate.M = {} the plate has {} modes, Model Exchange declares {declared}; use fewer plate modes, or Co-Simulation",
+                    variables::CONTINUOUS_STATES.len(),
+                    p.plate.n,
+                    p.plate.m,
+                    p.plate.n * p.plate.m
+                ))
+            }
+        }
+    }
+
+    fn evaluate(&mut self, values: &mut Values, _time: f64) -> Result<(), String> {
+        let Some(system) = &mut self.system else {
+            return Err("the model was not built".into());
+        };
+        system.set_inputs(values);
+        system.state_from_values(values, &mut self.state);
+        system.write_outputs(&self.state, values);
+        Ok(())
+    }
+
+    fn nominals(&self, out: &mut [f64]) {
+        out.fill(1.0);
+        if let Some(system) = &self.system {
+            for (slot, &n) in system.state_slots().iter().zip(system.nominal()) {
+                if let Some(k) = slot {
+                    out[*k] = n;
+                }
+            }
+        }
+    }
+
+    fn directional_derivative(
+        &mut self,
+        values: &Values,
+        unknowns: &[usize],
+        knowns: &[usize],
+        dv: &[f64],
+        dz: &mut [f64],
+    ) -> Result<(), String> {
+        let Some(system) = &self.system else {
+            return Err("the model was not built".into());
+        };
+        // The held inputs stay as they are: in co-simulation a changed input is a jump the next
+        // step must see.
+        let u = system.inputs_from_values(values);
+        // States the XML does not declare (co-simulation of a larger plate) from the integrator.
+        self.state.clear();
+        match &self.integrator {
+            Some(i) => self.state.extend_from_slice(i.x()),
+            None => self.state.extend(system.initial_state()),
+        }
+        system.overlay_declared_states(values, &mut self.state);
+        system.directional_derivative(&self.state, &u, (unknowns, knowns), dv, dz)
     }
 
     fn save_state(&self) -> ModelState {
