@@ -9,7 +9,8 @@ suite runs this, so the two files cannot drift).
 
 What changes from FMI 2.0 to 3.0:
 - Scalar families named `base[1]`, ..., `base[n]` with consecutive value references and the same
-  type, causality, variability and unit become one array variable `base` with `<Dimension
+  type, causality, variability and unit (continuous states and their derivatives excepted) become
+  one array variable `base` with `<Dimension
   start="n"/>` and the value reference of `base[1]` (the accelerometers `acc`, the plate
   frequencies `plate.f`). The FMI 3.0 layer (src/fmi3/variables.rs) groups the same way, and the
   test suite checks that it finds exactly these arrays.
@@ -71,18 +72,23 @@ class Var:
 
 def group(variables):
     """Scalar families base[1..n] with consecutive value references and one signature -> arrays.
-    Returns a list of (name, [Var...]) in table order; a scalar is a list of one."""
+    Continuous states and their derivatives stay scalars (an array state would need an array
+    derivative of the same shape, and `der(x[k])` is not a family). Returns a list of
+    (name, [Var...]) in table order; a scalar is a list of one."""
+    state_related = {v.index for v in variables if "derivative" in v.type_attrs}
+    state_related |= {int(v.type_attrs["derivative"]) for v in variables if "derivative" in v.type_attrs}
     out, i = [], 0
     while i < len(variables):
         v = variables[i]
         base, k = v.family()
         members = [v]
-        if base is not None and k == 1:
+        if base is not None and k == 1 and v.index not in state_related:
             j = i + 1
             while j < len(variables):
                 w = variables[j]
                 wb, wk = w.family()
-                if wb == base and wk == len(members) + 1 and w.vr == v.vr + len(members) and w.signature() == v.signature():
+                if (wb == base and wk == len(members) + 1 and w.vr == v.vr + len(members)
+                        and w.signature() == v.signature() and w.index not in state_related):
                     members.append(w)
                     j += 1
                 else:

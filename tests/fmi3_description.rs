@@ -8,7 +8,7 @@ use std::process::Command;
 
 use hydraulic_slewing_plate::fmi2::{Causality, Variability};
 use hydraulic_slewing_plate::fmi3::variables::{fmi3_type_name, Fmi3Table, TIME_VALUE_REFERENCE};
-use hydraulic_slewing_plate::model::variables::{GUID, VARIABLES};
+use hydraulic_slewing_plate::model::variables::{CONTINUOUS_STATES, GUID, VARIABLES};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -64,7 +64,7 @@ fn the_fmi3_description_declares_what_the_layer_serves() {
         .unwrap();
     let declared: Vec<_> = variables.children().filter(|n| n.is_element()).collect();
 
-    let table = Fmi3Table::new(&VARIABLES);
+    let table = Fmi3Table::new(&VARIABLES, &CONTINUOUS_STATES);
     // time first, then the table in order.
     assert_eq!(declared.len(), table.variables().len() + 1);
     let time = declared[0];

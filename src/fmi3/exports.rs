@@ -459,6 +459,238 @@ pub unsafe fn unsupported<M: FmuModel>(
     status(fmi2::unsupported::<M>(c, function, why))
 }
 
+/// # Safety
+/// As `fmi3InstantiateModelExchange`: strings NULL or NUL-terminated.
+pub unsafe fn instantiate_model_exchange<M: FmuModel>(
+    instance_name: Fmi3String,
+    token: Fmi3String,
+    resource_path: Fmi3String,
+    logging_on: bool,
+    environment: Fmi3InstanceEnvironment,
+    log_message: Fmi3LogMessageCallback,
+) -> Fmi3Instance {
+    let result = guarded(|| {
+        let name = c_str(instance_name).unwrap_or("");
+        let sink = Sink::Fmi3 {
+            environment,
+            log_message,
+        };
+        let logger = Logger::with_sink(name, sink, logging_on);
+        let token = c_str(token).unwrap_or("");
+        let resources = c_str(resource_path)
+            .filter(|p| !p.is_empty())
+            .map(std::path::PathBuf::from);
+        match Instance::<M>::with_logger(name, token, resources, logger, Interface::ModelExchange) {
+            Ok(inst) => {
+                inst.log_call(|| format!("fmi3InstantiateModelExchange(instanceName=\"{name}\")"));
+                Box::into_raw(Box::new(inst)) as Fmi3Instance
+            }
+            Err((logger, message)) => {
+                logger.log(
+                    Fmi2Status::Error,
+                    crate::fmi2::LogCategory::StatusError,
+                    &message,
+                );
+                std::ptr::null_mut()
+            }
+        }
+    });
+    result.unwrap_or(std::ptr::null_mut())
+}
+
+/// # Safety
+/// As `fmi3UpdateDiscreteStates`: the six out-arguments point to writable memory.
+pub unsafe fn update_discrete_states<M: FmuModel>(
+    c: Fmi3Instance,
+    discrete_states_need_update: *mut bool,
+    terminate_simulation: *mut bool,
+    nominals_changed: *mut bool,
+    values_changed: *mut bool,
+    next_event_time_defined: *mut bool,
+    next_event_time: *mut f64,
+) -> Fmi3Status {
+    const F: &str = "fmi3UpdateDiscreteStates";
+    status(with_instance::<M>(c, F, |inst| {
+        let outs = [
+            discrete_states_need_update,
+            terminate_simulation,
+            nominals_changed,
+            values_changed,
+            next_event_time_defined,
+        ];
+        if outs.iter().any(|p| p.is_null()) || next_event_time.is_null() {
+            return inst.error(&format!("{F}: an out-argument is NULL"));
+        }
+        inst.log_call(|| format!("{F}()"));
+        let mut info = crate::fmi2::ffi::Fmi2EventInfo {
+            new_discrete_states_needed: FMI2_FALSE,
+            terminate_simulation: FMI2_FALSE,
+            nominals_of_continuous_states_changed: FMI2_FALSE,
+            values_of_continuous_states_changed: FMI2_FALSE,
+            next_event_time_defined: FMI2_FALSE,
+            next_event_time: 0.0,
+        };
+        let s = inst.new_discrete_states(&mut info);
+        if s == Fmi2Status::Ok {
+            *discrete_states_need_update = info.new_discrete_states_needed != FMI2_FALSE;
+            *terminate_simulation = info.terminate_simulation != FMI2_FALSE;
+            *nominals_changed = info.nominals_of_continuous_states_changed != FMI2_FALSE;
+            *values_changed = info.values_of_continuous_states_changed != FMI2_FALSE;
+            *next_event_time_defined = info.next_event_time_defined != FMI2_FALSE;
+            *next_event_time = info.next_event_time;
+        }
+        s
+    }))
+}
+
+/// # Safety
+/// As `fmi3CompletedIntegratorStep`.
+pub unsafe fn completed_integrator_step<M: FmuModel>(
+    c: Fmi3Instance,
+    enter_event_mode: *mut bool,
+    terminate_simulation: *mut bool,
+) -> Fmi3Status {
+    const F: &str = "fmi3CompletedIntegratorStep";
+    status(with_instance::<M>(c, F, |inst| {
+        if enter_event_mode.is_null() || terminate_simulation.is_null() {
+            return inst.error(&format!(
+                "{F}: argument 'enterEventMode' or 'terminateSimulation' is NULL"
+            ));
+        }
+        match inst.completed_integrator_step() {
+            Ok((event, terminate)) => {
+                *enter_event_mode = event;
+                *terminate_simulation = terminate;
+                Fmi2Status::Ok
+            }
+            Err(s) => s,
+        }
+    }))
+}
+
+/// # Safety
+/// As `fmi3GetNumberOfContinuousStates` and `fmi3GetNumberOfEventIndicators`.
+pub unsafe fn get_number<M: FmuModel>(
+    c: Fmi3Instance,
+    function: &'static str,
+    n: *mut usize,
+    value: usize,
+) -> Fmi3Status {
+    status(with_instance::<M>(c, function, |inst| {
+        if n.is_null() {
+            return inst.error(&format!("{function}: the out-argument is NULL"));
+        }
+        if let Err(s) = inst.allowed(function, crate::fmi2::calls::Operation::GetNominals) {
+            return s;
+        }
+        *n = value;
+        Fmi2Status::Ok
+    }))
+}
+
+/// The FMI 2.0 value references of FMI 3.0 Float64 value references (arrays expanded), for the
+/// derivative functions; `time` is neither a known nor an unknown of a derivative.
+fn expand_reals<M: FmuModel>(
+    table: &Fmi3Table,
+    function: &str,
+    what: &str,
+    vrs: &[u32],
+    n_values: usize,
+) -> Result<Vec<u32>, String> {
+    let elements = expand::<M>(table, function, "Float64", vrs, n_values)
+        .map_err(|m| m.replace("nValues", what))?;
+    elements
+        .into_iter()
+        .map(|e| match e {
+            Element::Scalar(vr) => Ok(vr),
+            Element::Time => Err(format!(
+                "{function}: 'time' (value reference {TIME_VALUE_REFERENCE}) is neither a known nor an unknown of a partial derivative"
+            )),
+        })
+        .collect()
+}
+
+/// `fmi3GetDirectionalDerivative` (`adjoint` false): `sensitivity = J seed`, and
+/// `fmi3GetAdjointDerivative` (`adjoint` true): `sensitivity = J^T seed`, with `J` the exact
+/// Jacobian of the unknowns (outputs, state derivatives) with respect to the knowns (inputs,
+/// continuous states). The adjoint takes one directional derivative per known, a column of `J`
+/// each: the model's dual numbers carry one direction at a time.
+///
+/// # Safety
+/// As the FMI functions: each array holds the number of elements its count says.
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn partial_derivative<M: FmuModel>(
+    table: &Fmi3Table,
+    c: Fmi3Instance,
+    adjoint: bool,
+    unknowns: *const Fmi3ValueReference,
+    n_unknowns: usize,
+    knowns: *const Fmi3ValueReference,
+    n_knowns: usize,
+    seed: *const f64,
+    n_seed: usize,
+    sensitivity: *mut f64,
+    n_sensitivity: usize,
+) -> Fmi3Status {
+    let function = if adjoint {
+        "fmi3GetAdjointDerivative"
+    } else {
+        "fmi3GetDirectionalDerivative"
+    };
+    status(with_instance::<M>(c, function, |inst| {
+        let (Some(u), Some(k), Some(seed), Some(out)) = (
+            slice(unknowns, n_unknowns),
+            slice(knowns, n_knowns),
+            slice(seed, n_seed),
+            slice_mut(sensitivity, n_sensitivity),
+        ) else {
+            return inst.error(&format!(
+                "{function}: argument 'unknowns', 'knowns', 'seed' or 'sensitivity' is NULL"
+            ));
+        };
+        inst.log_call(|| format!("{function}(unknowns={u:?}, knowns={k:?}, seed={seed:?})"));
+        // The seed runs over the knowns (directional) or the unknowns (adjoint), the
+        // sensitivity over the other.
+        let (n_u, n_k) = if adjoint {
+            (n_seed, n_sensitivity)
+        } else {
+            (n_sensitivity, n_seed)
+        };
+        let (seed_name, sens_name) = ("nSeed", "nSensitivity");
+        let (u_count, k_count) = if adjoint {
+            (seed_name, sens_name)
+        } else {
+            (sens_name, seed_name)
+        };
+        let u2 = match expand_reals::<M>(table, function, u_count, u, n_u) {
+            Ok(v) => v,
+            Err(m) => return inst.error(&m),
+        };
+        let k2 = match expand_reals::<M>(table, function, k_count, k, n_k) {
+            Ok(v) => v,
+            Err(m) => return inst.error(&m),
+        };
+        if !adjoint {
+            return inst.directional_derivative(&u2, &k2, seed, out);
+        }
+        let mut direction = vec![0.0; k2.len()];
+        let mut column = vec![0.0; u2.len()];
+        for j in 0..k2.len() {
+            direction.fill(0.0);
+            direction[j] = 1.0;
+            let s = inst.directional_derivative(&u2, &k2, &direction, &mut column);
+            if s != Fmi2Status::Ok {
+                return s;
+            }
+            out[j] = column.iter().zip(seed).map(|(a, b)| a * b).sum();
+        }
+        if let Some(j) = out.iter().position(|v| !v.is_finite()) {
+            return inst.error(&format!("{function}: sensitivity[{j}] is not finite"));
+        }
+        Fmi2Status::Ok
+    }))
+}
+
 /// Logs why an instantiation is refused and returns NULL.
 ///
 /// # Safety
@@ -534,8 +766,8 @@ macro_rules! __fmi3_unsupported {
     };
 }
 
-/// Emits the FMI 3.0 C API (Co-Simulation; the Model Exchange and Scheduled Execution
-/// functions answer as their capability flags say) for a model type implementing
+/// Emits the FMI 3.0 C API (Co-Simulation and Model Exchange; the Scheduled Execution, clock and
+/// configuration functions answer fmi3Error, as the capability flags say) for a model type implementing
 /// [`FmuModel`](crate::fmi2::FmuModel). Call it once, in the crate that builds the cdylib, beside
 /// [`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation): the function names do not
 /// clash, so one binary serves both FMUs.
@@ -557,7 +789,10 @@ macro_rules! export_fmi3 {
             fn table() -> &'static Fmi3Table {
                 static TABLE: std::sync::OnceLock<Fmi3Table> = std::sync::OnceLock::new();
                 TABLE.get_or_init(|| {
-                    Fmi3Table::new(<M as $crate::fmi2::FmuModel>::variables())
+                    Fmi3Table::new(
+                        <M as $crate::fmi2::FmuModel>::variables(),
+                        <M as $crate::fmi2::FmuModel>::continuous_states(),
+                    )
                 })
             }
 
@@ -606,14 +841,14 @@ macro_rules! export_fmi3 {
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateModelExchange(
                 name: Fmi3String,
-                _token: Fmi3String,
-                _resources: Fmi3String,
+                token: Fmi3String,
+                resources: Fmi3String,
                 _visible: bool,
-                _logging_on: bool,
+                logging_on: bool,
                 env: Fmi3InstanceEnvironment,
                 log: Fmi3LogMessageCallback,
             ) -> Fmi3Instance {
-                x::refuse_instantiation(name, env, log, "fmi3InstantiateModelExchange: this FMU offers co-simulation only")
+                x::instantiate_model_exchange::<M>(name, token, resources, logging_on, env, log)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
@@ -667,7 +902,11 @@ macro_rules! export_fmi3 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterEventMode(c: Fmi3Instance) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3EnterEventMode", "the model has no events (hasEventMode = false)")
+                // Model Exchange has an event mode (after initialisation); co-simulation with
+                // eventModeUsed = false has none, and the shared core refuses it there.
+                x::status($crate::fmi2::exports::simple_call::<M>(c, "fmi3EnterEventMode", |i| {
+                    i.enter_event_mode()
+                }))
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterStepMode(c: Fmi3Instance) -> Fmi3Status {
@@ -882,30 +1121,30 @@ macro_rules! export_fmi3 {
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
                 c: Fmi3Instance,
-                _unknowns: *const Fmi3ValueReference,
-                _nu: usize,
-                _knowns: *const Fmi3ValueReference,
-                _nk: usize,
-                _seed: *const f64,
-                _ns: usize,
-                _sensitivity: *mut f64,
-                _nsens: usize,
+                unknowns: *const Fmi3ValueReference,
+                nu: usize,
+                knowns: *const Fmi3ValueReference,
+                nk: usize,
+                seed: *const f64,
+                ns: usize,
+                sensitivity: *mut f64,
+                nsens: usize,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3GetDirectionalDerivative", "providesDirectionalDerivatives is false")
+                x::partial_derivative::<M>(table(), c, false, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetAdjointDerivative(
                 c: Fmi3Instance,
-                _unknowns: *const Fmi3ValueReference,
-                _nu: usize,
-                _knowns: *const Fmi3ValueReference,
-                _nk: usize,
-                _seed: *const f64,
-                _ns: usize,
-                _sensitivity: *mut f64,
-                _nsens: usize,
+                unknowns: *const Fmi3ValueReference,
+                nu: usize,
+                knowns: *const Fmi3ValueReference,
+                nk: usize,
+                seed: *const f64,
+                ns: usize,
+                sensitivity: *mut f64,
+                nsens: usize,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3GetAdjointDerivative", "providesAdjointDerivatives is false")
+                x::partial_derivative::<M>(table(), c, true, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetOutputDerivatives(
@@ -955,26 +1194,65 @@ macro_rules! export_fmi3 {
             #[no_mangle]
             pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
                 c: Fmi3Instance,
-                _a: *mut bool,
-                _b: *mut bool,
-                _c: *mut bool,
-                _d: *mut bool,
-                _e: *mut bool,
-                _f: *mut f64,
+                need_update: *mut bool,
+                terminate: *mut bool,
+                nominals_changed: *mut bool,
+                values_changed: *mut bool,
+                next_defined: *mut bool,
+                next: *mut f64,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3UpdateDiscreteStates", "only in event mode, which this FMU does not have in co-simulation")
+                x::update_discrete_states::<M>(c, need_update, terminate, nominals_changed, values_changed, next_defined, next)
             }
-
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3EnterContinuousTimeMode,);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3CompletedIntegratorStep, bool, *mut bool, *mut bool);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3SetTime, f64);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3SetContinuousStates, *const f64, usize);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3GetContinuousStateDerivatives, *mut f64, usize);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3GetEventIndicators, *mut f64, usize);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3GetContinuousStates, *mut f64, usize);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3GetNominalsOfContinuousStates, *mut f64, usize);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3GetNumberOfEventIndicators, *mut usize);
-            $crate::__fmi3_unsupported!("model exchange is not offered by this FMU", fmi3GetNumberOfContinuousStates, *mut usize);
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: Fmi3Instance) -> Fmi3Status {
+                x::status($crate::fmi2::exports::simple_call::<M>(c, "fmi3EnterContinuousTimeMode", |i| {
+                    i.enter_continuous_time_mode()
+                }))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
+                c: Fmi3Instance,
+                _no_prior: bool,
+                enter_event_mode: *mut bool,
+                terminate: *mut bool,
+            ) -> Fmi3Status {
+                x::completed_integrator_step::<M>(c, enter_event_mode, terminate)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetTime(c: Fmi3Instance, time: f64) -> Fmi3Status {
+                x::status($crate::fmi2::exports::set_time::<M>(c, time))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetContinuousStates(c: Fmi3Instance, xs: *const f64, n: usize) -> Fmi3Status {
+                x::status($crate::fmi2::exports::set_continuous_states::<M>(c, xs, n))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(c: Fmi3Instance, dx: *mut f64, n: usize) -> Fmi3Status {
+                x::status($crate::fmi2::exports::get_state_array::<M>(c, "fmi3GetContinuousStateDerivatives", dx, n, |i, o| i.derivatives(o)))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetContinuousStates(c: Fmi3Instance, xs: *mut f64, n: usize) -> Fmi3Status {
+                x::status($crate::fmi2::exports::get_state_array::<M>(c, "fmi3GetContinuousStates", xs, n, |i, o| i.continuous_states(o)))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(c: Fmi3Instance, xs: *mut f64, n: usize) -> Fmi3Status {
+                x::status($crate::fmi2::exports::get_state_array::<M>(c, "fmi3GetNominalsOfContinuousStates", xs, n, |i, o| {
+                    i.nominals_of_continuous_states(o)
+                }))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetEventIndicators(c: Fmi3Instance, z: *mut f64, n: usize) -> Fmi3Status {
+                x::status($crate::fmi2::exports::get_event_indicators::<M>(c, z, n))
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(c: Fmi3Instance, n: *mut usize) -> Fmi3Status {
+                let count = <M as $crate::fmi2::FmuModel>::continuous_states().len();
+                x::get_number::<M>(c, "fmi3GetNumberOfContinuousStates", n, count)
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(c: Fmi3Instance, n: *mut usize) -> Fmi3Status {
+                x::get_number::<M>(c, "fmi3GetNumberOfEventIndicators", n, 0)
+            }
         }
     };
 }

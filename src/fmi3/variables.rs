@@ -1,7 +1,8 @@
 //! The FMI 3.0 view of a model's variable table: scalar families `base[1]`, ..., `base[n]` with
 //! consecutive value references and the same type, causality, variability, unit and range are one
 //! array variable `base` with the value reference of `base[1]`, and value reference 0 is the
-//! independent variable `time`.
+//! independent variable `time`. Continuous states and their derivatives stay scalars: an array
+//! state would need an array derivative of its shape, and `der(x[k])` is no family.
 //!
 //! `modelDescription/fmi3.py` writes the FMI 3.0 XML from the FMI 2.0 XML by the same rule, and
 //! `tests/fmi3_description.rs` checks that the XML declares exactly the arrays this table finds.
@@ -69,16 +70,19 @@ pub struct Fmi3Table {
 }
 
 impl Fmi3Table {
-    /// Groups the FMI 2.0 table into FMI 3.0 variables (without `time`).
-    pub fn new(table: &[Variable]) -> Self {
+    /// Groups the FMI 2.0 table into FMI 3.0 variables (without `time`); `states` are the
+    /// (state, derivative) positions of the Model Exchange states, which stay scalars.
+    pub fn new(table: &[Variable], states: &[(usize, usize)]) -> Self {
+        let state_related = |i: usize| states.iter().any(|&(x, d)| x == i || d == i);
         let mut variables = Vec::new();
         let mut i = 0;
         while i < table.len() {
             let first = &table[i];
             let mut len = 1;
-            if let Some((base, 1)) = family(first.name) {
+            if let (Some((base, 1)), false) = (family(first.name), state_related(i)) {
                 while let Some(next) = table.get(i + len) {
-                    let follows = family(next.name) == Some((base, len + 1))
+                    let follows = !state_related(i + len)
+                        && family(next.name) == Some((base, len + 1))
                         && next.value_reference == first.value_reference + len as u32
                         && same_signature(first, next);
                     if !follows {
@@ -160,7 +164,7 @@ mod tests {
             real("c[1]", 20),
             real("c[2]", 22),
         ];
-        let t = Fmi3Table::new(&table);
+        let t = Fmi3Table::new(&table, &[]);
         let summary: Vec<_> = t
             .variables()
             .iter()
@@ -179,6 +183,21 @@ mod tests {
         );
         assert!(t.get(6).is_none(), "a[2] has no FMI 3.0 value reference");
         assert_eq!(t.get(5).map(|v| v.len), Some(3));
+    }
+
+    #[test]
+    fn states_and_derivatives_stay_scalars() {
+        let table = [
+            real("q[1]", 1),
+            real("q[2]", 2),
+            real("der(q[1])", 3),
+            real("der(q[2])", 4),
+            real("a[1]", 5),
+            real("a[2]", 6),
+        ];
+        let t = Fmi3Table::new(&table, &[(0, 2), (1, 3)]);
+        let names: Vec<_> = t.variables().iter().map(|v| v.name.as_str()).collect();
+        assert_eq!(names, ["q[1]", "q[2]", "der(q[1])", "der(q[2])", "a"]);
     }
 
     #[test]
