@@ -623,6 +623,12 @@ co-simulation FMU, reproducing the model of {PAPER}</p>
 <table class="meta">
 <tr><td>FMU version</td><td>{fmu_version} (packaged {today})</td></tr>
 <tr><td>FMI version and interfaces</td><td>FMI {fmi_version}, {interfaces}</td></tr>
+<tr><td>FMI 2.0 and 3.0</td><td>The model is packaged twice from the same binaries, with this page in
+both: <code>HydraulicSlewingPlate.fmu</code> (FMI 2.0) and <code>fmi3/HydraulicSlewingPlate.fmu</code>
+(FMI 3.0). The variables below carry their FMI 2.0 names; in the FMI 3.0 FMU the accelerometers
+<code>acc[1]</code> to <code>acc[12]</code> are one array variable <code>acc</code> and the
+frequencies <code>plate.f[k]</code> the array <code>plate.f</code> (value reference of the first
+element), and <code>time</code> is value reference 0.</td></tr>
 <tr><td>Capabilities</td><td>{capabilities}</td></tr>
 <tr><td>Platforms (binaries in this FMU)</td><td>{platforms}</td></tr>
 <tr><td>Default experiment</td><td>{default_experiment}</td></tr>
