@@ -84,6 +84,7 @@ use serde::{Deserialize, Serialize};
 mod common;
 mod integrator;
 pub mod jacobian;
+pub mod linalg;
 pub mod radau5;
 pub mod rodas5p;
 pub mod testset;
