@@ -43,7 +43,7 @@ use std::sync::Arc;
 use nalgebra::{Complex, DMatrix};
 
 /// The scalars the iteration matrices have: f64 (Rodas5P, Radau5's real system) and
-/// Complex<f64> (Radau5's complex system).
+/// `Complex<f64>` (Radau5's complex system).
 pub trait Scalar:
     Copy
     + PartialEq
@@ -363,7 +363,7 @@ impl<T: Scalar> Factorisation<T> {
 
     /// Factorises the matrix with entries `entry(i, j)` for the partition `part` (reusing this
     /// factorisation's memory). False if a pivot is zero, or, for a structured partition, small
-    /// against its block (see [`PIVOT_FLOOR`]); the factors are then unusable.
+    /// against its block (below 1e-10 of its largest entry); the factors are then unusable.
     pub fn factor(&mut self, part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T) -> bool {
         if !Arc::ptr_eq(&self.part, part) {
             self.part = Arc::clone(part);
