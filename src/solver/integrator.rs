@@ -96,12 +96,13 @@ impl Counted {
 
 /// Moves the factorisation for step size `h` to the front of `kept`, making it with `make` if
 /// it is not there (rebuilt after a restore: the same bits); keeps at most
-/// [`KEPT_FACTORISATIONS`]. False if `make` fails (a singular matrix).
+/// [`KEPT_FACTORISATIONS`]. `make` is given the oldest one when that many are kept, to
+/// refactorise in its memory. False if `make` fails (a singular matrix).
 pub(crate) fn front_factorisation<F>(
     kept: &mut Vec<F>,
     h: f64,
     step_of: impl Fn(&F) -> f64,
-    make: impl FnOnce() -> Option<F>,
+    make: impl FnOnce(Option<F>) -> Option<F>,
 ) -> bool {
     match kept.iter().position(|f| step_of(f) == h) {
         Some(i) => {
@@ -109,7 +110,11 @@ pub(crate) fn front_factorisation<F>(
             kept.insert(0, f);
             true
         }
-        None => match make() {
+        None => match make(if kept.len() >= KEPT_FACTORISATIONS {
+            kept.pop()
+        } else {
+            None
+        }) {
             Some(f) => {
                 kept.insert(0, f);
                 kept.truncate(KEPT_FACTORISATIONS);
@@ -333,7 +338,14 @@ impl Integrator {
     /// start polynomial; Jacobian and LU are not kept between calls unless they are constant,
     /// see [`OdeSystem::constant_jacobian`]). Keeps h as a guess.
     pub fn notify_discontinuity(&mut self) {
-        self.hist = History::fresh();
+        // Keeps the buffer of the collocation polynomial (emptied, so unused): an input jump at
+        // every communication point must not cost an allocation.
+        let mut cont = std::mem::take(&mut self.hist.cont);
+        cont.clear();
+        self.hist = History {
+            cont,
+            ..History::fresh()
+        };
     }
 
     /// Replace the state (e.g. re-initialisation); resets history like notify_discontinuity.

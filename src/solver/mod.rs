@@ -29,6 +29,12 @@
 //!   a restored copy and the original. Serialise with
 //!   `serde_json` (the crate enables `float_roundtrip`, so every f64 round-trips exactly); no
 //!   non-finite f64 is ever stored.
+//! * **Linear algebra.** The iteration matrices are factorised by [`linalg`]: bordered
+//!   block-diagonal elimination with the blocks and the border found from J's nonzero pattern
+//!   (the dense LU when there is no such structure), so a model of loosely coupled parts costs
+//!   about linearly in its size. Once warm, a call to `advance_to` without output times
+//!   allocates nothing for an autonomous system with an analytic Jacobian (the FMU's case;
+//!   finite differences and the starting-step estimate use temporary vectors).
 //! * **Zero-order-hold input jumps.** Call [`Integrator::notify_discontinuity`] after the
 //!   inputs jump: step-size history and Newton start values that assume smoothness are dropped.
 //! * **Error control.** Mixed: component i is scaled by `atol_i + rtol * |x_i|`, RMS norm.
@@ -84,6 +90,7 @@ use serde::{Deserialize, Serialize};
 mod common;
 mod integrator;
 pub mod jacobian;
+pub mod linalg;
 pub mod radau5;
 pub mod rodas5p;
 pub mod testset;

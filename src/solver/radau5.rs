@@ -36,6 +36,8 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+use std::sync::Arc;
+
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::common::{
@@ -45,6 +47,7 @@ use super::common::{
 use super::integrator::Integrator;
 use super::integrator::{front_factorisation, SAME_STEP};
 use super::jacobian;
+use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache};
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
 
 /// √6.
@@ -137,25 +140,42 @@ enum Why {
 
 /// The real LU of (γ/h) I - J and the complex LU of ((α + iβ)/h) I - J for the step size `h`.
 pub(crate) struct Lu {
-    real: nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
-    complex: nalgebra::linalg::LU<Complex<f64>, nalgebra::Dyn, nalgebra::Dyn>,
+    real: Factorisation<f64>,
+    complex: Factorisation<Complex<f64>>,
     h: f64,
 }
 
-/// Factorises both iteration matrices for step size `h`; None if either is singular.
-fn factor(jac: &DMatrix<f64>, h: f64) -> Option<Lu> {
-    let n = jac.nrows();
+/// Factorises both iteration matrices for step size `h` into `lu` (reusing its memory) with the
+/// partition `part` of J; false if either is singular.
+fn factor_into(lu: &mut Lu, part: &Arc<Partition>, jac: &DMatrix<f64>, h: f64) -> bool {
     let (u1, alph, beta) = inverse_eigenvalues();
     let fac1 = u1 / h;
     let (alphn, betan) = (alph / h, beta / h);
-    let mut e1 = -jac.clone();
-    let mut e2 = jac.map(|v| Complex::new(-v, 0.0));
-    for i in 0..n {
-        e1[(i, i)] += fac1;
-        e2[(i, i)] += Complex::new(alphn, betan);
-    }
-    let (real, complex) = (e1.lu(), e2.lu());
-    (real.is_invertible() && complex.is_invertible()).then_some(Lu { real, complex, h })
+    lu.h = h;
+    factor_with_fallback(&mut lu.real, part, |i, j| {
+        if i == j {
+            fac1 - jac[(i, j)]
+        } else {
+            -jac[(i, j)]
+        }
+    }) && factor_with_fallback(&mut lu.complex, part, |i, j| {
+        if i == j {
+            Complex::new(alphn - jac[(i, j)], betan)
+        } else {
+            Complex::new(-jac[(i, j)], 0.0)
+        }
+    })
+}
+
+/// Factorisations of both iteration matrices for step size `h` (in the memory of `old` if
+/// given); None if either is singular.
+fn factor(jac: &DMatrix<f64>, part: &Arc<Partition>, h: f64, old: Option<Lu>) -> Option<Lu> {
+    let mut lu = old.unwrap_or_else(|| Lu {
+        real: Factorisation::new(Arc::clone(part)),
+        complex: Factorisation::new(Arc::clone(part)),
+        h,
+    });
+    factor_into(&mut lu, part, jac, h).then_some(lu)
 }
 
 /// Buffers of `advance`, kept between calls in the integrator's cache (no allocation per call);
@@ -171,8 +191,18 @@ pub(crate) struct Work {
     f2: Vec<f64>,
     x1: Vec<f64>,
     atol: Vec<f64>,
+    /// `atol` again, in the form the finite-difference Jacobian takes.
+    atol_for_fd: Atol,
     rr: DVector<f64>,
     rc: DVector<Complex<f64>>,
+    /// Scratch of the structured solves.
+    scratch_r: Vec<f64>,
+    scratch_c: Vec<Complex<f64>>,
+    /// Partition of J into blocks and border (see [`super::linalg`]).
+    pattern: PatternCache,
+    /// The memory of the last factorisations of a Jacobian that changes from step to step
+    /// (their contents are stale): refactorised into, so a step allocates nothing.
+    spare: Option<Lu>,
 }
 
 impl Work {
@@ -189,8 +219,13 @@ impl Work {
             f2: v(),
             x1: v(),
             atol: v(),
+            atol_for_fd: Atol::Vector(v()),
             rr: DVector::zeros(n),
             rc: DVector::zeros(n),
+            scratch_r: v(),
+            scratch_c: vec![Complex::new(0.0, 0.0); n],
+            pattern: PatternCache::default(),
+            spare: None,
         }
     }
 }
@@ -211,6 +246,9 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     let stamp = sys.constant_jacobian();
     let mut lus = take_factorisations(&mut integ.cache.radau_lu, integ.cache.stamp, stamp);
     let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
+    if stamp.is_none() {
+        w.spare = lus.pop().or(w.spare.take());
+    }
     integ.cache.radau = Some(w);
     keep_factorisations(&mut integ.cache.radau_lu, lus, stamp);
     result
@@ -239,8 +277,13 @@ fn advance_with<S: OdeSystem + ?Sized>(
         f2,
         x1,
         atol,
+        atol_for_fd,
         rr,
         rc,
+        scratch_r,
+        scratch_c,
+        pattern,
+        spare,
     } = work;
     let (c1, c2) = nodes();
     let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
@@ -255,7 +298,9 @@ fn advance_with<S: OdeSystem + ?Sized>(
     for (i, a) in atol.iter_mut().enumerate() {
         *a = atol_factor * integ.options.atol.get(i);
     }
-    let atol_for_fd = Atol::Vector(atol.clone());
+    if let Atol::Vector(v) = atol_for_fd {
+        v.copy_from_slice(atol);
+    }
     // Newton stopping criterion (RADAU5 FNEWT default).
     let fnewt = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
     // CFAC: numerator of the Newton-count-dependent safety factor.
@@ -327,6 +372,9 @@ fn advance_with<S: OdeSystem + ?Sized>(
                     &mut integ.counted,
                 ),
                 None => {
+                    if let Some(lu) = lus.pop() {
+                        *spare = Some(lu);
+                    }
                     lus.clear();
                     jacobian::evaluate(
                         sys,
@@ -334,7 +382,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
                         t,
                         &integ.x,
                         f0,
-                        &atol_for_fd,
+                        atol_for_fd,
                         rtol,
                         jac,
                     )
@@ -361,13 +409,30 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 Some(_) => {
                     let lu_h = integ.counted.factorisation_step(h, &mut integ.stats, 2);
                     let jac = &integ.cache.jac;
-                    front_factorisation(lus, lu_h, |l| l.h, || factor(jac, lu_h))
+                    front_factorisation(
+                        lus,
+                        lu_h,
+                        |l| l.h,
+                        |old| factor(jac, pattern.partition(jac, stamp), lu_h, old),
+                    )
                 }
                 None => {
                     if lus.first().is_none_or(|l| (l.h - h).abs() > SAME_STEP * h) {
+                        // Refactorised in the memory of the last factorisation.
                         integ.stats.lu_decompositions += 2;
-                        lus.clear();
-                        lus.extend(factor(jac, h));
+                        if lus.is_empty() {
+                            lus.extend(spare.take());
+                        }
+                        lus.truncate(1);
+                        let part = pattern.partition(jac, None);
+                        match lus.first_mut() {
+                            Some(lu) => {
+                                if !factor_into(lu, part, jac, h) {
+                                    *spare = lus.pop();
+                                }
+                            }
+                            None => lus.extend(factor(jac, part, h, None)),
+                        }
                     }
                     !lus.is_empty()
                 }
@@ -438,9 +503,8 @@ fn advance_with<S: OdeSystem + ?Sized>(
                         r3 - betan * w2[i] - alphn * w3[i],
                     );
                 }
-                if !lu.real.solve_mut(rr) || !lu.complex.solve_mut(rc) {
-                    break 'attempt Err((Why::Singular, 0.5));
-                }
+                lu.real.solve(rr.as_mut_slice(), scratch_r);
+                lu.complex.solve(rc.as_mut_slice(), scratch_c);
                 newt += 1;
                 let mut dyno = 0.0;
                 for i in 0..n {
@@ -494,9 +558,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 f2[i] = hee1 * z1[i] + hee2 * z2[i] + hee3 * z3[i];
                 rr[i] = f2[i] + f0[i];
             }
-            if !lu.real.solve_mut(rr) {
-                break 'attempt Err((Why::Singular, 0.5));
-            }
+            lu.real.solve(rr.as_mut_slice(), scratch_r);
             let norm = |v: &DVector<f64>| {
                 let s: f64 = (0..n).map(|i| (v[i] / scal[i]).powi(2)).sum();
                 (s / n as f64).sqrt().max(1e-10)
@@ -514,9 +576,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 for i in 0..n {
                     rr[i] = a1[i] + f2[i];
                 }
-                if !lu.real.solve_mut(rr) {
-                    break 'attempt Err((Why::Singular, 0.5));
-                }
+                lu.real.solve(rr.as_mut_slice(), scratch_r);
                 err = norm(rr);
             }
             if err.is_finite() {

@@ -28,8 +28,9 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::linalg::LU;
-use nalgebra::{DMatrix, DVector, Dyn};
+use std::sync::Arc;
+
+use nalgebra::{DMatrix, DVector};
 
 use super::common::{
     all_finite, eval, initial_step, keep_factorisations, plan_step, rms, scale_into,
@@ -37,6 +38,7 @@ use super::common::{
 };
 use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
+use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache};
 use super::{OdeSystem, SolverError, SolverErrorKind};
 
 /// Number of stages.
@@ -266,6 +268,13 @@ pub(crate) struct Work {
     x1: Vec<f64>,
     sc: Vec<f64>,
     rhs: DVector<f64>,
+    /// Scratch of the structured solve.
+    scratch: Vec<f64>,
+    /// Partition of J into blocks and border (see [`super::linalg`]).
+    pattern: PatternCache,
+    /// The memory of the last factorisation of a Jacobian that changes from step to step
+    /// (its contents are stale): refactorised into, so a step allocates nothing.
+    spare: Option<Factor>,
 }
 
 impl Work {
@@ -280,6 +289,9 @@ impl Work {
             x1: vec![0.0; n],
             sc: vec![0.0; n],
             rhs: DVector::zeros(n),
+            scratch: vec![0.0; n],
+            pattern: PatternCache::default(),
+            spare: None,
         }
     }
 }
@@ -287,19 +299,37 @@ impl Work {
 /// The LU of W = I/(h γ) - J for the step size `h`.
 pub(crate) struct Factor {
     h: f64,
-    lu: LU<f64, Dyn, Dyn>,
+    lu: Factorisation<f64>,
 }
 
-/// Factorises W = I/(h γ) - J; None if W is singular.
-fn factor(jac: &DMatrix<f64>, h: f64) -> Option<Factor> {
-    let n = jac.nrows();
+/// Factorises W = I/(h γ) - J into `lu` (reusing its memory) with the partition `part` of J;
+/// false if W is singular.
+fn factor_into(
+    lu: &mut Factorisation<f64>,
+    part: &Arc<Partition>,
+    jac: &DMatrix<f64>,
+    h: f64,
+) -> bool {
     let fac = 1.0 / (h * GAMMA);
-    let mut wm = -jac.clone();
-    for i in 0..n {
-        wm[(i, i)] += fac;
-    }
-    let lu = wm.lu();
-    lu.is_invertible().then_some(Factor { h, lu })
+    factor_with_fallback(lu, part, |i, j| {
+        if i == j {
+            fac - jac[(i, j)]
+        } else {
+            -jac[(i, j)]
+        }
+    })
+}
+
+/// A factorisation of W for step size `h` (in the memory of `old` if given); None if W is
+/// singular.
+fn factor(
+    jac: &DMatrix<f64>,
+    part: &Arc<Partition>,
+    h: f64,
+    old: Option<Factor>,
+) -> Option<Factor> {
+    let mut lu = old.map_or_else(|| Factorisation::new(Arc::clone(part)), |f| f.lu);
+    factor_into(&mut lu, part, jac, h).then_some(Factor { h, lu })
 }
 
 /// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
@@ -308,7 +338,7 @@ fn step<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     w: &mut Work,
-    lu: &LU<f64, Dyn, Dyn>,
+    lu: &Factorisation<f64>,
     h: f64,
     autonomous: bool,
 ) -> Result<f64, Reject> {
@@ -338,9 +368,7 @@ fn step<S: OdeSystem + ?Sized>(
             }
             w.rhs[i] = acc;
         }
-        if !lu.solve_mut(&mut w.rhs) {
-            return Err(Reject::Singular);
-        }
+        lu.solve(w.rhs.as_mut_slice(), &mut w.scratch);
         if !all_finite(w.rhs.as_slice()) {
             return Err(Reject::NonFinite);
         }
@@ -419,6 +447,9 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     let stamp = sys.constant_jacobian();
     let mut lus = take_factorisations(&mut integ.cache.rodas_lu, integ.cache.stamp, stamp);
     let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
+    if stamp.is_none() {
+        w.spare = lus.pop().or(w.spare.take());
+    }
     integ.cache.rodas = Some(w);
     keep_factorisations(&mut integ.cache.rodas_lu, lus, stamp);
     result
@@ -516,14 +547,34 @@ fn advance_with<S: OdeSystem + ?Sized>(
             Some(_) => {
                 let h_lu = integ.counted.factorisation_step(h, &mut integ.stats, 1);
                 let jac = &integ.cache.jac;
-                let ok = front_factorisation(lus, h_lu, |f| f.h, || factor(jac, h_lu));
+                let pattern = &mut w.pattern;
+                let ok = front_factorisation(
+                    lus,
+                    h_lu,
+                    |f| f.h,
+                    |old| factor(jac, pattern.partition(jac, stamp), h_lu, old),
+                );
                 (h_lu, ok)
             }
             None => {
+                // J changes from step to step: refactorise in the memory of the last one.
                 integ.stats.lu_decompositions += 1;
-                lus.clear();
-                lus.extend(factor(&w.jac, h));
-                (h, !lus.is_empty())
+                if lus.is_empty() {
+                    lus.extend(w.spare.take());
+                }
+                lus.truncate(1);
+                let part = w.pattern.partition(&w.jac, None);
+                let ok = match lus.first_mut() {
+                    Some(f) => {
+                        f.h = h;
+                        factor_into(&mut f.lu, part, &w.jac, h)
+                    }
+                    None => {
+                        lus.extend(factor(&w.jac, part, h, None));
+                        !lus.is_empty()
+                    }
+                };
+                (h, ok)
             }
         };
         let result = match lus.first() {

@@ -1,0 +1,850 @@
+//! LU factorisation of the iteration matrices that uses their sparsity: bordered
+//! block-diagonal (Schur complement) elimination, with the dense LU as its special case.
+//!
+//! Both methods solve with a matrix `M = c I - J` (Rodas5P: real c = 1/(h γ); Radau5: a real
+//! and a complex one). In a model whose parts meet only at a few states (the plate's modes
+//! meet only at the hub and the torsion bar), most states form small groups that are coupled
+//! with each other only through a few *border* states. Ordered group after group with the border
+//! last, M is bordered block-diagonal ("arrowhead"):
+//!
+//! ```text
+//!     [ A_1           B_1 ]
+//!     [      ...      ... ]      A_b: small square blocks (a group's states)
+//! M = [           A_k B_k ]      D:   the border (m × m)
+//!     [ C_1  ...  C_k  D  ]
+//! ```
+//!
+//! and it is factorised block by block: an LU with partial pivoting of every A_b,
+//! X_b = A_b⁻¹ B_b, and a dense LU of the Schur complement S = D - Σ C_b X_b. A solve is then
+//! a forward pass over the blocks, a solve with S for the border, and a back substitution
+//! x_b = y_b - X_b x_border. Work and memory grow with Σ k_b³ + m³ (factorisation) and
+//! Σ k_b² + m² (solve) plus the couplings, instead of n³ and n².
+//!
+//! [`Partition::detect`] finds the groups and the border from the nonzero pattern of J alone
+//! (nothing about the model): it moves the state with the most neighbours into the border until
+//! the estimated work stops falling, and keeps the best split it saw; if that split does not
+//! save at least half of the dense work it returns the dense partition (one block holding every
+//! state, no border), which is an ordinary LU with partial pivoting. The elimination does not
+//! pivot across blocks, so a block whose pivots are small against its own entries (or an exactly
+//! singular one) makes [`Factorisation::factor`] report failure; the caller then factorises
+//! with the dense partition, which fails only if M is singular.
+//!
+//! Everything is deterministic (the same J gives the same partition and the same bits), which
+//! keeps a restored integrator, which refactorises, bit-identical to the original.
+//! [`Factorisation::factor`] reuses the memory of the previous factorisation, and
+//! [`Factorisation::solve`] takes the caller's scratch vector, so neither allocates once warm.
+
+// Index loops mirror the elimination formulas.
+#![allow(clippy::needless_range_loop)]
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+use std::sync::Arc;
+
+use nalgebra::{Complex, DMatrix};
+
+/// The scalars the iteration matrices have: f64 (Rodas5P, Radau5's real system) and
+/// `Complex<f64>` (Radau5's complex system).
+pub trait Scalar:
+    Copy
+    + PartialEq
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + std::fmt::Debug
+{
+    const ZERO: Self;
+    /// |re| + |im|, the pivot size LAPACK's `izamax` uses.
+    fn norm1(self) -> f64;
+}
+
+impl Scalar for f64 {
+    const ZERO: f64 = 0.0;
+    #[inline]
+    fn norm1(self) -> f64 {
+        self.abs()
+    }
+}
+
+impl Scalar for Complex<f64> {
+    const ZERO: Complex<f64> = Complex { re: 0.0, im: 0.0 };
+    #[inline]
+    fn norm1(self) -> f64 {
+        self.re.abs() + self.im.abs()
+    }
+}
+
+/// Solves per factorisation assumed by the work estimate (Rodas5P makes 8 per step, Radau5 about
+/// 3 per Newton iteration, and a constant Jacobian's factorisation serves many steps).
+const SOLVES_PER_FACTORISATION: f64 = 10.0;
+
+/// The structured split is used only if it needs at most this share of the dense work.
+const STRUCTURED_SHARE: f64 = 0.5;
+
+/// A block whose smallest pivot is below this share of its largest entry is left to the dense
+/// LU: elimination inside blocks does not pivot across them.
+const PIVOT_FLOOR: f64 = 1e-10;
+
+/// Groups and border of the states (see the module documentation).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Partition {
+    n: usize,
+    /// The states in elimination order: block after block, then the border.
+    perm: Vec<usize>,
+    /// Block b holds positions `starts[b]..starts[b + 1]` of `perm`; the border is
+    /// `perm[nb..]` with `nb = starts[k]`.
+    starts: Vec<usize>,
+    /// Border positions (0-based within the border) coupled to block b, ascending:
+    /// `links[link_starts[b]..link_starts[b + 1]]`.
+    links: Vec<usize>,
+    link_starts: Vec<usize>,
+}
+
+impl Partition {
+    /// One block holding every state in natural order, no border: a dense LU.
+    pub fn dense(n: usize) -> Partition {
+        Partition {
+            n,
+            perm: (0..n).collect(),
+            starts: vec![0, n],
+            links: Vec::new(),
+            link_starts: vec![0, 0],
+        }
+    }
+
+    /// The split of the states of an n × n matrix whose off-diagonal nonzeros are
+    /// `(i, j)` for `nonzero(i, j)` (the diagonal is taken as nonzero).
+    pub fn detect(n: usize, nonzero: impl Fn(usize, usize) -> bool) -> Partition {
+        // Symmetrised adjacency without the diagonal.
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for j in 0..n {
+            for i in 0..n {
+                if i != j && nonzero(i, j) {
+                    adj[i].push(j);
+                    adj[j].push(i);
+                }
+            }
+        }
+        for a in &mut adj {
+            a.sort_unstable();
+            a.dedup();
+        }
+        let dense_cost = work(&[n], &[0], 0);
+        let mut in_border = vec![false; n];
+        let mut degree: Vec<usize> = adj.iter().map(Vec::len).collect();
+        let mut border: Vec<usize> = Vec::new();
+        let mut best = (f64::INFINITY, 0usize);
+        let mut comp = Components::default();
+        loop {
+            comp.find(&adj, &in_border);
+            let cost = work(&comp.sizes, &comp.link_counts, border.len());
+            if cost < best.0 {
+                best = (cost, border.len());
+            }
+            if cost > 2.0 * best.0 || 2 * border.len() >= n {
+                break;
+            }
+            // The state with the most neighbours outside the border (the first of equals).
+            let Some(v) = (0..n)
+                .filter(|&v| !in_border[v] && degree[v] > 0)
+                .max_by(|&a, &b| degree[a].cmp(&degree[b]).then(b.cmp(&a)))
+            else {
+                break;
+            };
+            in_border[v] = true;
+            border.push(v);
+            for &u in &adj[v] {
+                degree[u] -= 1;
+            }
+        }
+        if best.0 > STRUCTURED_SHARE * dense_cost || best.1 == 0 {
+            return Partition::dense(n);
+        }
+        border.truncate(best.1);
+        border.sort_unstable();
+        in_border.fill(false);
+        for &v in &border {
+            in_border[v] = true;
+        }
+        comp.find(&adj, &in_border);
+        let mut border_pos = vec![usize::MAX; n];
+        for (p, &v) in border.iter().enumerate() {
+            border_pos[v] = p;
+        }
+        // Blocks in the order of their first state; states ascending inside a block.
+        let mut perm = Vec::with_capacity(n);
+        let mut starts = vec![0];
+        let mut links = Vec::new();
+        let mut link_starts = vec![0];
+        for members in comp.members() {
+            perm.extend_from_slice(&members);
+            starts.push(perm.len());
+            let first = links.len();
+            for &v in &members {
+                links.extend(
+                    adj[v]
+                        .iter()
+                        .filter(|&&u| in_border[u])
+                        .map(|&u| border_pos[u]),
+                );
+            }
+            links[first..].sort_unstable();
+            let mut unique = first;
+            for r in first..links.len() {
+                if r == first || links[r] != links[unique - 1] {
+                    links[unique] = links[r];
+                    unique += 1;
+                }
+            }
+            links.truncate(unique);
+            link_starts.push(links.len());
+        }
+        perm.extend_from_slice(&border);
+        Partition {
+            n,
+            perm,
+            starts,
+            links,
+            link_starts,
+        }
+    }
+
+    /// The split for the nonzero pattern of a dense matrix.
+    pub fn of_matrix(m: &DMatrix<f64>) -> Partition {
+        Partition::detect(m.nrows(), |i, j| m[(i, j)] != 0.0)
+    }
+
+    /// Number of states.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+    /// Number of independent blocks.
+    pub fn blocks(&self) -> usize {
+        self.starts.len() - 1
+    }
+    /// Number of border states.
+    pub fn border(&self) -> usize {
+        self.n - self.starts[self.blocks()]
+    }
+    /// Size of the largest block.
+    pub fn largest_block(&self) -> usize {
+        self.starts
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .max()
+            .unwrap_or(0)
+    }
+    /// Whether this is the dense partition (one block, no border).
+    pub fn is_dense(&self) -> bool {
+        self.blocks() == 1 && self.border() == 0
+    }
+
+    #[inline]
+    fn block(&self, b: usize) -> (usize, usize, &[usize]) {
+        let (s, e) = (self.starts[b], self.starts[b + 1]);
+        (
+            s,
+            e - s,
+            &self.links[self.link_starts[b]..self.link_starts[b + 1]],
+        )
+    }
+}
+
+/// Estimated flops of a factorisation plus [`SOLVES_PER_FACTORISATION`] solves for blocks of
+/// `sizes` with `links` border couplings each and a border of `m` states.
+fn work(sizes: &[usize], links: &[usize], m: usize) -> f64 {
+    let mut f = (m as f64).powi(3) / 3.0;
+    let mut s = (m * m) as f64;
+    for (&k, &l) in sizes.iter().zip(links) {
+        let (k, l) = (k as f64, l as f64);
+        f += k * k * k / 3.0 + k * k * l + k * l * l;
+        s += k * k + 2.0 * k * l;
+    }
+    f + SOLVES_PER_FACTORISATION * s
+}
+
+/// Connected components of the states outside the border, with their border links.
+#[derive(Default)]
+struct Components {
+    /// Component of each state (usize::MAX in the border).
+    of: Vec<usize>,
+    sizes: Vec<usize>,
+    link_counts: Vec<usize>,
+    stack: Vec<usize>,
+    /// Last component that counted a border state as its link.
+    seen_by: Vec<usize>,
+}
+
+impl Components {
+    fn find(&mut self, adj: &[Vec<usize>], in_border: &[bool]) {
+        let n = adj.len();
+        self.of.clear();
+        self.of.resize(n, usize::MAX);
+        self.seen_by.clear();
+        self.seen_by.resize(n, usize::MAX);
+        self.sizes.clear();
+        self.link_counts.clear();
+        for root in 0..n {
+            if in_border[root] || self.of[root] != usize::MAX {
+                continue;
+            }
+            let c = self.sizes.len();
+            let (mut size, mut nlinks) = (0, 0);
+            self.of[root] = c;
+            self.stack.push(root);
+            while let Some(v) = self.stack.pop() {
+                size += 1;
+                for &u in &adj[v] {
+                    if in_border[u] {
+                        if self.seen_by[u] != c {
+                            self.seen_by[u] = c;
+                            nlinks += 1;
+                        }
+                    } else if self.of[u] == usize::MAX {
+                        self.of[u] = c;
+                        self.stack.push(u);
+                    }
+                }
+            }
+            self.sizes.push(size);
+            self.link_counts.push(nlinks);
+        }
+    }
+
+    /// The members of every component, ascending, components in the order of their first state.
+    fn members(&self) -> Vec<Vec<usize>> {
+        let mut out = vec![Vec::new(); self.sizes.len()];
+        for (v, &c) in self.of.iter().enumerate() {
+            if c != usize::MAX {
+                out[c].push(v);
+            }
+        }
+        out
+    }
+}
+
+/// LU factors of M for a [`Partition`] (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Factorisation<T: Scalar> {
+    part: Arc<Partition>,
+    /// LU of each block, column-major k × k, one after the other.
+    lu: Vec<T>,
+    /// Row interchanges of each block (LAPACK style, local to the block), at the block's
+    /// positions.
+    piv: Vec<usize>,
+    /// X_b = A_b⁻¹ B_b, column-major k × (links of b), one block after the other.
+    x: Vec<T>,
+    /// C_b, row-major (links of b) × k, at the same offsets as `x`.
+    c: Vec<T>,
+    /// LU of the Schur complement (m × m, column-major) and its interchanges.
+    schur: Vec<T>,
+    schur_piv: Vec<usize>,
+}
+
+impl<T: Scalar> Factorisation<T> {
+    /// An empty factorisation (to be filled by [`Factorisation::factor`]).
+    pub fn new(part: Arc<Partition>) -> Self {
+        Factorisation {
+            part,
+            lu: Vec::new(),
+            piv: Vec::new(),
+            x: Vec::new(),
+            c: Vec::new(),
+            schur: Vec::new(),
+            schur_piv: Vec::new(),
+        }
+    }
+
+    /// The partition in use.
+    pub fn partition(&self) -> &Arc<Partition> {
+        &self.part
+    }
+
+    /// Factorises the matrix with entries `entry(i, j)` for the partition `part` (reusing this
+    /// factorisation's memory). False if a pivot is zero, or, for a structured partition, small
+    /// against its block (below 1e-10 of its largest entry); the factors are then unusable.
+    pub fn factor(&mut self, part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T) -> bool {
+        if !Arc::ptr_eq(&self.part, part) {
+            self.part = Arc::clone(part);
+        }
+        let p = &*self.part;
+        let n = p.n;
+        let nb = p.starts[p.blocks()];
+        let m = n - nb;
+        let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
+        let (mut lu_len, mut x_len) = (0, 0);
+        for b in 0..p.blocks() {
+            let (_, k, links) = p.block(b);
+            lu_len += k * k;
+            x_len += k * links.len();
+        }
+        resize(&mut self.lu, lu_len);
+        resize(&mut self.x, x_len);
+        resize(&mut self.c, x_len);
+        self.piv.resize(n, 0);
+        resize(&mut self.schur, m * m);
+        self.schur_piv.resize(m, 0);
+        let border = &p.perm[nb..];
+        for q in 0..m {
+            for r in 0..m {
+                self.schur[r + q * m] = entry(border[r], border[q]);
+            }
+        }
+        let (mut lo, mut xo) = (0, 0);
+        for b in 0..p.blocks() {
+            let (s, k, links) = p.block(b);
+            let idx = &p.perm[s..s + k];
+            let a = &mut self.lu[lo..lo + k * k];
+            for cj in 0..k {
+                for r in 0..k {
+                    a[r + cj * k] = entry(idx[r], idx[cj]);
+                }
+            }
+            if !lu_in_place(a, k, &mut self.piv[s..s + k], floor) {
+                return false;
+            }
+            let l = links.len();
+            let x = &mut self.x[xo..xo + k * l];
+            let c = &mut self.c[xo..xo + k * l];
+            for (li, &q) in links.iter().enumerate() {
+                let col = &mut x[li * k..(li + 1) * k];
+                for r in 0..k {
+                    col[r] = entry(idx[r], border[q]);
+                    c[li * k + r] = entry(border[q], idx[r]);
+                }
+                lu_solve(a, k, &self.piv[s..s + k], col);
+            }
+            // S -= C_b X_b, only where block b touches the border.
+            for (l2, &q) in links.iter().enumerate() {
+                let xc = &x[l2 * k..(l2 + 1) * k];
+                for (l1, &r) in links.iter().enumerate() {
+                    let cr = &c[l1 * k..(l1 + 1) * k];
+                    let mut acc = T::ZERO;
+                    for i in 0..k {
+                        acc = acc + cr[i] * xc[i];
+                    }
+                    self.schur[r + q * m] = self.schur[r + q * m] - acc;
+                }
+            }
+            lo += k * k;
+            xo += k * l;
+        }
+        lu_in_place(&mut self.schur, m, &mut self.schur_piv, floor)
+    }
+
+    /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
+    /// overwritten).
+    pub fn solve(&self, rhs: &mut [T], scratch: &mut [T]) {
+        let p = &*self.part;
+        let n = p.n;
+        let nb = p.starts[p.blocks()];
+        let m = n - nb;
+        let s = &mut scratch[..n];
+        for (dst, &i) in s.iter_mut().zip(&p.perm) {
+            *dst = rhs[i];
+        }
+        let (blocks, border) = s.split_at_mut(nb);
+        // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
+        let (mut lo, mut xo) = (0, 0);
+        for b in 0..p.blocks() {
+            let (st, k, links) = p.block(b);
+            let y = &mut blocks[st..st + k];
+            lu_solve(&self.lu[lo..lo + k * k], k, &self.piv[st..st + k], y);
+            for (li, &q) in links.iter().enumerate() {
+                let cr = &self.c[xo + li * k..xo + (li + 1) * k];
+                let mut acc = T::ZERO;
+                for i in 0..k {
+                    acc = acc + cr[i] * y[i];
+                }
+                border[q] = border[q] - acc;
+            }
+            lo += k * k;
+            xo += k * links.len();
+        }
+        lu_solve(&self.schur, m, &self.schur_piv, border);
+        // x_b = y_b - X_b x_B.
+        let mut xo = 0;
+        for b in 0..p.blocks() {
+            let (st, k, links) = p.block(b);
+            let y = &mut blocks[st..st + k];
+            for (li, &q) in links.iter().enumerate() {
+                let v = border[q];
+                let xc = &self.x[xo + li * k..xo + (li + 1) * k];
+                for i in 0..k {
+                    y[i] = y[i] - xc[i] * v;
+                }
+            }
+            xo += k * links.len();
+        }
+        for (src, &i) in s.iter().zip(&p.perm) {
+            rhs[i] = *src;
+        }
+    }
+}
+
+fn resize<T: Scalar>(v: &mut Vec<T>, len: usize) {
+    v.resize(len, T::ZERO);
+}
+
+/// LU with partial pivoting of the column-major k × k matrix `a` in place (unit lower L below
+/// the diagonal, U on and above), interchanges in `piv` (row j was swapped with row piv[j]).
+/// False if a pivot is zero or below `floor` times the largest entry of `a`.
+fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
+    let tiny = floor * amax;
+    for j in 0..k {
+        let mut p = j;
+        let mut pmax = a[j + j * k].norm1();
+        for r in j + 1..k {
+            let v = a[r + j * k].norm1();
+            if v > pmax {
+                p = r;
+                pmax = v;
+            }
+        }
+        piv[j] = p;
+        if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+            return false;
+        }
+        if p != j {
+            for c in 0..k {
+                a.swap(j + c * k, p + c * k);
+            }
+        }
+        let d = a[j + j * k];
+        for r in j + 1..k {
+            a[r + j * k] = a[r + j * k] / d;
+        }
+        for c in j + 1..k {
+            let f = a[j + c * k];
+            if f != T::ZERO {
+                let (left, right) = a.split_at_mut(c * k);
+                let lcol = &left[j * k..j * k + k];
+                let col = &mut right[..k];
+                for r in j + 1..k {
+                    col[r] = col[r] - lcol[r] * f;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves with the factors of [`lu_in_place`] in place.
+fn lu_solve<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
+    for j in 0..k {
+        if piv[j] != j {
+            x.swap(j, piv[j]);
+        }
+    }
+    for j in 0..k {
+        let v = x[j];
+        if v != T::ZERO {
+            let col = &a[j * k..j * k + k];
+            for r in j + 1..k {
+                x[r] = x[r] - col[r] * v;
+            }
+        }
+    }
+    for j in (0..k).rev() {
+        let col = &a[j * k..j * k + k];
+        let v = x[j] / col[j];
+        x[j] = v;
+        if v != T::ZERO {
+            for r in 0..j {
+                x[r] = x[r] - col[r] * v;
+            }
+        }
+    }
+}
+
+/// The partition of the last Jacobian and its nonzero pattern: re-detected only when the
+/// pattern changes, so a Jacobian evaluated at every step costs one scan of J, no allocation.
+#[derive(Clone, Debug)]
+pub(crate) struct PatternCache {
+    /// (column, row) of every nonzero off-diagonal entry, column-major order.
+    nonzeros: Vec<(u32, u32)>,
+    part: Arc<Partition>,
+    /// Stamp of the constant Jacobian the partition was made for (no scan needed for it).
+    stamp: Option<u64>,
+}
+
+impl Default for PatternCache {
+    fn default() -> Self {
+        PatternCache {
+            nonzeros: Vec::new(),
+            part: Arc::new(Partition::dense(0)),
+            stamp: None,
+        }
+    }
+}
+
+impl PatternCache {
+    /// The partition for J; `stamp` is that of a constant Jacobian (see
+    /// [`OdeSystem::constant_jacobian`](super::OdeSystem::constant_jacobian)), for which the
+    /// partition is found once.
+    pub fn partition(&mut self, jac: &DMatrix<f64>, stamp: Option<u64>) -> &Arc<Partition> {
+        let n = jac.nrows();
+        if stamp.is_some() && stamp == self.stamp && self.part.dim() == n {
+            return &self.part;
+        }
+        self.stamp = stamp;
+        let mut same = self.part.dim() == n;
+        let mut count = 0usize;
+        if same {
+            'scan: for j in 0..n {
+                for (i, v) in jac.column(j).iter().enumerate() {
+                    if i != j && *v != 0.0 {
+                        if self.nonzeros.get(count) != Some(&(j as u32, i as u32)) {
+                            same = false;
+                            break 'scan;
+                        }
+                        count += 1;
+                    }
+                }
+            }
+        }
+        if !(same && count == self.nonzeros.len()) {
+            self.nonzeros.clear();
+            for j in 0..n {
+                for (i, v) in jac.column(j).iter().enumerate() {
+                    if i != j && *v != 0.0 {
+                        self.nonzeros.push((j as u32, i as u32));
+                    }
+                }
+            }
+            self.part = Arc::new(Partition::of_matrix(jac));
+        }
+        &self.part
+    }
+}
+
+/// Factorises `entry` with `part`, or with the dense partition if the structured elimination
+/// fails (a small pivot inside a block); reuses `f`'s memory. False if M is singular.
+pub(crate) fn factor_with_fallback<T: Scalar>(
+    f: &mut Factorisation<T>,
+    part: &Arc<Partition>,
+    entry: impl Fn(usize, usize) -> T,
+) -> bool {
+    if f.factor(part, &entry) {
+        return true;
+    }
+    if part.is_dense() {
+        return false;
+    }
+    let dense = Arc::new(Partition::dense(part.dim()));
+    f.factor(&dense, &entry)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// xorshift64*: deterministic test matrices without a dependency.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            let v = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+            (v >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// A random arrowhead matrix: `blocks` groups of `k` states, each group dense inside and
+    /// coupled to a random subset of a `m`-state dense border; states shuffled.
+    fn arrowhead(rng: &mut Rng, blocks: usize, k: usize, m: usize) -> DMatrix<f64> {
+        let n = blocks * k + m;
+        let mut a = DMatrix::zeros(n, n);
+        for b in 0..blocks {
+            for i in 0..k {
+                for j in 0..k {
+                    a[(b * k + i, b * k + j)] = rng.next();
+                }
+                for q in 0..m {
+                    if rng.next() > 0.3 {
+                        a[(b * k + i, blocks * k + q)] = rng.next();
+                        a[(blocks * k + q, b * k + i)] = rng.next();
+                    }
+                }
+            }
+        }
+        for i in 0..m {
+            for j in 0..m {
+                a[(blocks * k + i, blocks * k + j)] = rng.next();
+            }
+        }
+        // A random symmetric permutation hides the order.
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let j = ((rng.next() + 1.0) / 2.0 * (i + 1) as f64) as usize % (i + 1);
+            perm.swap(i, j);
+        }
+        DMatrix::from_fn(n, n, |i, j| a[(perm[i], perm[j])])
+    }
+
+    fn residual<T: Scalar>(n: usize, entry: impl Fn(usize, usize) -> T, x: &[T], b: &[T]) -> f64 {
+        (0..n)
+            .map(|i| {
+                let mut acc = T::ZERO;
+                for j in 0..n {
+                    acc = acc + entry(i, j) * x[j];
+                }
+                (acc - b[i]).norm1()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn arrowhead_is_detected_and_solved_like_the_dense_lu() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        for &(blocks, k, m) in &[(30, 2, 4), (60, 1, 3), (12, 3, 5), (100, 2, 8)] {
+            let j = arrowhead(&mut rng, blocks, k, m);
+            let n = j.nrows();
+            let part = Arc::new(Partition::of_matrix(&j));
+            assert!(!part.is_dense(), "{blocks}x{k}+{m}: not detected");
+            // The greedy split may move a few block states into the border when the work
+            // estimate says so, but it must find the blocks.
+            assert!(
+                part.border() <= 2 * m,
+                "{blocks}x{k}+{m}: border {}",
+                part.border()
+            );
+            assert!(part.largest_block() <= k);
+            let c = 3.0; // M = c I - J
+            let entry = |i: usize, jj: usize| if i == jj { c } else { 0.0 } - j[(i, jj)];
+            let mut f = Factorisation::new(Arc::clone(&part));
+            assert!(f.factor(&part, entry));
+            let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+            let mut x = b.clone();
+            let mut scratch = vec![0.0; n];
+            f.solve(&mut x, &mut scratch);
+            let m_dense = DMatrix::from_fn(n, n, entry);
+            let m_max = m_dense.amax();
+            let reference = m_dense
+                .lu()
+                .solve(&nalgebra::DVector::from(b.clone()))
+                .unwrap();
+            let scale = reference.amax();
+            let diff = x
+                .iter()
+                .zip(reference.iter())
+                .map(|(a, r)| (a - r).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                diff <= 1e-11 * scale,
+                "{blocks}x{k}+{m}: {diff:e} vs {scale:e}"
+            );
+            assert!(residual(n, entry, &x, &b) <= 1e-12 * scale * m_max * n as f64);
+        }
+    }
+
+    #[test]
+    fn complex_arrowhead_matches_the_dense_lu() {
+        let mut rng = Rng(7);
+        let j = arrowhead(&mut rng, 40, 2, 6);
+        let n = j.nrows();
+        let part = Arc::new(Partition::of_matrix(&j));
+        assert!(!part.is_dense());
+        let shift = Complex::new(2.5, 1.7);
+        let entry = |i: usize, jj: usize| {
+            let d = if i == jj { shift } else { Complex::ZERO };
+            d - Complex::new(j[(i, jj)], 0.0)
+        };
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(f.factor(&part, entry));
+        let b: Vec<Complex<f64>> = (0..n)
+            .map(|_| Complex::new(rng.next(), rng.next()))
+            .collect();
+        let mut x = b.clone();
+        let mut scratch = vec![Complex::ZERO; n];
+        f.solve(&mut x, &mut scratch);
+        let m_dense = DMatrix::from_fn(n, n, entry);
+        let reference = m_dense.lu().solve(&nalgebra::DVector::from(b)).unwrap();
+        let diff = x
+            .iter()
+            .zip(reference.iter())
+            .map(|(a, r)| (a - r).norm())
+            .fold(0.0, f64::max);
+        let scale = reference.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        assert!(diff <= 1e-11 * scale, "{diff:e} vs {scale:e}");
+    }
+
+    #[test]
+    fn a_dense_matrix_gets_the_dense_partition_and_solves() {
+        let mut rng = Rng(3);
+        let n = 20;
+        let j = DMatrix::from_fn(n, n, |_, _| rng.next());
+        let part = Arc::new(Partition::of_matrix(&j));
+        assert!(part.is_dense());
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(f.factor(&part, |i, k| j[(i, k)]));
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let mut x = b.clone();
+        f.solve(&mut x, &mut vec![0.0; n]);
+        assert!(residual(n, |i, k| j[(i, k)], &x, &b) < 1e-12 * n as f64);
+    }
+
+    #[test]
+    fn singular_matrices_are_reported_and_bad_blocks_fall_back_to_dense() {
+        // Exactly singular: two equal rows.
+        let mut m = DMatrix::from_fn(4, 4, |i, j| (i * 4 + j) as f64 + 1.0);
+        m.set_row(3, &m.row(0).clone_owned());
+        let part = Arc::new(Partition::dense(4));
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(!factor_with_fallback(&mut f, &part, |i, j| m[(i, j)]));
+        // A block that is singular on its own inside a regular matrix: the border rescues it
+        // only with pivoting across blocks, which the dense fallback does.
+        let mut rng = Rng(11);
+        let mut j = arrowhead(&mut rng, 30, 2, 3);
+        let part = Arc::new(Partition::of_matrix(&j));
+        assert!(!part.is_dense());
+        let (s, _, _) = part.block(0);
+        let v = part.perm[s];
+        for c in 0..j.ncols() {
+            if part.perm[..part.starts[part.blocks()]].contains(&c) {
+                j[(v, c)] = 0.0; // row v vanishes inside its block...
+            }
+        }
+        let (_, _, links) = part.block(0);
+        let nb = part.starts[part.blocks()];
+        let q = part.perm[nb + links.first().copied().unwrap_or(0)];
+        j[(v, q)] = 1.0; // ...but not towards the border
+        let n = j.nrows();
+        let entry = |i: usize, k: usize| j[(i, k)];
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(!f.factor(&part, entry));
+        let dense_ok = DMatrix::from_fn(n, n, entry).lu().is_invertible();
+        assert_eq!(factor_with_fallback(&mut f, &part, entry), dense_ok);
+        if dense_ok {
+            assert!(f.partition().is_dense());
+            let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+            let mut x = b.clone();
+            f.solve(&mut x, &mut vec![0.0; n]);
+            assert!(residual(n, entry, &x, &b) < 1e-9);
+        }
+    }
+
+    #[test]
+    fn the_pattern_cache_redetects_only_on_a_new_pattern() {
+        let mut rng = Rng(5);
+        let j = arrowhead(&mut rng, 20, 2, 3);
+        let mut cache = PatternCache::default();
+        let p1 = Arc::clone(cache.partition(&j, None));
+        let p2 = Arc::clone(cache.partition(&(&j * 2.0), None));
+        assert!(Arc::ptr_eq(&p1, &p2));
+        let mut j2 = j.clone();
+        j2[(0, j.ncols() - 1)] = 1.0 + j2[(0, j.ncols() - 1)].abs();
+        j2[(1, j.ncols() - 2)] = 1.0 + j2[(1, j.ncols() - 2)].abs();
+        let p3 = Arc::clone(cache.partition(&j2, None));
+        assert!(!Arc::ptr_eq(&p1, &p3));
+        assert_eq!(*p3, Partition::of_matrix(&j2));
+        // Under one constant-Jacobian stamp the partition is not looked for again.
+        let p4 = Arc::clone(cache.partition(&j, Some(1)));
+        assert_eq!(*p4, *p1);
+        let p5 = Arc::clone(cache.partition(&j2, Some(1)));
+        assert!(Arc::ptr_eq(&p4, &p5));
+    }
+}
