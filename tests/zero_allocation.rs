@@ -8,11 +8,15 @@
 //! of the benchmark's kinds is checked with both methods: a constant Jacobian (the LOES, whose J
 //! and factorisations are kept) and one evaluated and factorised at every step (the servo valve).
 //!
+//! The FMI 3.0 entry point `fmi3DoStep`, a thin layer over the same core, is held to the same rule.
+//!
 //! The count is per thread (the test harness runs other tests on other threads), and only
 //! allocations are counted: a reallocation that grows a buffer counts too.
 
 #[path = "common/fmu.rs"]
 mod fmu;
+#[path = "common/fmu3.rs"]
+mod fmu3;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -150,4 +154,24 @@ fn the_counter_sees_allocations() {
     let v = std::hint::black_box(vec![1u8; 100]);
     assert!(allocations() > before);
     drop(v);
+}
+
+#[test]
+fn fmi3_do_step_does_not_allocate_either() {
+    use hydraulic_slewing_plate::fmi3::ffi::Fmi3Status;
+    let fmu = fmu3::Fmu3::new();
+    assert_eq!(fmu.set_integer("hydraulics.model", 2), Fmi3Status::Ok);
+    assert_eq!(fmu.init(0.0), Fmi3Status::Ok);
+    let mut counted = 0;
+    for k in 0..WARM_UP + MEASURED {
+        let t = k as f64 * STEP;
+        assert_eq!(fmu.set_real("r", 1.0 + 0.1 * (t * 7.0).sin()), Fmi3Status::Ok);
+        let before = allocations();
+        let step = fmu.step(t, STEP);
+        if k >= WARM_UP {
+            counted += allocations() - before;
+        }
+        assert_eq!(step, Fmi3Status::Ok, "step {k}");
+    }
+    assert_eq!(counted, 0, "{counted} allocations in {MEASURED} fmi3DoStep calls");
 }
