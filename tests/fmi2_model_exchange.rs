@@ -638,3 +638,29 @@ fn energy_derivative_is_its_gradient() {
         get_reals(&f, &energy)
     });
 }
+
+/// The derivatives read after fmi2Terminate are those of the last states set, as before it.
+#[test]
+fn derivatives_after_terminate_follow_the_last_states() {
+    let moved = |f: &Fmu| {
+        running(f);
+        let mut x = states(f).1;
+        let hub = CONTINUOUS_STATES
+            .iter()
+            .position(|&(x, _)| VARIABLES[x].name == "x.hub.I.p")
+            .unwrap();
+        x[hub] = 1e-3;
+        assert_eq!(set_states(f, &x), Fmi2Status::Ok);
+    };
+    let (a, b) = (Fmu::model_exchange(), Fmu::model_exchange());
+    moved(&a);
+    moved(&b);
+    let before = derivatives(&a).1;
+    assert_eq!(unsafe { fmi2Terminate(b.c) }, Fmi2Status::Ok);
+    let (s, after) = derivatives(&b);
+    assert_eq!(s, Fmi2Status::Ok);
+    assert_eq!(after, before);
+    let rest = Fmu::model_exchange();
+    running(&rest);
+    assert_ne!(after, derivatives(&rest).1);
+}
