@@ -282,9 +282,11 @@ fn generate(text: &str) -> Result<String, String> {
         )
         .unwrap();
         let id = ident(name);
+        // Brackets in a description (plate.I[1]) would be read as intra-doc links.
+        let doc_text = description.replace('[', "\\[").replace(']', "\\]");
         writeln!(
             idx_consts,
-            "    /// `{name}`: {description}\n    pub const {id}: usize = {i};"
+            "    /// `{name}`: {doc_text}\n    pub const {id}: usize = {i};"
         )
         .unwrap();
         writeln!(

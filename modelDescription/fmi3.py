@@ -121,15 +121,19 @@ def generate(text):
     out.append("")
 
     me, cs = root.find("ModelExchange"), root.find("CoSimulation")
-    dd = "true" if any(x is not None and x.get("providesDirectionalDerivative") == "true" for x in (me, cs)) else "false"
-    common = [
-        ("canGetAndSetFMUState", "true"),
-        ("canSerializeFMUState", "true"),
-        ("providesDirectionalDerivatives", dd),
-        ("providesAdjointDerivatives", dd),
-    ]
+    def common(element):
+        # The FMU-state capabilities as the FMI 2.0 element declares them; the adjoint comes from
+        # the same exact Jacobian as the directional derivative.
+        dd = element.get("providesDirectionalDerivative", "false")
+        return [
+            ("canGetAndSetFMUState", element.get("canGetAndSetFMUstate", "false")),
+            ("canSerializeFMUState", element.get("canSerializeFMUstate", "false")),
+            ("providesDirectionalDerivatives", dd),
+            ("providesAdjointDerivatives", dd),
+        ]
+
     if me is not None:
-        out.append("  <ModelExchange" + attrs([("modelIdentifier", me.get("modelIdentifier")), ("needsCompletedIntegratorStep", "false")] + common) + "/>")
+        out.append("  <ModelExchange" + attrs([("modelIdentifier", me.get("modelIdentifier")), ("needsCompletedIntegratorStep", "false")] + common(me)) + "/>")
         out.append("")
     if cs is not None:
         out.append(
@@ -140,7 +144,7 @@ def generate(text):
                     ("canHandleVariableCommunicationStepSize", cs.get("canHandleVariableCommunicationStepSize")),
                     ("canBeInstantiatedOnlyOncePerProcess", "false"),
                 ]
-                + common
+                + common(cs)
                 + [("hasEventMode", "false"), ("providesIntermediateUpdate", "false"), ("canReturnEarlyAfterIntermediateUpdate", "false")]
             )
             + "/>"

@@ -37,8 +37,11 @@ STATE_VR, DERIVATIVE_VR = 10000, 20000
 def state_description(name, plate_modes):
     element, _, variable = name.rpartition(".")
     kinds = {"p": "momentum p", "q": "displacement q"}
+    entry = re.search(r"\[(\d+)\]$", variable)
     kind = kinds.get(re.sub(r"\[\d+\]$", "", variable))
-    what = f"{kind}{variable[1:]} of the bond-graph element {element}" if kind else f"{name} (integrated signal)"
+    if entry and kind:
+        kind = f"{kind}, entry {entry.group(1)},"
+    what = f"{kind} of the bond-graph element {element}" if kind else f"{name} (integrated signal)"
     return (
         f"Continuous state (Model Exchange): {what}; stays at its value with derivative 0 in "
         f"configurations without it (Model Exchange declares the states of every configuration with up "

@@ -3,8 +3,9 @@
 //! The reference open implementation of Barbosa & Góes, "Modeling system of a flexible structure
 //! with hydraulic actuation using bond-graphs" (II CONEM, 2002): a flexible aluminium plate on a
 //! gas-bearing hub, slewed through a torsion bar by a vane motor under a two-stage
-//! electro-hydraulic servo valve and an analog position loop. It is shipped as an FMI 2.0
-//! co-simulation FMU (model identifier `HydraulicSlewingPlate`).
+//! electro-hydraulic servo valve and an analog position loop. It is shipped as an FMI 2.0 FMU
+//! offering Co-Simulation and Model Exchange from one binary (model identifier
+//! `HydraulicSlewingPlate`).
 //!
 //! The layers, each usable and testable on its own:
 //!
@@ -14,8 +15,8 @@
 //! | [`bond_graph`] | elements, causality, compilation to state equations | energy and signals |
 //! | [`fragments`] | the paper's physical parts as bond-graph fragments | physics, no FMI |
 //! | [`model`] | the assembled model behind the FMU, its parameters and outputs | fragments, solver |
-//! | [`fmi2`] | the FMI 2.0 co-simulation C ABI, generic over a model | FMI, no physics |
-//! | [`fmi3`] | the FMI 3.0 C ABI over the same core | FMI, no physics |
+//! | [`fmi2`] | the FMI 2.0 C ABI (Co-Simulation, Model Exchange), generic over a model | FMI, no physics |
+//! | [`fmi3`] | the FMI 3.0 C ABI (Co-Simulation, Model Exchange) over the same core | FMI, no physics |
 
 pub mod bond_graph;
 pub mod fmi2;
@@ -24,7 +25,7 @@ pub mod fragments;
 pub mod model;
 pub mod solver;
 
-// The FMI 2.0 co-simulation C API of the shipped FMU.
+// The FMI 2.0 C API (Co-Simulation and Model Exchange) of the shipped FMU.
 export_fmi2_cosimulation!(crate::model::HydraulicSlewingPlate);
 // The FMI 3.0 C API of the same model, for the FMI 3.0 FMU (the same binary).
 export_fmi3!(crate::model::HydraulicSlewingPlate);

@@ -187,31 +187,26 @@ fn xml_declares_the_compiled_models_states_and_dependencies() {
             .map(|i| i + 1)
             .unwrap_or_else(|| position(&format!("{STATE_PREFIX}{name}")))
     };
-    let derivatives = declared(&xml, "Derivatives");
-    for (state, deps) in computed["derivatives"].as_object().unwrap() {
-        let d = position(&format!("der({STATE_PREFIX}{state})"));
-        let want: BTreeSet<usize> = deps
-            .as_array()
+    let positions = |deps: &Value| -> BTreeSet<usize> {
+        deps.as_array()
             .unwrap()
             .iter()
             .map(|n| known(n.as_str().unwrap()))
-            .collect();
-        assert_eq!(derivatives[&d], want, "der({state})");
+            .collect()
+    };
+    let derivatives = declared(&xml, "Derivatives");
+    for (state, deps) in computed["derivatives"].as_object().unwrap() {
+        let d = position(&format!("der({STATE_PREFIX}{state})"));
+        assert_eq!(derivatives[&d], positions(deps), "der({state})");
     }
     assert_eq!(derivatives.len(), CONTINUOUS_STATES.len());
     let outputs = declared(&xml, "Outputs");
     let states: BTreeSet<usize> = CONTINUOUS_STATES.iter().map(|&(x, _)| x + 1).collect();
     for (output, deps) in computed["outputs"].as_object().unwrap() {
-        let want: BTreeSet<usize> = deps
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|n| known(n.as_str().unwrap()))
-            .collect();
         let got: BTreeSet<usize> = outputs[&position(output)]
             .intersection(&states)
             .copied()
             .collect();
-        assert_eq!(got, want, "{output}");
+        assert_eq!(got, positions(deps), "{output}");
     }
 }

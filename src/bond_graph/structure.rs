@@ -194,30 +194,6 @@ fn colour(pattern: &[Vec<u32>], n: usize) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
     (colours, row_column)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn colouring_separates_columns_that_share_a_row() {
-        // Arrowhead: row 0 touches every column, rows 1..4 only their own and column 0.
-        let pattern: Vec<Vec<u32>> = vec![vec![0, 1, 2, 3], vec![0, 1], vec![0, 2], vec![0, 3]];
-        let (colours, row_column) = colour(&pattern, 4);
-        for (c, group) in colours.iter().enumerate() {
-            for (i, row) in pattern.iter().enumerate() {
-                let hits: Vec<u32> = group.iter().copied().filter(|j| row.contains(j)).collect();
-                assert!(hits.len() <= 1, "row {i} meets {hits:?} in group {c}");
-                assert_eq!(row_column[c][i], hits.first().copied().unwrap_or(NONE));
-            }
-        }
-        // Row 0 touches all four columns: four groups are needed and enough.
-        assert_eq!(colours.len(), 4);
-        let mut all: Vec<u32> = colours.concat();
-        all.sort();
-        assert_eq!(all, [0, 1, 2, 3]);
-    }
-}
-
 /// For each of the `targets` slots, the first `n_known` slots (states, then inputs) it depends
 /// on through `ops`, ascending: a structural dependency (a path through the plan), which holds
 /// at every `(x, u)` where a numerical zero of the Jacobian may hide one.
@@ -253,4 +229,28 @@ pub(crate) fn dependencies(
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colouring_separates_columns_that_share_a_row() {
+        // Arrowhead: row 0 touches every column, rows 1..4 only their own and column 0.
+        let pattern: Vec<Vec<u32>> = vec![vec![0, 1, 2, 3], vec![0, 1], vec![0, 2], vec![0, 3]];
+        let (colours, row_column) = colour(&pattern, 4);
+        for (c, group) in colours.iter().enumerate() {
+            for (i, row) in pattern.iter().enumerate() {
+                let hits: Vec<u32> = group.iter().copied().filter(|j| row.contains(j)).collect();
+                assert!(hits.len() <= 1, "row {i} meets {hits:?} in group {c}");
+                assert_eq!(row_column[c][i], hits.first().copied().unwrap_or(NONE));
+            }
+        }
+        // Row 0 touches all four columns: four groups are needed and enough.
+        assert_eq!(colours.len(), 4);
+        let mut all: Vec<u32> = colours.concat();
+        all.sort();
+        assert_eq!(all, [0, 1, 2, 3]);
+    }
 }

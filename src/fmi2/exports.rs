@@ -482,14 +482,15 @@ pub unsafe fn set_continuous_states<M: FmuModel>(
 /// `out` holds `n` elements.
 pub unsafe fn get_state_array<M: FmuModel>(
     c: Fmi2Component,
-    function: &'static str,
+    (function, argument): (&'static str, &'static str),
     out: *mut Fmi2Real,
     n: usize,
     f: fn(&mut Instance<M>, &mut [f64]) -> Fmi2Status,
 ) -> Fmi2Status {
     with_instance::<M>(c, function, |inst| {
-        let out = slice_mut(out, n);
-        null_check!(inst, function, out);
+        let Some(out) = slice_mut(out, n) else {
+            return inst.error(&format!("{function}: argument '{argument}' is NULL"));
+        };
         inst.log_call(|| format!("{function}(n={n})"));
         f(inst, out)
     })
@@ -554,6 +555,7 @@ pub unsafe fn completed_integrator_step<M: FmuModel>(
 /// # Safety
 /// As `fmi2GetDirectionalDerivative`: the unknown arrays hold `n_unknown` elements, the known
 /// ones `n_known`.
+#[allow(non_snake_case)]
 pub unsafe fn get_directional_derivative<M: FmuModel>(
     c: Fmi2Component,
     unknown_vrs: *const Fmi2ValueReference,
@@ -565,11 +567,14 @@ pub unsafe fn get_directional_derivative<M: FmuModel>(
 ) -> Fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
     with_instance::<M>(c, F, |inst| {
-        let v_unknown_ref = slice(unknown_vrs, n_unknown);
-        let v_known_ref = slice(known_vrs, n_known);
-        let dv_known = slice(dv_known, n_known);
-        let dv_unknown = slice_mut(dv_unknown, n_unknown);
-        null_check!(inst, F, v_unknown_ref, v_known_ref, dv_known, dv_unknown);
+        let vUnknown_ref = slice(unknown_vrs, n_unknown);
+        let vKnown_ref = slice(known_vrs, n_known);
+        let dvKnown = slice(dv_known, n_known);
+        let dvUnknown = slice_mut(dv_unknown, n_unknown);
+        // The arguments by their names in the standard, for the message.
+        null_check!(inst, F, vUnknown_ref, vKnown_ref, dvKnown, dvUnknown);
+        let (v_unknown_ref, v_known_ref, dv_known, dv_unknown) =
+            (vUnknown_ref, vKnown_ref, dvKnown, dvUnknown);
         inst.log_call(|| format!("{F}(vUnknown_ref={v_unknown_ref:?}, vKnown_ref={v_known_ref:?}, dvKnown={dv_known:?})"));
         inst.directional_derivative(v_unknown_ref, v_known_ref, dv_known, dv_unknown)
     })
@@ -932,7 +937,9 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_state_array::<M>(c, "fmi2GetDerivatives", v, n, |i, o| i.derivatives(o))
+                x::get_state_array::<M>(c, ("fmi2GetDerivatives", "derivatives"), v, n, |i, o| {
+                    i.derivatives(o)
+                })
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetEventIndicators(
@@ -948,7 +955,7 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_state_array::<M>(c, "fmi2GetContinuousStates", v, n, |i, o| {
+                x::get_state_array::<M>(c, ("fmi2GetContinuousStates", "x"), v, n, |i, o| {
                     i.continuous_states(o)
                 })
             }
@@ -958,9 +965,13 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_state_array::<M>(c, "fmi2GetNominalsOfContinuousStates", v, n, |i, o| {
-                    i.nominals_of_continuous_states(o)
-                })
+                x::get_state_array::<M>(
+                    c,
+                    ("fmi2GetNominalsOfContinuousStates", "x_nominal"),
+                    v,
+                    n,
+                    |i, o| i.nominals_of_continuous_states(o),
+                )
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(

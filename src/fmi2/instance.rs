@@ -470,8 +470,13 @@ impl<M: FmuModel> Instance<M> {
         if self.state == InitializationMode {
             self.ensure_initialized()?;
         }
-        let running = matches!(self.state, EventMode | ContinuousTimeMode);
-        if running && self.needs_evaluate {
+        let evaluated = match self.interface {
+            Interface::ModelExchange => {
+                matches!(self.state, EventMode | ContinuousTimeMode | Terminated)
+            }
+            Interface::CoSimulation => false,
+        };
+        if evaluated && self.needs_evaluate {
             if let Err(msg) = self.model.evaluate(&mut self.values, self.time) {
                 return Err(self.error(&format!("{function}: {msg}")));
             }

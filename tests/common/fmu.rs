@@ -35,6 +35,15 @@ pub struct Fmu {
 
 impl Fmu {
     pub fn new() -> Fmu {
+        Fmu::of_type(FMI2_CO_SIMULATION)
+    }
+
+    /// An instance for Model Exchange.
+    pub fn model_exchange() -> Fmu {
+        Fmu::of_type(FMI2_MODEL_EXCHANGE)
+    }
+
+    pub fn of_type(fmu_type: Fmi2Type) -> Fmu {
         let log = Box::new(Mutex::new(Vec::new()));
         let env = &*log as *const Mutex<Vec<Line>> as *mut c_void;
         let callbacks = Fmi2CallbackFunctions::with_plain_logger(logger, env);
@@ -42,7 +51,7 @@ impl Fmu {
         let c = unsafe {
             fmi2Instantiate(
                 c"contract".as_ptr(),
-                FMI2_CO_SIMULATION,
+                fmu_type,
                 guid.as_ptr(),
                 std::ptr::null(),
                 &callbacks,

@@ -174,8 +174,13 @@ def test_solver_failure_is_a_discard_with_last_successful_time(slave_factory, vr
 
 
 def test_get_and_set_strings_and_unsupported_functions(slave_factory, vr):
+    # Directional derivatives are offered (providesDirectionalDerivative="true"): y_pot does not
+    # depend on r directly, controller.e_out does (the amplifier gain A1 A2, linear at rest).
     s = slave_factory()
     initialise(s, vr)
+    assert s.getDirectionalDerivative([vr["y_pot"], vr["controller.e_out"]], [vr["r"]], [1.0])[0] == 0.0
+    assert s.getDirectionalDerivative([vr["controller.e_out"]], [vr["r"]], [1.0])[0] > 0.0
+    # Output derivatives are not (maxOutputDerivativeOrder="0").
     with pytest.raises(FMICallException):
-        s.getDirectionalDerivative([vr["y_pot"]], [vr["r"]], [1.0])
+        s.getRealOutputDerivatives([vr["y_pot"]], [1])
     assert any("not supported" in m for m in errors(s)), s.recorder.text()

@@ -506,6 +506,12 @@ fn page(md: &ModelDescription, platforms: &[String], summary: &str, bode_caption
             write!(capabilities, "<code>{k}=\"{}\"</code> ", escape(v)).unwrap();
         }
     }
+    // The plate modes Model Exchange declares states for (x.plate.I[k].p, k = 1, 2, ...).
+    let me_plate_modes = md
+        .variables
+        .iter()
+        .filter(|v| v.name.starts_with("x.plate.I["))
+        .count();
     let interfaces = if md.model_exchange {
         "Co-Simulation and Model Exchange"
     } else {
@@ -559,6 +565,14 @@ fn page(md: &ModelDescription, platforms: &[String], summary: &str, bode_caption
             &["calculatedParameter"][..],
             "Read-only: computed at initialisation from the parameters (for example the plate's \
              natural frequencies <code>plate.f[i]</code>).",
+        ),
+        (
+            "Continuous states and their derivatives",
+            &["local"][..],
+            "Model Exchange integrates these: the storages' momenta <code>p</code> and \
+             displacements <code>q</code> of the bond graph, set through \
+             <code>fmi2SetContinuousStates</code>; a state the chosen configuration does not \
+             have keeps its value with derivative 0. Co-Simulation reports them after each step.",
         ),
     ] {
         if !md
@@ -618,7 +632,7 @@ figure{{margin:1em 0}} figure img{{max-width:100%;border:1px solid #ddd}} figcap
 <h1>{model}</h1>
 <p>A flexible aluminium plate on a hub, slewed through a torsion bar by a rotary vane motor under a
 two-stage electro-hydraulic servo valve and an analog position loop: an FMI {fmi_version}
-co-simulation FMU, reproducing the model of {PAPER}</p>
+FMU ({interfaces}), reproducing the model of {PAPER}</p>
 
 <table class="meta">
 <tr><td>FMU version</td><td>{fmu_version} (packaged {today})</td></tr>
@@ -700,6 +714,21 @@ the block's sample time to your communication step (1 ms is a good start: the FM
 internal steps). Connect a signal to <code>r</code> (the position reference, V; 10 V is 150
 degrees of motor angle) and read <code>y_pot</code>, <code>theta_hub</code>, <code>w_tip</code> and
 the accelerometers.</p>
+<h3>Co-Simulation or Model Exchange</h3>
+<p>One binary offers both interfaces. In <em>Co-Simulation</em> the FMU integrates itself with
+its stiff solver and lands exactly on each communication point: the choice for co-simulation
+masters, Simulink's FMU block and fixed-step importers. In <em>Model Exchange</em> the importer's
+solver integrates the continuous states <code>x.*</code> from their derivatives
+<code>der(x.*)</code>: the choice for Modelica tools, which prefer it, and for coupling the model
+tightly with other equations. Pick a stiff (implicit) solver there: the servo valve's pilot stage
+is fast. Both interfaces give exact directional derivatives
+(<code>fmi2GetDirectionalDerivative</code>, from dual numbers through the bond graph's equations)
+and the sparsity of the Jacobian (<code>ModelStructure/Derivatives</code>). The number of states
+of FMI 2.0 Model Exchange is fixed by this file, while the model's states depend on the structural
+parameters: the file declares the states of every configuration with up to {me_plate_modes} plate modes
+(<code>plate.N</code> x <code>plate.M</code>); a state the chosen configuration does not have keeps
+its value and has derivative 0, and a larger plate is refused at initialisation in Model Exchange
+(Co-Simulation takes up to 20 x 20). The model has no events: its limits are smooth laws.</p>
 <h3>Configurations of the paper</h3>
 <p>The paper's configurations are parameter sets: set these parameters before initialisation (the
 others keep their start values). The first is the FMU's default. The repository's command-line
