@@ -165,7 +165,10 @@ fn fmi3_do_step_does_not_allocate_either() {
     let mut counted = 0;
     for k in 0..WARM_UP + MEASURED {
         let t = k as f64 * STEP;
-        assert_eq!(fmu.set_real("r", 1.0 + 0.1 * (t * 7.0).sin()), Fmi3Status::Ok);
+        assert_eq!(
+            fmu.set_real("r", 1.0 + 0.1 * (t * 7.0).sin()),
+            Fmi3Status::Ok
+        );
         let before = allocations();
         let step = fmu.step(t, STEP);
         if k >= WARM_UP {
@@ -173,5 +176,8 @@ fn fmi3_do_step_does_not_allocate_either() {
         }
         assert_eq!(step, Fmi3Status::Ok, "step {k}");
     }
-    assert_eq!(counted, 0, "{counted} allocations in {MEASURED} fmi3DoStep calls");
+    assert_eq!(
+        counted, 0,
+        "{counted} allocations in {MEASURED} fmi3DoStep calls"
+    );
 }
