@@ -1228,15 +1228,15 @@ macro_rules! export_fmi3 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(c: Fmi3Instance, dx: *mut f64, n: usize) -> Fmi3Status {
-                x::status($crate::fmi2::exports::get_state_array::<M>(c, "fmi3GetContinuousStateDerivatives", dx, n, |i, o| i.derivatives(o)))
+                x::status($crate::fmi2::exports::get_state_array::<M>(c, ("fmi3GetContinuousStateDerivatives", "derivatives"), dx, n, |i, o| i.derivatives(o)))
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetContinuousStates(c: Fmi3Instance, xs: *mut f64, n: usize) -> Fmi3Status {
-                x::status($crate::fmi2::exports::get_state_array::<M>(c, "fmi3GetContinuousStates", xs, n, |i, o| i.continuous_states(o)))
+                x::status($crate::fmi2::exports::get_state_array::<M>(c, ("fmi3GetContinuousStates", "continuousStates"), xs, n, |i, o| i.continuous_states(o)))
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(c: Fmi3Instance, xs: *mut f64, n: usize) -> Fmi3Status {
-                x::status($crate::fmi2::exports::get_state_array::<M>(c, "fmi3GetNominalsOfContinuousStates", xs, n, |i, o| {
+                x::status($crate::fmi2::exports::get_state_array::<M>(c, ("fmi3GetNominalsOfContinuousStates", "nominals"), xs, n, |i, o| {
                     i.nominals_of_continuous_states(o)
                 }))
             }
