@@ -99,18 +99,21 @@ fn expand<M: FmuModel>(
     Ok(out)
 }
 
+/// What `fmi3InstantiateCoSimulation` and `fmi3InstantiateModelExchange` share: the logger on
+/// FMI 3.0's callback, the instance with its interface, or NULL with a log line saying why
+/// (`refusal`, or the checks of [`Instance::with_logger`]).
+///
 /// # Safety
-/// As `fmi3InstantiateCoSimulation`: strings NULL or NUL-terminated.
+/// Strings NULL or NUL-terminated.
 #[allow(clippy::too_many_arguments)]
-pub unsafe fn instantiate_co_simulation<M: FmuModel>(
+unsafe fn instantiate<M: FmuModel>(
+    function: &str,
+    interface: Interface,
+    refusal: Option<&str>,
     instance_name: Fmi3String,
     token: Fmi3String,
     resource_path: Fmi3String,
-    _visible: bool,
     logging_on: bool,
-    event_mode_used: bool,
-    early_return_allowed: bool,
-    n_required_intermediate: usize,
     environment: Fmi3InstanceEnvironment,
     log_message: Fmi3LogMessageCallback,
 ) -> Fmi3Instance {
@@ -121,10 +124,6 @@ pub unsafe fn instantiate_co_simulation<M: FmuModel>(
             log_message,
         };
         let logger = Logger::with_sink(name, sink, logging_on);
-        let token = c_str(token).unwrap_or("");
-        let resources = c_str(resource_path)
-            .filter(|p| !p.is_empty())
-            .map(std::path::PathBuf::from);
         let refuse = |logger: &Logger, message: &str| {
             logger.log(
                 Fmi2Status::Error,
@@ -133,21 +132,79 @@ pub unsafe fn instantiate_co_simulation<M: FmuModel>(
             );
             std::ptr::null_mut()
         };
-        if event_mode_used {
-            return refuse(&logger, "fmi3InstantiateCoSimulation: eventModeUsed = true, but this FMU has no event mode (hasEventMode = false): the model has no events");
+        if let Some(why) = refusal {
+            return refuse(&logger, &format!("{function}: {why}"));
         }
-        if early_return_allowed || n_required_intermediate > 0 {
-            // Allowed by the standard; the FMU simply never returns early nor calls back.
-        }
-        match Instance::<M>::with_logger(name, token, resources, logger, Interface::CoSimulation) {
+        let token = c_str(token).unwrap_or("");
+        // FMI 3.0 passes the resources folder as a path (FMI 2.0: a URI).
+        let resources = c_str(resource_path)
+            .filter(|p| !p.is_empty())
+            .map(std::path::PathBuf::from);
+        match Instance::<M>::with_logger(name, token, resources, logger, interface) {
             Ok(inst) => {
-                inst.log_call(|| format!("fmi3InstantiateCoSimulation(instanceName=\"{name}\")"));
+                inst.log_call(|| format!("{function}(instanceName=\"{name}\")"));
                 Box::into_raw(Box::new(inst)) as Fmi3Instance
             }
             Err((logger, message)) => refuse(&logger, &message),
         }
     });
     result.unwrap_or(std::ptr::null_mut())
+}
+
+/// `fmi3InstantiateCoSimulation`. `earlyReturnAllowed` and the required intermediate variables
+/// are accepted and unused: the FMU never returns early and never calls back.
+///
+/// # Safety
+/// As `fmi3InstantiateCoSimulation`: strings NULL or NUL-terminated.
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn instantiate_co_simulation<M: FmuModel>(
+    instance_name: Fmi3String,
+    token: Fmi3String,
+    resource_path: Fmi3String,
+    logging_on: bool,
+    event_mode_used: bool,
+    environment: Fmi3InstanceEnvironment,
+    log_message: Fmi3LogMessageCallback,
+) -> Fmi3Instance {
+    let refusal = event_mode_used.then_some(
+        "eventModeUsed = true, but this FMU has no event mode (hasEventMode = false): the model has no events",
+    );
+    instantiate::<M>(
+        "fmi3InstantiateCoSimulation",
+        Interface::CoSimulation,
+        refusal,
+        instance_name,
+        token,
+        resource_path,
+        logging_on,
+        environment,
+        log_message,
+    )
+}
+
+/// `fmi3InstantiateModelExchange`.
+///
+/// # Safety
+/// As `fmi3InstantiateModelExchange`: strings NULL or NUL-terminated.
+pub unsafe fn instantiate_model_exchange<M: FmuModel>(
+    instance_name: Fmi3String,
+    token: Fmi3String,
+    resource_path: Fmi3String,
+    logging_on: bool,
+    environment: Fmi3InstanceEnvironment,
+    log_message: Fmi3LogMessageCallback,
+) -> Fmi3Instance {
+    instantiate::<M>(
+        "fmi3InstantiateModelExchange",
+        Interface::ModelExchange,
+        None,
+        instance_name,
+        token,
+        resource_path,
+        logging_on,
+        environment,
+        log_message,
+    )
 }
 
 /// # Safety
@@ -457,45 +514,6 @@ pub unsafe fn unsupported<M: FmuModel>(
     why: &'static str,
 ) -> Fmi3Status {
     status(fmi2::unsupported::<M>(c, function, why))
-}
-
-/// # Safety
-/// As `fmi3InstantiateModelExchange`: strings NULL or NUL-terminated.
-pub unsafe fn instantiate_model_exchange<M: FmuModel>(
-    instance_name: Fmi3String,
-    token: Fmi3String,
-    resource_path: Fmi3String,
-    logging_on: bool,
-    environment: Fmi3InstanceEnvironment,
-    log_message: Fmi3LogMessageCallback,
-) -> Fmi3Instance {
-    let result = guarded(|| {
-        let name = c_str(instance_name).unwrap_or("");
-        let sink = Sink::Fmi3 {
-            environment,
-            log_message,
-        };
-        let logger = Logger::with_sink(name, sink, logging_on);
-        let token = c_str(token).unwrap_or("");
-        let resources = c_str(resource_path)
-            .filter(|p| !p.is_empty())
-            .map(std::path::PathBuf::from);
-        match Instance::<M>::with_logger(name, token, resources, logger, Interface::ModelExchange) {
-            Ok(inst) => {
-                inst.log_call(|| format!("fmi3InstantiateModelExchange(instanceName=\"{name}\")"));
-                Box::into_raw(Box::new(inst)) as Fmi3Instance
-            }
-            Err((logger, message)) => {
-                logger.log(
-                    Fmi2Status::Error,
-                    crate::fmi2::LogCategory::StatusError,
-                    &message,
-                );
-                std::ptr::null_mut()
-            }
-        }
-    });
-    result.unwrap_or(std::ptr::null_mut())
 }
 
 /// # Safety
@@ -815,28 +833,17 @@ macro_rules! export_fmi3 {
                 name: Fmi3String,
                 token: Fmi3String,
                 resources: Fmi3String,
-                visible: bool,
+                _visible: bool,
                 logging_on: bool,
                 event_mode_used: bool,
-                early_return_allowed: bool,
+                _early_return_allowed: bool,
                 _required: *const Fmi3ValueReference,
-                n_required: usize,
+                _n_required: usize,
                 env: Fmi3InstanceEnvironment,
                 log: Fmi3LogMessageCallback,
                 _intermediate: Fmi3IntermediateUpdateCallback,
             ) -> Fmi3Instance {
-                x::instantiate_co_simulation::<M>(
-                    name,
-                    token,
-                    resources,
-                    visible,
-                    logging_on,
-                    event_mode_used,
-                    early_return_allowed,
-                    n_required,
-                    env,
-                    log,
-                )
+                x::instantiate_co_simulation::<M>(name, token, resources, logging_on, event_mode_used, env, log)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateModelExchange(
