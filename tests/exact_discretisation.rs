@@ -2,13 +2,14 @@
 //! `x_{k+1} = expm(A h) x_k + (∫_0^h expm(A s) ds) B u` at 1 ms communication steps, and the
 //! structure the solver relies on there (constant Jacobian, kept across steps).
 
+use hydraulic_slewing_plate::bond_graph::ExactDiscretisation;
 use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{idx, VARIABLES};
 use hydraulic_slewing_plate::solver::{Integrator, Method, OdeSystem};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 const STEP: f64 = 1e-3;
 
@@ -35,20 +36,7 @@ fn exact(system: &Assembled, n: usize) -> Vec<DVector<f64>> {
     let lin = system
         .compiled()
         .linearize(&system.initial_state(), system.inputs());
-    let (nx, nu) = (lin.a.nrows(), lin.b.ncols());
-    let mut m = DMatrix::zeros(nx + nu, nx + nu);
-    m.view_mut((0, 0), (nx, nx)).copy_from(&(&lin.a * STEP));
-    m.view_mut((0, nx), (nx, nu)).copy_from(&(&lin.b * STEP));
-    let e = m.exp();
-    let phi = e.view((0, 0), (nx, nx)).into_owned();
-    let gu = e.view((0, nx), (nx, nu)).into_owned() * DVector::from_column_slice(system.inputs());
-    let mut x = DVector::from_column_slice(&system.initial_state());
-    (0..n)
-        .map(|_| {
-            x = &phi * &x + &gu;
-            x.clone()
-        })
-        .collect()
+    ExactDiscretisation::of(&lin, STEP).states(&system.initial_state(), system.inputs(), n)
 }
 
 /// Largest deviation of each state from the exact trajectory over `n` communication steps,

@@ -36,6 +36,7 @@ mod loader;
 use std::fmt::Write as _;
 use std::time::Instant;
 
+use hydraulic_slewing_plate::bond_graph::ExactDiscretisation;
 use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
@@ -219,21 +220,15 @@ fn linear_model(sets: &[&str]) -> Result<Linear, String> {
 /// The exact discretisation: the output trajectories at 1..=n communication points and the
 /// wall time per step of the propagation (one dense mat-vec).
 fn exact(lin: &Linear, n: usize) -> (Vec<[f64; 2]>, f64) {
-    let (nx, nu) = (lin.a.nrows(), lin.b.ncols());
-    let mut m = DMatrix::zeros(nx + nu, nx + nu);
-    m.view_mut((0, 0), (nx, nx)).copy_from(&(&lin.a * STEP));
-    m.view_mut((0, nx), (nx, nu)).copy_from(&(&lin.b * STEP));
-    let e = m.exp();
-    let phi = e.view((0, 0), (nx, nx)).into_owned();
-    let gu = e.view((0, nx), (nx, nu)).into_owned() * DVector::from_column_slice(&lin.u);
+    let disc = ExactDiscretisation::new(&lin.a, &lin.b, STEP);
+    let gu = disc.input_term(&lin.u);
     let du = &lin.d * DVector::from_column_slice(&lin.u);
     let mut x = DVector::from_column_slice(&lin.x0);
-    let mut x1 = DVector::zeros(nx);
+    let mut x1 = DVector::zeros(x.len());
     let mut y = Vec::with_capacity(n);
     let start = Instant::now();
     for _ in 0..n {
-        x1.gemv(1.0, &phi, &x, 0.0);
-        x1 += &gu;
+        disc.step(&x, &gu, &mut x1);
         std::mem::swap(&mut x, &mut x1);
         let yo = &lin.c * &x + &du;
         y.push([yo[0], yo[1]]);

@@ -92,6 +92,7 @@
 
 mod causality;
 mod compile;
+mod discretisation;
 mod dot;
 mod dual;
 mod element;
@@ -101,6 +102,7 @@ mod structure;
 mod validate;
 
 pub use compile::{matrix_json, CompiledModel, Linearization, PowerBalance};
+pub use discretisation::ExactDiscretisation;
 pub use element::{
     Bond, BondId, Element, ElementId, ElementKind, Law, LawFn, Modulus, NonlinearLaw, OutputDef,
     OutputSource, Quantity, SignalBlock, SignalId, SignalKind, SourceValue,

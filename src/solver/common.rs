@@ -4,7 +4,7 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use super::integrator::Integrator;
+use super::integrator::{Cache, Integrator};
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
 
 /// Error weights `atol_i + rtol * max(|a_i|, |b_i|)`, floored at the smallest normal number so
@@ -32,11 +32,7 @@ pub(crate) fn all_finite(v: &[f64]) -> bool {
 /// The method's factorisations kept in `slot` from the last call, for a call with Jacobian stamp
 /// `stamp`: they survive only while the Jacobian is constant and the same (`cached` is the stamp
 /// they were made with); otherwise the call starts with none.
-pub(crate) fn take_factorisations<L>(
-    slot: &mut Vec<L>,
-    cached: Option<u64>,
-    stamp: Option<u64>,
-) -> Vec<L> {
+fn take_factorisations<L>(slot: &mut Vec<L>, cached: Option<u64>, stamp: Option<u64>) -> Vec<L> {
     let mut lus = std::mem::take(slot);
     if stamp.is_none() || cached != stamp {
         lus.clear();
@@ -46,11 +42,55 @@ pub(crate) fn take_factorisations<L>(
 
 /// Puts the factorisations back into `slot` after a call: those of a constant Jacobian are kept
 /// for the next call, any other lived for this call only.
-pub(crate) fn keep_factorisations<L>(slot: &mut Vec<L>, mut lus: Vec<L>, stamp: Option<u64>) {
+fn keep_factorisations<L>(slot: &mut Vec<L>, mut lus: Vec<L>, stamp: Option<u64>) {
     if stamp.is_none() {
         lus.clear();
     }
     *slot = lus;
+}
+
+/// A method's buffers, kept between `advance` calls in the integrator's cache so that a call
+/// allocates nothing once they exist.
+pub(crate) trait Workspace {
+    /// The method's factorisations of its iteration matrices.
+    type Lu;
+    /// Buffers for `n` states.
+    fn new(n: usize) -> Self;
+    /// The number of states the buffers are for.
+    fn dim(&self) -> usize;
+    /// The memory of the last factorisations of a Jacobian that changes from step to step.
+    fn spare(&mut self) -> &mut Option<Self::Lu>;
+}
+
+/// Picks a method's two slots in the integrator's cache: its buffers and its factorisations.
+pub(crate) type Slots<W> = fn(&mut Cache) -> (&mut Option<Box<W>>, &mut Vec<<W as Workspace>::Lu>);
+
+/// Runs one method's `advance` body `run` with the method's buffers and factorisations taken out
+/// of the integrator's cache (`slots` picks the method's two slots) and puts them back after,
+/// whatever the outcome: the buffers always, the factorisations of a constant Jacobian for the
+/// next call, and otherwise the memory of the last one as the buffers' spare.
+pub(crate) fn with_kept_memory<W: Workspace, R>(
+    integ: &mut Integrator,
+    stamp: Option<u64>,
+    slots: Slots<W>,
+    run: impl FnOnce(&mut Integrator, &mut W, &mut Vec<W::Lu>) -> R,
+) -> R {
+    let n = integ.x.len();
+    let mut w = match slots(&mut integ.cache).0.take() {
+        Some(w) if w.dim() == n => w,
+        _ => Box::new(W::new(n)),
+    };
+    let cached = integ.cache.stamp;
+    let mut lus = take_factorisations(slots(&mut integ.cache).1, cached, stamp);
+    let result = run(integ, &mut w, &mut lus);
+    if stamp.is_none() {
+        let spare = w.spare();
+        *spare = lus.pop().or(spare.take());
+    }
+    let (work_slot, lu_slot) = slots(&mut integ.cache);
+    *work_slot = Some(w);
+    keep_factorisations(lu_slot, lus, stamp);
+    result
 }
 
 /// Evaluate f, counting it.

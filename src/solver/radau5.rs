@@ -41,8 +41,7 @@ use std::sync::Arc;
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::common::{
-    all_finite, eval, initial_step, keep_factorisations, plan_step, take_factorisations, NextStep,
-    Outputs,
+    all_finite, eval, initial_step, plan_step, with_kept_memory, NextStep, Outputs, Workspace,
 };
 use super::integrator::Integrator;
 use super::integrator::{front_factorisation, SAME_STEP};
@@ -184,8 +183,11 @@ pub(crate) struct Work {
     jac: DMatrix<f64>,
     f0: Vec<f64>,
     scal: Vec<f64>,
+    /// Stage increments Z_i = Y_i - y0.
     z: [Vec<f64>; 3],
+    /// Transformed increments W = T⁻¹ Z.
     w: [Vec<f64>; 3],
+    /// f at the stages.
     a: [Vec<f64>; 3],
     ytmp: Vec<f64>,
     f2: Vec<f64>,
@@ -205,7 +207,8 @@ pub(crate) struct Work {
     spare: Option<Lu>,
 }
 
-impl Work {
+impl Workspace for Work {
+    type Lu = Lu;
     fn new(n: usize) -> Self {
         let v = || vec![0.0; n];
         Work {
@@ -228,6 +231,12 @@ impl Work {
             spare: None,
         }
     }
+    fn dim(&self) -> usize {
+        self.f0.len()
+    }
+    fn spare(&mut self) -> &mut Option<Lu> {
+        &mut self.spare
+    }
 }
 
 /// Advance `integ` to exactly `t_end` with Radau IIA (called by `Integrator::advance_to*`).
@@ -238,24 +247,56 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     times: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
-    let n = integ.x.len();
-    let mut w = match integ.cache.radau.take() {
-        Some(w) if w.f0.len() == n => w,
-        _ => Box::new(Work::new(n)),
-    };
     let stamp = sys.constant_jacobian();
-    let mut lus = take_factorisations(&mut integ.cache.radau_lu, integ.cache.stamp, stamp);
-    let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
-    if stamp.is_none() {
-        w.spare = lus.pop().or(w.spare.take());
-    }
-    integ.cache.radau = Some(w);
-    keep_factorisations(&mut integ.cache.radau_lu, lus, stamp);
-    result
+    with_kept_memory(
+        integ,
+        stamp,
+        |c| (&mut c.radau, &mut c.radau_lu),
+        |integ, w, lus| radcor(integ, sys, t_end, times, out, w, lus, stamp),
+    )
 }
 
+/// The tolerances the step control works with (RADAU5's prologue and RADCOR's FNEWT).
+struct Tolerances {
+    /// Transformed relative tolerance rtol' = 0.1 rtol^(2/3).
+    rtol: f64,
+    /// Newton stopping criterion κ·Tol (RADAU5 FNEWT default; Hairer & Wanner IV.8, "stopping
+    /// criterion" of the simplified Newton iteration).
+    fnewt: f64,
+}
+
+/// RADAU5's tolerance transformation: rtol' = 0.1 rtol^(2/3) for the relative part (the local
+/// error estimate is O(h⁴), the method of order 5); the absolute part `work.atol` is the user's,
+/// scaled down with rtol'/rtol but never up (see the module docs for why this departs from
+/// RADAU5's atol' = rtol' atol/rtol).
+fn transformed_tolerances(integ: &Integrator, work: &mut Work) -> Tolerances {
+    let rtol_user = integ.options.rtol;
+    let rtol = 0.1 * rtol_user.powf(2.0 / 3.0);
+    let atol_factor = (rtol / rtol_user).min(1.0);
+    for (i, a) in work.atol.iter_mut().enumerate() {
+        *a = atol_factor * integ.options.atol.get(i);
+    }
+    if let Atol::Vector(v) = &mut work.atol_for_fd {
+        v.copy_from_slice(&work.atol);
+    }
+    let fnewt = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
+    Tolerances { rtol, fnewt }
+}
+
+/// Error weights sc_i = atol'_i + rtol' |x_i| of the weighted RMS norm (RADCOR's SCAL; Hairer &
+/// Wanner IV.8, the norm under eq. 8.20), floored at the smallest normal number.
+fn set_scal(atol: &[f64], rtol: f64, x: &[f64], scal: &mut [f64]) {
+    for i in 0..scal.len() {
+        scal[i] = (atol[i] + rtol * x[i].abs()).max(f64::MIN_POSITIVE);
+    }
+}
+
+/// Step loop of RADAU5 (subroutine RADCOR): plans each step, computes J where needed (RADCOR
+/// label 20), factorises ([`decompose`]), sets the Newton start ([`start_values`]), iterates
+/// ([`newton`]), estimates the error ([`estrad`]), then accepts ([`accept`]) or rejects, and
+/// chooses the next step size ([`step_size`]).
 #[allow(clippy::too_many_arguments)]
-fn advance_with<S: OdeSystem + ?Sized>(
+fn radcor<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     t_end: f64,
@@ -266,55 +307,11 @@ fn advance_with<S: OdeSystem + ?Sized>(
     stamp: Option<u64>,
 ) -> Result<(), SolverError> {
     let n = integ.x.len();
-    let Work {
-        jac,
-        f0,
-        scal,
-        z: [z1, z2, z3],
-        w: [w1, w2, w3],
-        a: [a1, a2, a3],
-        ytmp,
-        f2,
-        x1,
-        atol,
-        atol_for_fd,
-        rr,
-        rc,
-        scratch_r,
-        scratch_c,
-        pattern,
-        spare,
-    } = work;
-    let (c1, c2) = nodes();
-    let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
-    let (u1, alph, beta) = inverse_eigenvalues();
-    let (dd1, dd2, dd3) = error_weights();
+    let tol = transformed_tolerances(integ, work);
+    set_scal(&work.atol, tol.rtol, &integ.x, &mut work.scal);
 
-    // Transformed tolerances: RADAU5's RTOL = 0.1 RTOL^(2/3) for the relative part; the
-    // absolute part is the user's, scaled down with it but never up (see the module docs).
-    let rtol_user = integ.options.rtol;
-    let rtol = 0.1 * rtol_user.powf(2.0 / 3.0);
-    let atol_factor = (rtol / rtol_user).min(1.0);
-    for (i, a) in atol.iter_mut().enumerate() {
-        *a = atol_factor * integ.options.atol.get(i);
-    }
-    if let Atol::Vector(v) = atol_for_fd {
-        v.copy_from_slice(atol);
-    }
-    // Newton stopping criterion (RADAU5 FNEWT default).
-    let fnewt = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
-    // CFAC: numerator of the Newton-count-dependent safety factor.
-    let cfac = SAFE * (1 + 2 * NIT) as f64;
-
-    let set_scal = |x: &[f64], scal: &mut [f64]| {
-        for i in 0..n {
-            scal[i] = (atol[i] + rtol * x[i].abs()).max(f64::MIN_POSITIVE);
-        }
-    };
-    set_scal(&integ.x, scal);
-
-    eval(sys, &mut integ.stats, integ.t, &integ.x, f0);
-    if !all_finite(f0) {
+    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
+    if !all_finite(&work.f0) {
         return Err(nonfinite_here(integ.t));
     }
     if integ.h <= 0.0 {
@@ -325,7 +322,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
             &mut integ.stats,
             integ.t,
             &integ.x,
-            f0,
+            &work.f0,
             t_end,
             3.0,
         );
@@ -334,11 +331,9 @@ fn advance_with<S: OdeSystem + ?Sized>(
 
     let mut need_jac = true;
     let mut jac_fresh = false; // J evaluated at the current point?
-    let mut theta = THET; // last Newton contraction estimate
     let mut attempts: u64 = 0;
     let mut consecutive_rejections: u32 = 0;
     let mut why = Why::Error;
-    let mut newt = 0usize; // Newton iterations of the current attempt
 
     loop {
         let why_small = || match why {
@@ -355,40 +350,13 @@ fn advance_with<S: OdeSystem + ?Sized>(
         };
         let quantise = stamp.is_some();
         let (h, last, h_proposed) =
-            match plan_step(integ, t_end, f0, &mut attempts, quantise, why_small)? {
+            match plan_step(integ, t_end, &work.f0, &mut attempts, quantise, why_small)? {
                 NextStep::Done => return Ok(()),
                 NextStep::Step { h, last, proposed } => (h, last, proposed),
             };
         let t = integ.t;
         if need_jac {
-            let ok = match stamp {
-                // A constant J is the same everywhere: kept, with its factorisations.
-                Some(stamp) => integ.cache.constant_jacobian(
-                    sys,
-                    stamp,
-                    t,
-                    &integ.x,
-                    &mut integ.stats,
-                    &mut integ.counted,
-                ),
-                None => {
-                    if let Some(lu) = lus.pop() {
-                        *spare = Some(lu);
-                    }
-                    lus.clear();
-                    jacobian::evaluate(
-                        sys,
-                        &mut integ.stats,
-                        t,
-                        &integ.x,
-                        f0,
-                        atol_for_fd,
-                        rtol,
-                        jac,
-                    )
-                }
-            };
-            if !ok {
+            if !jacobian_at(integ, sys, work, lus, stamp, tol.rtol) {
                 return Err(SolverError::new(
                     SolverErrorKind::NonFinite,
                     t,
@@ -399,260 +367,34 @@ fn advance_with<S: OdeSystem + ?Sized>(
             jac_fresh = true;
         }
 
-        // Outcome of this attempt: Ok(err) or a rejection reason with the factor for h.
-        let attempt: Result<f64, (Why, f64)> = 'attempt: {
-            // The simplified Newton iteration converges with factorisations for a step size
-            // within SAME_STEP of h as with exact ones (the difference is rounding in t_end - t);
-            // with a constant J the factorisation in use is the one counted (also after a
-            // restore, which rebuilds it with the same bits).
-            let ok = match stamp {
-                Some(_) => {
-                    let lu_h = integ.counted.factorisation_step(h, &mut integ.stats, 2);
-                    let jac = &integ.cache.jac;
-                    front_factorisation(
-                        lus,
-                        lu_h,
-                        |l| l.h,
-                        |old| factor(jac, pattern.partition(jac, stamp), lu_h, old),
-                    )
-                }
-                None => {
-                    if lus.first().is_none_or(|l| (l.h - h).abs() > SAME_STEP * h) {
-                        // Refactorised in the memory of the last factorisation.
-                        integ.stats.lu_decompositions += 2;
-                        if lus.is_empty() {
-                            lus.extend(spare.take());
-                        }
-                        lus.truncate(1);
-                        let part = pattern.partition(jac, None);
-                        match lus.first_mut() {
-                            Some(lu) => {
-                                if !factor_into(lu, part, jac, h) {
-                                    *spare = lus.pop();
-                                }
-                            }
-                            None => lus.extend(factor(jac, part, h, None)),
-                        }
-                    }
-                    !lus.is_empty()
-                }
-            };
-            let (true, Some(lu)) = (ok, lus.first()) else {
+        // Outcome of this attempt: the Newton result and the error, or a rejection reason with
+        // the factor for h.
+        let attempt: Result<(Newton, f64), (Why, f64)> = 'attempt: {
+            if !decompose(integ, work, lus, stamp, h) {
+                break 'attempt Err((Why::Singular, 0.5));
+            }
+            let Some(lu) = lus.first() else {
                 break 'attempt Err((Why::Singular, 0.5));
             };
-            let fac1 = u1 / h;
-            let (alphn, betan) = (alph / h, beta / h);
-
-            // Newton start values: extrapolated collocation polynomial, or zero.
-            if integ.hist.first || integ.hist.cont.len() != 3 * n || integ.hist.h_old <= 0.0 {
-                z1.fill(0.0);
-                z2.fill(0.0);
-                z3.fill(0.0);
-                w1.fill(0.0);
-                w2.fill(0.0);
-                w3.fill(0.0);
-            } else {
-                let c3q = h / integ.hist.h_old;
-                let (c1q, c2q) = (c1 * c3q, c2 * c3q);
-                let cont = &integ.hist.cont;
-                for i in 0..n {
-                    let (k1, k2, k3) = (cont[i], cont[n + i], cont[2 * n + i]);
-                    let p = |q: f64| q * (k1 + (q - c2m1) * (k2 + (q - c1m1) * k3));
-                    z1[i] = p(c1q);
-                    z2[i] = p(c2q);
-                    z3[i] = p(c3q);
-                    w1[i] = TI[0][0] * z1[i] + TI[0][1] * z2[i] + TI[0][2] * z3[i];
-                    w2[i] = TI[1][0] * z1[i] + TI[1][1] * z2[i] + TI[1][2] * z3[i];
-                    w3[i] = TI[2][0] * z1[i] + TI[2][1] * z2[i] + TI[2][2] * z3[i];
-                }
-            }
-
-            // Simplified Newton iteration (RADAU5 labels 40 ff.).
-            integ.hist.faccon = integ.hist.faccon.max(f64::EPSILON).powf(0.8);
-            theta = THET;
-            newt = 0;
-            let mut dynold = 0.0;
-            let mut thqold = 0.0;
-            loop {
-                if newt >= NIT {
-                    break 'attempt Err((Why::Newton, 0.5));
-                }
-                for i in 0..n {
-                    ytmp[i] = integ.x[i] + z1[i];
-                }
-                eval(sys, &mut integ.stats, t + c1 * h, ytmp, a1);
-                for i in 0..n {
-                    ytmp[i] = integ.x[i] + z2[i];
-                }
-                eval(sys, &mut integ.stats, t + c2 * h, ytmp, a2);
-                for i in 0..n {
-                    ytmp[i] = integ.x[i] + z3[i];
-                }
-                eval(sys, &mut integ.stats, t + h, ytmp, a3);
-                if !(all_finite(a1) && all_finite(a2) && all_finite(a3)) {
-                    break 'attempt Err((Why::NonFinite, 0.5));
-                }
-                // Transformed residual, then the two block solves (SLVRAD).
-                for i in 0..n {
-                    let r1 = TI[0][0] * a1[i] + TI[0][1] * a2[i] + TI[0][2] * a3[i];
-                    let r2 = TI[1][0] * a1[i] + TI[1][1] * a2[i] + TI[1][2] * a3[i];
-                    let r3 = TI[2][0] * a1[i] + TI[2][1] * a2[i] + TI[2][2] * a3[i];
-                    rr[i] = r1 - fac1 * w1[i];
-                    rc[i] = Complex::new(
-                        r2 - alphn * w2[i] + betan * w3[i],
-                        r3 - betan * w2[i] - alphn * w3[i],
-                    );
-                }
-                lu.real.solve(rr.as_mut_slice(), scratch_r);
-                lu.complex.solve(rc.as_mut_slice(), scratch_c);
-                newt += 1;
-                let mut dyno = 0.0;
-                for i in 0..n {
-                    let s = scal[i];
-                    dyno += (rr[i] / s).powi(2) + (rc[i].re / s).powi(2) + (rc[i].im / s).powi(2);
-                }
-                let dyno = (dyno / (3 * n) as f64).sqrt();
-                if !dyno.is_finite() {
-                    break 'attempt Err((Why::NonFinite, 0.5));
-                }
-                // Convergence monitor: contraction θ and predicted remaining error.
-                if newt > 1 && newt < NIT {
-                    let thq = dyno / dynold;
-                    theta = if newt == 2 {
-                        thq
-                    } else {
-                        (thq * thqold).sqrt()
-                    };
-                    thqold = thq;
-                    if theta < 0.99 {
-                        integ.hist.faccon = theta / (1.0 - theta);
-                        let dyth =
-                            integ.hist.faccon * dyno * theta.powi((NIT - 1 - newt) as i32) / fnewt;
-                        if dyth >= 1.0 {
-                            // Would not converge within NIT iterations: smaller step.
-                            let qnewt = dyth.clamp(1e-4, 20.0);
-                            let hhfac = 0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64));
-                            break 'attempt Err((Why::Newton, hhfac));
-                        }
-                    } else {
-                        break 'attempt Err((Why::Newton, 0.5));
-                    }
-                }
-                dynold = dyno.max(f64::EPSILON);
-                for i in 0..n {
-                    w1[i] += rr[i];
-                    w2[i] += rc[i].re;
-                    w3[i] += rc[i].im;
-                    z1[i] = T[0][0] * w1[i] + T[0][1] * w2[i] + T[0][2] * w3[i];
-                    z2[i] = T[1][0] * w1[i] + T[1][1] * w2[i] + T[1][2] * w3[i];
-                    z3[i] = T[2][0] * w1[i] + w2[i];
-                }
-                if integ.hist.faccon * dyno <= fnewt {
-                    break;
-                }
-            }
-
-            // Error estimate (ESTRAD).
-            let (hee1, hee2, hee3) = (dd1 / h, dd2 / h, dd3 / h);
-            for i in 0..n {
-                f2[i] = hee1 * z1[i] + hee2 * z2[i] + hee3 * z3[i];
-                rr[i] = f2[i] + f0[i];
-            }
-            lu.real.solve(rr.as_mut_slice(), scratch_r);
-            let norm = |v: &DVector<f64>| {
-                let s: f64 = (0..n).map(|i| (v[i] / scal[i]).powi(2)).sum();
-                (s / n as f64).sqrt().max(1e-10)
+            start_values(integ, work, h);
+            let newton = match newton(integ, sys, work, lu, &tol, h) {
+                Ok(newton) => newton,
+                Err(e) => break 'attempt Err(e),
             };
-            let mut err = norm(rr);
-            if err >= 1.0 && (integ.hist.first || integ.hist.last_rejected) {
-                // Refined estimate with one more f evaluation (stiff components).
-                for i in 0..n {
-                    ytmp[i] = integ.x[i] + rr[i];
-                }
-                eval(sys, &mut integ.stats, t, ytmp, a1);
-                if !all_finite(a1) {
-                    break 'attempt Err((Why::NonFinite, 0.5));
-                }
-                for i in 0..n {
-                    rr[i] = a1[i] + f2[i];
-                }
-                lu.real.solve(rr.as_mut_slice(), scratch_r);
-                err = norm(rr);
-            }
-            if err.is_finite() {
-                Ok(err)
-            } else {
-                Err((Why::NonFinite, 0.5))
+            match estrad(integ, sys, work, lu, h) {
+                Ok(err) => Ok((newton, err)),
+                Err(e) => Err(e),
             }
         };
 
-        // Step-size proposal from the error (with Newton-count-dependent safety), RADAU5.
-        let newt_safety = |newt_used: usize| SAFE.min(cfac / (newt_used + 2 * NIT) as f64);
         match attempt {
-            Ok(err) => {
-                let fac = newt_safety(newt);
-                let mut quot = FACR.max(FACL.min(err.powf(0.25) / fac));
-                let mut hnew = h / quot;
+            Ok((newton, err)) => {
+                let mut hnew = step_size(integ, err, h, newton.iterations);
                 if err < 1.0 {
-                    // Accepted. Gustafsson's predictive controller.
-                    if !integ.hist.first && integ.hist.h_acc > 0.0 {
-                        let facgus = (integ.hist.h_acc / h)
-                            * (err * err / integ.hist.err_acc).powf(0.25)
-                            / SAFE;
-                        let facgus = facgus.clamp(FACR, FACL);
-                        quot = quot.max(facgus);
-                        hnew = h / quot;
-                    }
-                    integ.hist.h_acc = h;
-                    integ.hist.err_acc = err.max(1e-2);
                     let t1 = if last { t_end } else { t + h };
-                    for i in 0..n {
-                        x1[i] = integ.x[i] + z3[i];
-                    }
-                    if !all_finite(x1) {
-                        return Err(nonfinite_here(t));
-                    }
-                    // Collocation polynomial of this step (CONT(N+1..4N) of RADAU5).
-                    let mut cont = std::mem::take(&mut integ.hist.cont);
-                    cont.resize(3 * n, 0.0);
-                    for i in 0..n {
-                        let k1 = (z2[i] - z3[i]) / c2m1;
-                        let ak = (z1[i] - z2[i]) / c1mc2;
-                        let acont3 = (ak - z1[i] / c1) / c2;
-                        let k2 = (ak - k1) / c1m1;
-                        cont[i] = k1;
-                        cont[n + i] = k2;
-                        cont[2 * n + i] = k2 - acont3;
-                    }
-                    if outputs.pending(t1) {
-                        let cref = &cont;
-                        let x1r = &*x1;
-                        outputs.emit(
-                            t,
-                            h,
-                            t1,
-                            x1,
-                            &mut |th, buf| {
-                                let s = th - 1.0;
-                                for i in 0..n {
-                                    buf[i] = x1r[i]
-                                        + s * (cref[i]
-                                            + (s - c2m1)
-                                                * (cref[n + i] + (s - c1m1) * cref[2 * n + i]));
-                                }
-                            },
-                            out,
-                        );
-                    }
-                    integ.hist.cont = cont;
-                    integ.hist.h_old = h;
-                    integ.hist.first = false;
-                    integ.x.copy_from_slice(x1);
-                    integ.t = t1;
-                    integ.stats.accepted += 1;
+                    accept(integ, work, &mut outputs, out, &tol, t, h, t1)?;
                     consecutive_rejections = 0;
                     why = Why::Error;
-                    set_scal(&integ.x, scal);
                     if integ.hist.last_rejected {
                         hnew = hnew.min(h);
                     }
@@ -662,20 +404,20 @@ fn advance_with<S: OdeSystem + ?Sized>(
                         integ.h = hnew.max(h_proposed);
                         return Ok(());
                     }
-                    eval(sys, &mut integ.stats, integ.t, &integ.x, f0);
-                    if !all_finite(f0) {
+                    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
+                    if !all_finite(&work.f0) {
                         integ.h = hnew;
                         return Err(nonfinite_here(integ.t));
                     }
                     jac_fresh = false;
                     let qt = hnew / h;
-                    if theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+                    if newton.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
                         // Keep h, J and LU.
                         integ.h = h;
                     } else {
                         integ.h = hnew;
                         // Reuse J (new LU) only while Newton converges very fast.
-                        need_jac = theta > THET;
+                        need_jac = newton.theta > THET;
                     }
                     continue;
                 }
@@ -708,6 +450,436 @@ fn advance_with<S: OdeSystem + ?Sized>(
             ));
         }
     }
+}
+
+/// The Jacobian J = ∂f/∂y at the current point (RADCOR label 20: analytic or by finite
+/// differences). A constant J ([`OdeSystem::constant_jacobian`]) is the same everywhere and is
+/// kept in the integrator's cache with its factorisations; otherwise J goes into `work.jac` and
+/// the factorisations of the old J are dropped (their memory kept as the spare). False if J is
+/// not finite.
+fn jacobian_at<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    work: &mut Work,
+    lus: &mut Vec<Lu>,
+    stamp: Option<u64>,
+    rtol: f64,
+) -> bool {
+    let t = integ.t;
+    match stamp {
+        Some(stamp) => integ.cache.constant_jacobian(
+            sys,
+            stamp,
+            t,
+            &integ.x,
+            &mut integ.stats,
+            &mut integ.counted,
+        ),
+        None => {
+            if let Some(lu) = lus.pop() {
+                work.spare = Some(lu);
+            }
+            lus.clear();
+            jacobian::evaluate(
+                sys,
+                &mut integ.stats,
+                t,
+                &integ.x,
+                &work.f0,
+                &work.atol_for_fd,
+                rtol,
+                &mut work.jac,
+            )
+        }
+    }
+}
+
+/// Makes `lus[0]` the factorisations for step size `h` (RADAU5's DECOMR and DECOMC: the real LU
+/// of (γ/h) I - J and the complex LU of ((α + iβ)/h) I - J, the blocks of the transformed
+/// Newton matrix, Hairer & Wanner IV.8, eq. 8.16ff), reusing those in `lus` where they fit.
+/// False if a matrix is singular.
+///
+/// The simplified Newton iteration converges with factorisations for a step size within
+/// SAME_STEP of h as with exact ones (the difference is rounding in t_end - t); with a constant J
+/// the factorisation in use is the one counted (also after a restore, which rebuilds it with the
+/// same bits). A changing J is refactorised in the memory of its last factorisation.
+fn decompose(
+    integ: &mut Integrator,
+    work: &mut Work,
+    lus: &mut Vec<Lu>,
+    stamp: Option<u64>,
+    h: f64,
+) -> bool {
+    let Work {
+        jac,
+        pattern,
+        spare,
+        ..
+    } = work;
+    match stamp {
+        Some(_) => {
+            let lu_h = integ.counted.factorisation_step(h, &mut integ.stats, 2);
+            let jac = &integ.cache.jac;
+            front_factorisation(
+                lus,
+                lu_h,
+                |l| l.h,
+                |old| factor(jac, pattern.partition(jac, stamp), lu_h, old),
+            )
+        }
+        None => {
+            if lus.first().is_none_or(|l| (l.h - h).abs() > SAME_STEP * h) {
+                integ.stats.lu_decompositions += 2;
+                if lus.is_empty() {
+                    lus.extend(spare.take());
+                }
+                lus.truncate(1);
+                let part = pattern.partition(jac, None);
+                match lus.first_mut() {
+                    Some(lu) => {
+                        if !factor_into(lu, part, jac, h) {
+                            *spare = lus.pop();
+                        }
+                    }
+                    None => lus.extend(factor(jac, part, h, None)),
+                }
+            }
+            !lus.is_empty()
+        }
+    }
+}
+
+/// Starting values of the simplified Newton iteration (RADCOR, "starting values for Newton
+/// iteration"; Hairer & Wanner IV.8, "starting values"): Z_i⁰ = q(c_i h), the previous step's collocation
+/// polynomial q extrapolated, and W⁰ = T⁻¹ Z⁰; zero on the first step or when there is no
+/// polynomial.
+fn start_values(integ: &Integrator, work: &mut Work, h: f64) {
+    let n = integ.x.len();
+    let Work {
+        z: [z1, z2, z3],
+        w: [w1, w2, w3],
+        ..
+    } = work;
+    if integ.hist.first || integ.hist.cont.len() != 3 * n || integ.hist.h_old <= 0.0 {
+        z1.fill(0.0);
+        z2.fill(0.0);
+        z3.fill(0.0);
+        w1.fill(0.0);
+        w2.fill(0.0);
+        w3.fill(0.0);
+        return;
+    }
+    let (c1, c2) = nodes();
+    let (c1m1, c2m1) = (c1 - 1.0, c2 - 1.0);
+    let c3q = h / integ.hist.h_old;
+    let (c1q, c2q) = (c1 * c3q, c2 * c3q);
+    let cont = &integ.hist.cont;
+    for i in 0..n {
+        let (k1, k2, k3) = (cont[i], cont[n + i], cont[2 * n + i]);
+        let p = |q: f64| q * (k1 + (q - c2m1) * (k2 + (q - c1m1) * k3));
+        z1[i] = p(c1q);
+        z2[i] = p(c2q);
+        z3[i] = p(c3q);
+        w1[i] = TI[0][0] * z1[i] + TI[0][1] * z2[i] + TI[0][2] * z3[i];
+        w2[i] = TI[1][0] * z1[i] + TI[1][1] * z2[i] + TI[1][2] * z3[i];
+        w3[i] = TI[2][0] * z1[i] + TI[2][1] * z2[i] + TI[2][2] * z3[i];
+    }
+}
+
+/// What a converged Newton iteration leaves for the step-size choice.
+struct Newton {
+    /// Iterations used.
+    iterations: usize,
+    /// Last contraction estimate θ (J is kept while θ ≤ THET).
+    theta: f64,
+}
+
+/// The simplified Newton iteration for the stage increments (RADCOR, "loop for the simplified
+/// Newton iteration"; Hairer & Wanner IV.8, "simplified Newton iterations", in the transformed
+/// form of eq. 8.16ff), with the convergence monitor of the "stopping criterion": contraction θ_k = ‖ΔW^k‖/‖ΔW^{k-1}‖, stop when
+/// η_k ‖ΔW^k‖ ≤ κ Tol, η_k = θ_k/(1 - θ_k); give up early (with a factor for h) when the
+/// predicted error after NIT iterations is too large. Leaves Z and W in `work`.
+fn newton<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    work: &mut Work,
+    lu: &Lu,
+    tol: &Tolerances,
+    h: f64,
+) -> Result<Newton, (Why, f64)> {
+    let n = integ.x.len();
+    let t = integ.t;
+    let (c1, c2) = nodes();
+    let (u1, alph, beta) = inverse_eigenvalues();
+    let fac1 = u1 / h;
+    let (alphn, betan) = (alph / h, beta / h);
+    integ.hist.faccon = integ.hist.faccon.max(f64::EPSILON).powf(0.8);
+    let mut theta = THET;
+    let mut newt = 0;
+    let mut dynold = 0.0;
+    let mut thqold = 0.0;
+    loop {
+        if newt >= NIT {
+            return Err((Why::Newton, 0.5));
+        }
+        let Work {
+            z: [z1, z2, z3],
+            a: [a1, a2, a3],
+            ytmp,
+            ..
+        } = &mut *work;
+        for i in 0..n {
+            ytmp[i] = integ.x[i] + z1[i];
+        }
+        eval(sys, &mut integ.stats, t + c1 * h, ytmp, a1);
+        for i in 0..n {
+            ytmp[i] = integ.x[i] + z2[i];
+        }
+        eval(sys, &mut integ.stats, t + c2 * h, ytmp, a2);
+        for i in 0..n {
+            ytmp[i] = integ.x[i] + z3[i];
+        }
+        eval(sys, &mut integ.stats, t + h, ytmp, a3);
+        if !(all_finite(a1) && all_finite(a2) && all_finite(a3)) {
+            return Err((Why::NonFinite, 0.5));
+        }
+        slvrad(work, lu, fac1, alphn, betan);
+        let Work {
+            z: [z1, z2, z3],
+            w: [w1, w2, w3],
+            scal,
+            rr,
+            rc,
+            ..
+        } = &mut *work;
+        newt += 1;
+        let mut dyno = 0.0;
+        for i in 0..n {
+            let s = scal[i];
+            dyno += (rr[i] / s).powi(2) + (rc[i].re / s).powi(2) + (rc[i].im / s).powi(2);
+        }
+        let dyno = (dyno / (3 * n) as f64).sqrt();
+        if !dyno.is_finite() {
+            return Err((Why::NonFinite, 0.5));
+        }
+        // Convergence monitor: contraction θ and predicted remaining error.
+        if newt > 1 && newt < NIT {
+            let thq = dyno / dynold;
+            theta = if newt == 2 {
+                thq
+            } else {
+                (thq * thqold).sqrt()
+            };
+            thqold = thq;
+            if theta < 0.99 {
+                integ.hist.faccon = theta / (1.0 - theta);
+                let dyth =
+                    integ.hist.faccon * dyno * theta.powi((NIT - 1 - newt) as i32) / tol.fnewt;
+                if dyth >= 1.0 {
+                    // Would not converge within NIT iterations: smaller step.
+                    let qnewt = dyth.clamp(1e-4, 20.0);
+                    let hhfac = 0.8 * qnewt.powf(-1.0 / (4.0 + (NIT - 1 - newt) as f64));
+                    return Err((Why::Newton, hhfac));
+                }
+            } else {
+                return Err((Why::Newton, 0.5));
+            }
+        }
+        dynold = dyno.max(f64::EPSILON);
+        for i in 0..n {
+            w1[i] += rr[i];
+            w2[i] += rc[i].re;
+            w3[i] += rc[i].im;
+            z1[i] = T[0][0] * w1[i] + T[0][1] * w2[i] + T[0][2] * w3[i];
+            z2[i] = T[1][0] * w1[i] + T[1][1] * w2[i] + T[1][2] * w3[i];
+            z3[i] = T[2][0] * w1[i] + w2[i];
+        }
+        if integ.hist.faccon * dyno <= tol.fnewt {
+            return Ok(Newton {
+                iterations: newt,
+                theta,
+            });
+        }
+    }
+}
+
+/// The linear solves of one simplified Newton iteration (RADAU5's SLVRAD; Hairer & Wanner IV.8,
+/// eq. 8.16ff): the residual of the stage equations transformed with T⁻¹, from f at the stages in
+/// `work.a` and W in `work.w`, then the increments ΔW₁ of the real block (γ/h) I - J into
+/// `work.rr` and ΔW₂ + iΔW₃ of the complex block ((α + iβ)/h) I - J into `work.rc`.
+fn slvrad(work: &mut Work, lu: &Lu, fac1: f64, alphn: f64, betan: f64) {
+    let Work {
+        w: [w1, w2, w3],
+        a: [a1, a2, a3],
+        rr,
+        rc,
+        scratch_r,
+        scratch_c,
+        ..
+    } = work;
+    for i in 0..rr.len() {
+        let r1 = TI[0][0] * a1[i] + TI[0][1] * a2[i] + TI[0][2] * a3[i];
+        let r2 = TI[1][0] * a1[i] + TI[1][1] * a2[i] + TI[1][2] * a3[i];
+        let r3 = TI[2][0] * a1[i] + TI[2][1] * a2[i] + TI[2][2] * a3[i];
+        rr[i] = r1 - fac1 * w1[i];
+        rc[i] = Complex::new(
+            r2 - alphn * w2[i] + betan * w3[i],
+            r3 - betan * w2[i] - alphn * w3[i],
+        );
+    }
+    lu.real.solve(rr.as_mut_slice(), scratch_r);
+    lu.complex.solve(rc.as_mut_slice(), scratch_c);
+}
+
+/// The local error estimate (RADAU5's ESTRAD; Hairer & Wanner IV.8, eqs. 8.19–8.20):
+/// err = ((γ/h) I - J)⁻¹ (f(y0) + (e1 Z1 + e2 Z2 + e3 Z3)/h) in the weighted RMS norm, the
+/// filter suppressing the stiff components. On the first step or after a rejection an estimate
+/// ≥ 1 is refined once with f(y0 + err) in place of f(y0), as ESTRAD does.
+fn estrad<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    work: &mut Work,
+    lu: &Lu,
+    h: f64,
+) -> Result<f64, (Why, f64)> {
+    let n = integ.x.len();
+    let (dd1, dd2, dd3) = error_weights();
+    let Work {
+        z: [z1, z2, z3],
+        a: [a1, ..],
+        f0,
+        f2,
+        ytmp,
+        scal,
+        rr,
+        scratch_r,
+        ..
+    } = work;
+    let (hee1, hee2, hee3) = (dd1 / h, dd2 / h, dd3 / h);
+    for i in 0..n {
+        f2[i] = hee1 * z1[i] + hee2 * z2[i] + hee3 * z3[i];
+        rr[i] = f2[i] + f0[i];
+    }
+    lu.real.solve(rr.as_mut_slice(), scratch_r);
+    let norm = |v: &DVector<f64>| {
+        let s: f64 = (0..n).map(|i| (v[i] / scal[i]).powi(2)).sum();
+        (s / n as f64).sqrt().max(1e-10)
+    };
+    let mut err = norm(rr);
+    if err >= 1.0 && (integ.hist.first || integ.hist.last_rejected) {
+        // Refined estimate with one more f evaluation (stiff components).
+        for i in 0..n {
+            ytmp[i] = integ.x[i] + rr[i];
+        }
+        eval(sys, &mut integ.stats, integ.t, ytmp, a1);
+        if !all_finite(a1) {
+            return Err((Why::NonFinite, 0.5));
+        }
+        for i in 0..n {
+            rr[i] = a1[i] + f2[i];
+        }
+        lu.real.solve(rr.as_mut_slice(), scratch_r);
+        err = norm(rr);
+    }
+    if err.is_finite() {
+        Ok(err)
+    } else {
+        Err((Why::NonFinite, 0.5))
+    }
+}
+
+/// The step size proposed after a step of size `h` with error `err` and `newt` Newton
+/// iterations (RADCOR, "computation of hnew"; Hairer & Wanner IV.8, "step size selection", with
+/// a safety factor that falls with the Newton iterations used): h_new = h / quot, quot within
+/// [FACR, FACL]; for an accepted step Gustafsson's predictive controller (eq. 8.25) may shorten
+/// it, and its memory (the last accepted h and error) is updated.
+fn step_size(integ: &mut Integrator, err: f64, h: f64, newt: usize) -> f64 {
+    let cfac = SAFE * (1 + 2 * NIT) as f64;
+    let fac = SAFE.min(cfac / (newt + 2 * NIT) as f64);
+    let mut quot = FACR.max(FACL.min(err.powf(0.25) / fac));
+    let mut hnew = h / quot;
+    if err < 1.0 {
+        if !integ.hist.first && integ.hist.h_acc > 0.0 {
+            let facgus =
+                (integ.hist.h_acc / h) * (err * err / integ.hist.err_acc).powf(0.25) / SAFE;
+            let facgus = facgus.clamp(FACR, FACL);
+            quot = quot.max(facgus);
+            hnew = h / quot;
+        }
+        integ.hist.h_acc = h;
+        integ.hist.err_acc = err.max(1e-2);
+    }
+    hnew
+}
+
+/// Accepts the step from `t` to `t1` (RADCOR, "step is accepted"): y1 = y0 + Z3, the collocation
+/// polynomial of the step for dense output and the next Newton start (RADAU5's CONT, evaluated
+/// by CONTR5), the outputs due within the step, and the new error weights.
+#[allow(clippy::too_many_arguments)]
+fn accept(
+    integ: &mut Integrator,
+    work: &mut Work,
+    outputs: &mut Outputs,
+    out: &mut dyn FnMut(f64, &[f64]),
+    tol: &Tolerances,
+    t: f64,
+    h: f64,
+    t1: f64,
+) -> Result<(), SolverError> {
+    let n = integ.x.len();
+    let (c1, c2) = nodes();
+    let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
+    let Work {
+        z: [z1, z2, z3],
+        x1,
+        atol,
+        scal,
+        ..
+    } = work;
+    for i in 0..n {
+        x1[i] = integ.x[i] + z3[i];
+    }
+    if !all_finite(x1) {
+        return Err(nonfinite_here(t));
+    }
+    // Collocation polynomial of this step (CONT(N+1..4N) of RADAU5).
+    let mut cont = std::mem::take(&mut integ.hist.cont);
+    cont.resize(3 * n, 0.0);
+    for i in 0..n {
+        let k1 = (z2[i] - z3[i]) / c2m1;
+        let ak = (z1[i] - z2[i]) / c1mc2;
+        let acont3 = (ak - z1[i] / c1) / c2;
+        let k2 = (ak - k1) / c1m1;
+        cont[i] = k1;
+        cont[n + i] = k2;
+        cont[2 * n + i] = k2 - acont3;
+    }
+    if outputs.pending(t1) {
+        let cref = &cont;
+        let x1r = &*x1;
+        outputs.emit(
+            t,
+            h,
+            t1,
+            x1,
+            &mut |th, buf| {
+                let s = th - 1.0;
+                for i in 0..n {
+                    buf[i] = x1r[i]
+                        + s * (cref[i] + (s - c2m1) * (cref[n + i] + (s - c1m1) * cref[2 * n + i]));
+                }
+            },
+            out,
+        );
+    }
+    integ.hist.cont = cont;
+    integ.hist.h_old = h;
+    integ.hist.first = false;
+    integ.x.copy_from_slice(x1);
+    integ.t = t1;
+    integ.stats.accepted += 1;
+    set_scal(atol, tol.rtol, &integ.x, scal);
+    Ok(())
 }
 
 fn nonfinite_here(t: f64) -> SolverError {

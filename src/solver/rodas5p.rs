@@ -33,8 +33,8 @@ use std::sync::Arc;
 use nalgebra::{DMatrix, DVector};
 
 use super::common::{
-    all_finite, eval, initial_step, keep_factorisations, plan_step, rms, scale_into,
-    take_factorisations, NextStep, Outputs,
+    all_finite, eval, initial_step, plan_step, rms, scale_into, with_kept_memory, NextStep,
+    Outputs, Workspace,
 };
 use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
@@ -277,7 +277,8 @@ pub(crate) struct Work {
     spare: Option<Factor>,
 }
 
-impl Work {
+impl Workspace for Work {
+    type Lu = Factor;
     fn new(n: usize) -> Self {
         Work {
             f0: vec![0.0; n],
@@ -293,6 +294,12 @@ impl Work {
             pattern: PatternCache::default(),
             spare: None,
         }
+    }
+    fn dim(&self) -> usize {
+        self.f0.len()
+    }
+    fn spare(&mut self) -> &mut Option<Factor> {
+        &mut self.spare
     }
 }
 
@@ -439,20 +446,13 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     times: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
-    let n = integ.x.len();
-    let mut w = match integ.cache.rodas.take() {
-        Some(w) if w.f0.len() == n => w,
-        _ => Box::new(Work::new(n)),
-    };
     let stamp = sys.constant_jacobian();
-    let mut lus = take_factorisations(&mut integ.cache.rodas_lu, integ.cache.stamp, stamp);
-    let result = advance_with(integ, sys, t_end, times, out, &mut w, &mut lus, stamp);
-    if stamp.is_none() {
-        w.spare = lus.pop().or(w.spare.take());
-    }
-    integ.cache.rodas = Some(w);
-    keep_factorisations(&mut integ.cache.rodas_lu, lus, stamp);
-    result
+    with_kept_memory(
+        integ,
+        stamp,
+        |c| (&mut c.rodas, &mut c.rodas_lu),
+        |integ, w, lus| advance_with(integ, sys, t_end, times, out, w, lus, stamp),
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
