@@ -372,22 +372,30 @@ impl<M: FmuModel> Instance<M> {
         vrs: &[u32],
         type_name: &str,
     ) -> Result<Vec<usize>, Fmi2Status> {
-        let mut out = Vec::with_capacity(vrs.len());
-        for &vr in vrs {
-            let Some(index) = M::index_of(vr) else {
-                return Err(self.error(&format!("{function}: unknown value reference {vr}")));
-            };
-            let var = &M::variables()[index];
-            if var.kind.type_name() != type_name {
-                return Err(self.error(&format!(
-                    "{function}: value reference {vr} is '{}', a {}, not a {type_name}",
-                    var.name,
-                    var.kind.type_name()
-                )));
-            }
-            out.push(index);
+        vrs.iter()
+            .map(|&vr| self.resolve_one(function, vr, type_name))
+            .collect()
+    }
+
+    /// The table position of one value reference, checking its type.
+    fn resolve_one(
+        &mut self,
+        function: &str,
+        vr: u32,
+        type_name: &str,
+    ) -> Result<usize, Fmi2Status> {
+        let Some(index) = M::index_of(vr) else {
+            return Err(self.error(&format!("{function}: unknown value reference {vr}")));
+        };
+        let var = &M::variables()[index];
+        if var.kind.type_name() != type_name {
+            return Err(self.error(&format!(
+                "{function}: value reference {vr} is '{}', a {}, not a {type_name}",
+                var.name,
+                var.kind.type_name()
+            )));
         }
-        Ok(out)
+        Ok(index)
     }
 
     /// The getters: `fmi2GetReal` and its siblings.
@@ -402,15 +410,20 @@ impl<M: FmuModel> Instance<M> {
         if let Err(s) = self.allowed(function, Operation::GetValues) {
             return s;
         }
-        let indices = match self.resolve(function, vrs, type_name) {
-            Ok(i) => i,
-            Err(s) => return s,
-        };
+        // Every reference is checked before anything is read; then each is looked up again
+        // rather than collected, so that a getter called after every step allocates nothing.
+        for &vr in vrs {
+            if let Err(s) = self.resolve_one(function, vr, type_name) {
+                return s;
+            }
+        }
         if let Err(s) = self.bring_up_to_date(function) {
             return s;
         }
-        for (slot, index) in out.iter_mut().zip(indices) {
-            *slot = convert(self.values.get(index));
+        for (slot, &vr) in out.iter_mut().zip(vrs) {
+            if let Some(index) = M::index_of(vr) {
+                *slot = convert(self.values.get(index));
+            }
         }
         Fmi2Status::Ok
     }
