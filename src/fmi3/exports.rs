@@ -154,6 +154,18 @@ unsafe fn instantiate<M: FmuModel>(
 /// `fmi3InstantiateCoSimulation`. `earlyReturnAllowed` and the required intermediate variables
 /// are accepted and unused: the FMU never returns early and never calls back.
 ///
+/// The FMI 2.0 type name the shared core checks for an FMI 3.0 type the model has (the inverse
+/// of [`fmi3_type_name`]); `expand` has already refused every other type.
+fn fmi2_type_name(fmi3: &str) -> &'static str {
+    match fmi3 {
+        "Float64" => "Real",
+        "Int32" => "Integer",
+        "Boolean" => "Boolean",
+        "String" => "String",
+        _ => "",
+    }
+}
+
 /// # Safety
 /// As `fmi3InstantiateCoSimulation`: strings NULL or NUL-terminated.
 #[allow(clippy::too_many_arguments)]
@@ -285,10 +297,7 @@ pub unsafe fn get_values<M: FmuModel, T: Copy + Default>(
             })
             .collect();
         let mut got = vec![T::default(); scalars.len()];
-        let fmi2_type = M::variables()
-            .iter()
-            .find(|v| fmi3_type_name(&v.kind) == type_name)
-            .map_or("", |v| v.kind.type_name());
+        let fmi2_type = fmi2_type_name(type_name);
         let s = inst.get(function, fmi2_type, &scalars, &mut got, &convert);
         if s != Fmi2Status::Ok {
             return s;
@@ -344,10 +353,7 @@ pub unsafe fn set_values<M: FmuModel, T: Copy>(
         }
         let new: Vec<Value> = values.iter().map(|&v| convert(v)).collect();
         inst.log_call(|| format!("{function}(vr={vrs:?}, value={new:?})"));
-        let fmi2_type = M::variables()
-            .iter()
-            .find(|v| fmi3_type_name(&v.kind) == type_name)
-            .map_or("", |v| v.kind.type_name());
+        let fmi2_type = fmi2_type_name(type_name);
         inst.set(function, fmi2_type, &scalars, new)
     }))
 }
