@@ -148,6 +148,132 @@ mod solver_api {
         }
     }
 
+    /// Advances `integ` through the points `k * dt` for k in k0+1..=k1 with `advance_past`
+    /// (no limit), returning the states there.
+    fn past(
+        integ: &mut Integrator,
+        sys: &dyn OdeSystem,
+        k0: usize,
+        k1: usize,
+        dt: f64,
+    ) -> Vec<Vec<f64>> {
+        (k0 + 1..=k1)
+            .map(|k| {
+                let t = k as f64 * dt;
+                integ.advance_past(sys, t, f64::INFINITY).unwrap();
+                assert_eq!(
+                    integ.t().to_bits(),
+                    t.to_bits(),
+                    "point not reported exactly"
+                );
+                integ.x().to_vec()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn stepping_past_points_is_accurate_and_takes_fewer_steps() {
+        // Orego is stiff and oscillates; points every 0.5 s are much closer than the steps
+        // rtol 1e-6 allows. The states at the points must agree with a tight reference as well
+        // as those of steps ending on each point do. (Rodas5P only: Radau5 ends its steps on
+        // the points, checked below.)
+        for method in [Method::Rodas5P] {
+            let p = problem("orego").unwrap();
+            let mut reference = Integrator::new(opts(method, 1e-11, 1e-11), 0.0, p.y0()).unwrap();
+            let mut ending = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
+            let mut free = ending.clone();
+            let free_x = past(&mut free, p.as_ref(), 0, 200, 0.5);
+            let mut worst = [0.0_f64; 2];
+            for (k, xf) in free_x.iter().enumerate() {
+                let t = (k + 1) as f64 * 0.5;
+                reference.advance_to(p.as_ref(), t).unwrap();
+                ending.advance_to(p.as_ref(), t).unwrap();
+                for (w, x) in worst.iter_mut().zip([xf.as_slice(), ending.x()]) {
+                    for (a, b) in x.iter().zip(reference.x()) {
+                        *w = w.max((a - b).abs() / (1e-6 + b.abs()));
+                    }
+                }
+            }
+            assert!(
+                worst[0] < 10.0 * worst[1].max(1e-6),
+                "{method:?}: past {:e}, ending {:e}",
+                worst[0],
+                worst[1]
+            );
+            assert!(
+                free.stats().accepted < ending.stats().accepted,
+                "{method:?}: {:?} vs {:?}",
+                free.stats(),
+                ending.stats()
+            );
+        }
+    }
+
+    #[test]
+    fn radau5_ends_its_steps_on_the_points() {
+        let p = problem("orego").unwrap();
+        let mut a = Integrator::new(opts(Method::Radau5, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
+        let mut b = a.clone();
+        let xa = past(&mut a, p.as_ref(), 0, 100, 0.5);
+        for (k, x) in xa.iter().enumerate() {
+            b.advance_to(p.as_ref(), (k + 1) as f64 * 0.5).unwrap();
+            assert_eq!(x.as_slice(), b.x());
+            assert!(!a.is_past());
+        }
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn a_step_kept_past_a_point_is_saved_and_dropped_on_a_jump() {
+        for method in [Method::Rodas5P] {
+            let p = problem("orego").unwrap();
+            let mut a = Integrator::new(opts(method, 1e-6, 1e-6), 0.0, p.y0()).unwrap();
+            past(&mut a, p.as_ref(), 0, 10, 0.5);
+            // Find a point inside a kept step, save there, and go on in both copies.
+            let mut k = 10;
+            while !a.is_past() {
+                k += 1;
+                past(&mut a, p.as_ref(), k - 1, k, 0.5);
+            }
+            let json = serde_json::to_string(&a).unwrap();
+            let mut b: Integrator = serde_json::from_str(&json).unwrap();
+            assert_eq!(a, b, "{method:?}: JSON round trip must be exact");
+            let xa = past(&mut a, p.as_ref(), k, k + 40, 0.5);
+            let xb = past(&mut b, p.as_ref(), k, k + 40, 0.5);
+            assert_eq!(xa, xb, "{method:?}: states differ after restore");
+            assert_eq!(a, b);
+            // A jump goes on from the reported point, with no step kept.
+            while !a.is_past() {
+                k += 1;
+                past(&mut a, p.as_ref(), k + 39, k + 40, 0.5);
+            }
+            let (t, x) = (a.t(), a.x().to_vec());
+            a.notify_discontinuity();
+            assert!(!a.is_past());
+            assert_eq!((a.t(), a.x()), (t, x.as_slice()));
+            // The limit is respected, and a limit before t_end is refused by name.
+            let limit = t + 0.25;
+            for j in 1..=5 {
+                let t_end = (t + 0.05 * j as f64).min(limit);
+                a.advance_past(p.as_ref(), t_end, limit).unwrap();
+                assert_eq!(a.t(), t_end);
+                assert!(
+                    a.reached() <= limit,
+                    "{method:?}: {} past {limit}",
+                    a.reached()
+                );
+            }
+            assert_eq!(
+                a.reached(),
+                limit,
+                "{method:?}: the step was cut at the limit"
+            );
+            let e = a.advance_past(p.as_ref(), t + 0.2, t + 0.15).unwrap_err();
+            assert_eq!(e.kind, SolverErrorKind::InvalidInput);
+            assert!(e.message.contains("limit"), "{e}");
+        }
+    }
+
     #[test]
     fn serialised_state_has_no_non_finite_numbers() {
         for method in METHODS {

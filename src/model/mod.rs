@@ -173,10 +173,19 @@ impl FmuModel for HydraulicSlewingPlate {
                 message: "the model was not initialized".into(),
             });
         };
-        if system.set_inputs(values) {
+        let jump = system.set_inputs(values);
+        if jump {
             // A zero-order-hold jump of the inputs: the solution has a kink here.
             integrator.notify_discontinuity();
         }
+        // Steps run past the communication point while the inputs are unchanged: inputs held
+        // over the last step are likely held over the next, and the state there comes from the
+        // dense output. After a jump the step ends on the point, as the next jump may come
+        // there too (an importer closing a loop sets inputs at every point).
+        let limit = match self.parameters.as_ref() {
+            Some(p) if p.dense_output && !jump => p.stop_time.unwrap_or(f64::INFINITY).max(t_end),
+            _ => t_end,
+        };
         // After a communication step shorter than the solver's minimum step, the step size it
         // carries on with is as short and may not grow past that minimum in the next step:
         // let the next step start from a fresh estimate instead.
@@ -185,7 +194,7 @@ impl FmuModel for HydraulicSlewingPlate {
         }
         self.step_start.clear();
         self.step_start.extend_from_slice(integrator.x());
-        let result = integrator.advance_to(&*system, t_end);
+        let result = integrator.advance_past(&*system, t_end, limit);
         log(LogCategory::Solver, &|| {
             let stats = integrator.stats();
             format!(
@@ -437,5 +446,5 @@ fn check_restored_integrator(
             3 * dim
         ));
     }
-    Ok(())
+    integrator.ahead.check(dim, time)
 }

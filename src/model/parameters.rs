@@ -43,6 +43,11 @@ pub struct Parameters {
     pub atol: f64,
     pub max_step: f64,
     pub max_steps: u64,
+    /// Co-simulation: let steps run past communication points while the inputs are unchanged
+    /// (`solver.dense_output`).
+    pub dense_output: bool,
+    /// The experiment's stop time, if the importer gave one: no step goes past it.
+    pub stop_time: Option<f64>,
 }
 
 /// Parameters that must be strictly positive (the XML says `min="0"`, which admits zero).
@@ -244,6 +249,8 @@ impl Parameters {
             atol: values.real(idx::SOLVER_ATOL),
             max_step: values.real(idx::SOLVER_MAX_STEP),
             max_steps: max_steps as u64,
+            dense_output: values.boolean(idx::SOLVER_DENSE_OUTPUT),
+            stop_time: experiment.stop_time,
         };
         parameters.check_derived(values)?;
         Ok(parameters)

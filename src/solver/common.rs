@@ -251,20 +251,23 @@ impl<'a> Outputs<'a> {
 pub(crate) enum NextStep {
     /// `t_end` is reached.
     Done,
-    /// Attempt a step of size `h`; `last` if it ends on `t_end`. `proposed` is the step the
-    /// controller asked for, kept as the next call's guess when `t_end` cut it short.
+    /// Attempt a step of size `h`; `last` if it ends on the limit (`t_end`, unless the caller
+    /// lets steps go past it). `proposed` is the step the controller asked for, kept as the
+    /// next call's guess when the limit cut it short.
     Step { h: f64, last: bool, proposed: f64 },
 }
 
 /// Plans the next step attempt, the same way for both methods (with `quantise`, a step shorter
 /// than what is left before `t_end` is an equal share of it, see below): covers a rounding remnant before
 /// `t_end` (a few ulp of t) with an explicit Euler step, error O(remaining^2); counts the attempt
-/// against `max_steps`; clips h to `max_step` and to `t_end`; and fails when h has fallen below
+/// against `max_steps`; clips h to `max_step` and to `limit` (`t_end`, or beyond it when the
+/// caller lets steps go past `t_end`: [`Integrator::advance_past`]); and fails when h has fallen below
 /// the minimum step, with the kind and reason `why_small` gives. A final step shorter than the
 /// minimum is fine: its size is dictated by `t_end`, not by error control.
 pub(crate) fn plan_step(
     integ: &mut Integrator,
     t_end: f64,
+    limit: f64,
     f0: &[f64],
     attempts: &mut u64,
     quantise: bool,
@@ -291,9 +294,11 @@ pub(crate) fn plan_step(
         ));
     }
     let h_proposed = integ.h.min(integ.options.max_step);
-    let (h, last) = if h_proposed >= remaining {
-        (remaining, true)
-    } else if quantise && h_proposed * 64.0 >= remaining {
+    // Room before the limit: `remaining` itself unless the caller lets steps go past t_end.
+    let room = if limit > t_end { limit - t } else { remaining };
+    let (h, last) = if h_proposed >= room {
+        (room, true)
+    } else if quantise && limit == t_end && h_proposed * 64.0 >= remaining {
         // An equal share of what is left, not larger than proposed: the same few step sizes
         // recur from one communication step to the next, and so do their factorisations (with
         // a constant Jacobian, which is when this is asked for).
@@ -303,7 +308,9 @@ pub(crate) fn plan_step(
         (h_proposed, false)
     };
     let hmin = h_min(&integ.options, t);
-    if h < hmin && !last {
+    // A step that reaches t_end may be short: its size came from t_end (a short communication
+    // step), not from error control.
+    if h < hmin && !last && h < remaining {
         let (kind, reason) = why_small();
         return Err(SolverError::new(
             kind,

@@ -69,16 +69,34 @@ pub(crate) const KEPT_FACTORISATIONS: usize = 3;
 /// always, a shift below 1e-9 of a step.
 pub(crate) const SAME_STEP: f64 = 1e-9;
 
+/// A step the controller proposes may be taken shorter, down to 1/SHORTER of it, to use a kept
+/// factorisation of a constant Jacobian (RADAU5's QUOT2 = 1.2 plays this part for its step
+/// changes): a step somewhat shorter than needed costs less than a new LU.
+pub(crate) const SHORTER: f64 = 1.2;
+
 impl Counted {
     /// The step size to factorise for (or use the factorisation of) when the step is `h`: a
-    /// kept one within [`SAME_STEP`] of h (moved to the front), or h itself, counted as a new
-    /// factorisation (`count` is added to the LU counter) and kept.
-    pub fn factorisation_step(&mut self, h: f64, stats: &mut Stats, count: u64) -> f64 {
-        match self
+    /// kept one within [`SAME_STEP`] of h, or, if `shorten`, the longest kept one between
+    /// h / [`SHORTER`] and h (moved to the front); or h itself, counted as a new factorisation
+    /// (`count` is added to the LU counter) and kept.
+    pub fn factorisation_step(
+        &mut self,
+        h: f64,
+        stats: &mut Stats,
+        count: u64,
+        shorten: bool,
+    ) -> f64 {
+        let same = self
             .lu_h
             .iter()
-            .position(|&k| (k - h).abs() <= SAME_STEP * h)
-        {
+            .position(|&k| (k - h).abs() <= SAME_STEP * h);
+        let shorter = || {
+            let fits = |k: f64| k <= h && k * SHORTER >= h;
+            (0..self.lu_h.len())
+                .filter(|&i| fits(self.lu_h[i]))
+                .max_by(|&i, &j| self.lu_h[i].total_cmp(&self.lu_h[j]))
+        };
+        match same.or_else(|| if shorten { shorter() } else { None }) {
             Some(i) => {
                 let k = self.lu_h.remove(i);
                 self.lu_h.insert(0, k);
@@ -197,6 +215,95 @@ impl Cache {
     }
 }
 
+/// The last accepted step when the integrator has stepped past the point it reports (see
+/// [`Integrator::advance_within`]): the step from `t0` to `t1` of size `h`, its end state `x1`
+/// (where integration goes on), its start state `x0` and the coefficients of its dense output,
+/// from which the reported point `(t, x)` inside the step was interpolated.
+///
+/// The buffers are kept while it is idle, so that stepping past points allocates nothing once
+/// warm; only an active one is saved (an idle one serialises to nothing and compares equal to
+/// any other idle one).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub(crate) struct Ahead {
+    /// True while the integrator's (t, x) is an interpolated point inside this step.
+    pub active: bool,
+    pub t0: f64,
+    pub t1: f64,
+    pub h: f64,
+    pub x0: Vec<f64>,
+    pub x1: Vec<f64>,
+    /// Dense-output coefficients, 3 n numbers: Rodas5P's three correction vectors of its
+    /// order-4 interpolant.
+    pub coef: Vec<f64>,
+}
+
+impl Ahead {
+    fn is_idle(&self) -> bool {
+        !self.active
+    }
+
+    /// Makes the buffers hold a step from `t0` (state `x0`) to `t1` (state `x1`) of size `h`,
+    /// active; the method fills `coef` (resized to 3 n).
+    pub fn keep(&mut self, t0: f64, t1: f64, h: f64, x0: &[f64], x1: &[f64]) {
+        self.active = true;
+        self.t0 = t0;
+        self.t1 = t1;
+        self.h = h;
+        self.x0.clear();
+        self.x0.extend_from_slice(x0);
+        self.x1.clear();
+        self.x1.extend_from_slice(x1);
+        self.coef.resize(3 * x0.len(), 0.0);
+    }
+
+    /// Checks a restored step: finite, of the right sizes, and covering `t`.
+    pub fn check(&self, n: usize, t: f64) -> Result<(), String> {
+        if !self.active {
+            return Ok(());
+        }
+        if self.x0.len() != n || self.x1.len() != n || self.coef.len() != 3 * n {
+            return Err(format!(
+                "its step past the communication point holds {}, {} and {} numbers, the model needs {n}, {n} and {}",
+                self.x0.len(),
+                self.x1.len(),
+                self.coef.len(),
+                3 * n
+            ));
+        }
+        let numbers = [self.t0, self.t1, self.h].into_iter();
+        if !numbers
+            .chain(self.x0.iter().copied())
+            .chain(self.x1.iter().copied())
+            .chain(self.coef.iter().copied())
+            .all(f64::is_finite)
+        {
+            return Err("its step past the communication point holds a non-finite number".into());
+        }
+        if !(self.h > 0.0 && self.t0 <= t && t <= self.t1) {
+            return Err(format!(
+                "its step past the communication point, from t = {} to {}, does not cover t = {t}",
+                self.t0, self.t1
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl PartialEq for Ahead {
+    fn eq(&self, other: &Ahead) -> bool {
+        match (self.active, other.active) {
+            (false, false) => true,
+            (true, true) => {
+                (self.t0, self.t1, self.h) == (other.t0, other.t1, other.h)
+                    && self.x0 == other.x0
+                    && self.x1 == other.x1
+                    && self.coef == other.coef
+            }
+            _ => false,
+        }
+    }
+}
+
 /// A stiff integrator: options, current point, next step size, history and statistics.
 ///
 /// It is `Clone` and serde-serialisable; a restored copy continues bit-identically (see the
@@ -213,6 +320,9 @@ pub struct Integrator {
     /// What the counters know about a constant Jacobian.
     #[serde(default)]
     pub(crate) counted: Counted,
+    /// The step that went past the reported point, if the last call stepped past it.
+    #[serde(default, skip_serializing_if = "Ahead::is_idle")]
+    pub(crate) ahead: Ahead,
     #[serde(skip)]
     pub(crate) cache: Cache,
 }
@@ -233,6 +343,7 @@ impl Integrator {
             stats: Stats::default(),
             hist: History::fresh(),
             counted: Counted::default(),
+            ahead: Ahead::default(),
             cache: Cache::default(),
         })
     }
@@ -291,6 +402,65 @@ impl Integrator {
         times: &[f64],
         out: &mut dyn FnMut(f64, &[f64]),
     ) -> Result<(), SolverError> {
+        self.advance(sys, t_end, t_end, times, out)
+    }
+
+    /// Advance to `t_end` without ending a step there: steps keep the size the error control
+    /// chooses and may go past `t_end`, though never past `limit` (`t_end <= limit`, `+inf`
+    /// for none). Afterwards `t()` is `t_end` bit-exactly and `x()` the state there,
+    /// interpolated from the dense output of the step that covers it (Rodas5P's continuous
+    /// extension of order 4), which is within the tolerance like the step's end point.
+    /// Radau5 ends its steps on `t_end` all the same: its dense output, the collocation
+    /// polynomial, is of order 3 only and would spoil the accuracy between its steps.
+    ///
+    /// The integrator keeps that step: a next call whose `t_end` it also covers only
+    /// interpolates, and one beyond it goes on from the step's end, so that a run of short
+    /// calls costs about as many steps as one long call. [`Integrator::notify_discontinuity`]
+    /// and [`Integrator::reset`] drop the step and go on from the reported point, as after
+    /// [`Integrator::advance_to`]. The step is part of the integrator's saved state, so a
+    /// restored copy continues bit-identically.
+    ///
+    /// With `limit == t_end` this is [`Integrator::advance_to`].
+    pub fn advance_past<S: OdeSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+        limit: f64,
+    ) -> Result<(), SolverError> {
+        self.advance(sys, t_end, limit, &[], &mut |_, _| {})
+    }
+
+    /// Is (t(), x()) a point inside the last accepted step, interpolated by
+    /// [`Integrator::advance_past`], rather than a step's end?
+    pub fn is_past(&self) -> bool {
+        self.ahead.active
+    }
+
+    /// Where integration has got to: the end of the step kept past `t()` if
+    /// [`Integrator::is_past`], else `t()`. Never past the `limit` of [`Integrator::advance_past`].
+    pub fn reached(&self) -> f64 {
+        if self.ahead.active {
+            self.ahead.t1
+        } else {
+            self.t
+        }
+    }
+
+    fn advance<S: OdeSystem + ?Sized>(
+        &mut self,
+        sys: &S,
+        t_end: f64,
+        limit: f64,
+        times: &[f64],
+        out: &mut dyn FnMut(f64, &[f64]),
+    ) -> Result<(), SolverError> {
+        if limit.is_nan() || limit < t_end {
+            return Err(SolverError::new(
+                SolverErrorKind::InvalidInput,
+                self.t,
+                format!("the limit {limit} lies before t_end = {t_end}"),
+            ));
+        }
         if sys.dim() != self.x.len() {
             return Err(SolverError::new(
                 SolverErrorKind::InvalidInput,
@@ -317,8 +487,28 @@ impl Integrator {
         if t_end == self.t {
             return Ok(());
         }
+        if self.ahead.active {
+            if t_end <= self.ahead.t1 {
+                self.emit_ahead(t_end, times, out);
+                let mut x = std::mem::take(&mut self.x);
+                self.dense_at(t_end, &mut x);
+                self.x = x;
+                self.t = t_end;
+                return Ok(());
+            }
+            // Go on from the end of the kept step.
+            let t1 = self.ahead.t1;
+            self.emit_ahead(t1, times, out);
+            std::mem::swap(&mut self.x, &mut self.ahead.x1);
+            self.t = t1;
+            self.ahead.active = false;
+        }
         let result = match self.options.method {
-            Method::Rodas5P => super::rodas5p::advance(self, sys, t_end, times, out),
+            Method::Rodas5P => super::rodas5p::advance(self, sys, t_end, limit, times, out),
+            // Radau5 ends its steps on t_end whatever the limit: its dense output, the
+            // collocation polynomial, is of order 3 only, and read between the points of free
+            // steps it erred by 1e-5 at rtol 1e-6 on the LOES with the plate (6 times the error
+            // of steps ending on the points; Rodas5P's order-4 extension: 2e-7).
             Method::Radau5 => super::radau5::advance(self, sys, t_end, times, out),
         };
         if let Err(e) = &result {
@@ -331,6 +521,33 @@ impl Integrator {
             }
         }
         result
+    }
+
+    /// The state at `t` inside the kept step (t0 <= t <= t1), into `buf`: its end state at t1
+    /// itself, else the method's dense output.
+    fn dense_at(&self, t: f64, buf: &mut [f64]) {
+        let a = &self.ahead;
+        if t == a.t1 {
+            buf.copy_from_slice(&a.x1);
+            return;
+        }
+        // Only Rodas5P steps past t_end (see `advance`).
+        super::rodas5p::dense(&a.x0, &a.x1, &a.coef, (t - a.t0) / a.h, buf);
+    }
+
+    /// Calls `out` at the output times in (t(), until] from the kept step.
+    fn emit_ahead(&self, until: f64, times: &[f64], out: &mut dyn FnMut(f64, &[f64])) {
+        let mut due = times
+            .iter()
+            .filter(|&&w| w > self.t && w <= until)
+            .peekable();
+        if due.peek().is_some() {
+            let mut buf = vec![0.0; self.x.len()];
+            for &w in due {
+                self.dense_at(w, &mut buf);
+                out(w, &buf);
+            }
+        }
     }
 
     /// The inputs of the system jumped (zero-order hold at a communication point): forget
@@ -346,6 +563,8 @@ impl Integrator {
             cont,
             ..History::fresh()
         };
+        // Go on from the reported point, not from the end of a step taken with the old inputs.
+        self.ahead.active = false;
     }
 
     /// Replace the state (e.g. re-initialisation); resets history like notify_discontinuity.

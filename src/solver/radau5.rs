@@ -349,11 +349,18 @@ fn radcor<S: OdeSystem + ?Sized>(
             Why::Error => (SolverErrorKind::StepTooSmall, "to meet the tolerances"),
         };
         let quantise = stamp.is_some();
-        let (h, last, h_proposed) =
-            match plan_step(integ, t_end, &work.f0, &mut attempts, quantise, why_small)? {
-                NextStep::Done => return Ok(()),
-                NextStep::Step { h, last, proposed } => (h, last, proposed),
-            };
+        let (h, last, h_proposed) = match plan_step(
+            integ,
+            t_end,
+            t_end,
+            &work.f0,
+            &mut attempts,
+            quantise,
+            why_small,
+        )? {
+            NextStep::Done => return Ok(()),
+            NextStep::Step { h, last, proposed } => (h, last, proposed),
+        };
         let t = integ.t;
         if need_jac {
             if !jacobian_at(integ, sys, work, lus, stamp, tol.rtol) {
@@ -518,7 +525,9 @@ fn decompose(
     } = work;
     match stamp {
         Some(_) => {
-            let lu_h = integ.counted.factorisation_step(h, &mut integ.stats, 2);
+            let lu_h = integ
+                .counted
+                .factorisation_step(h, &mut integ.stats, 2, false);
             let jac = &integ.cache.jac;
             front_factorisation(
                 lus,
@@ -855,22 +864,8 @@ fn accept(
         cont[2 * n + i] = k2 - acont3;
     }
     if outputs.pending(t1) {
-        let cref = &cont;
-        let x1r = &*x1;
-        outputs.emit(
-            t,
-            h,
-            t1,
-            x1,
-            &mut |th, buf| {
-                let s = th - 1.0;
-                for i in 0..n {
-                    buf[i] = x1r[i]
-                        + s * (cref[i] + (s - c2m1) * (cref[n + i] + (s - c1m1) * cref[2 * n + i]));
-                }
-            },
-            out,
-        );
+        let (cref, x1r) = (&cont, &*x1);
+        outputs.emit(t, h, t1, x1, &mut |th, buf| dense(x1r, cref, th, buf), out);
     }
     integ.hist.cont = cont;
     integ.hist.h_old = h;
@@ -880,6 +875,19 @@ fn accept(
     integ.stats.accepted += 1;
     set_scal(atol, tol.rtol, &integ.x, scal);
     Ok(())
+}
+
+/// The collocation polynomial of a step at θ ∈ [0, 1] of it (RADAU5's CONTR5, with
+/// s = θ - 1 measured back from the step's end), into `buf`, from the end state `x1` and the
+/// polynomial's coefficients `cont` (3 n numbers).
+pub(crate) fn dense(x1: &[f64], cont: &[f64], theta: f64, buf: &mut [f64]) {
+    let n = x1.len();
+    let (c1, c2) = nodes();
+    let (c1m1, c2m1) = (c1 - 1.0, c2 - 1.0);
+    let s = theta - 1.0;
+    for i in 0..n {
+        buf[i] = x1[i] + s * (cont[i] + (s - c2m1) * (cont[n + i] + (s - c1m1) * cont[2 * n + i]));
+    }
 }
 
 fn nonfinite_here(t: f64) -> SolverError {

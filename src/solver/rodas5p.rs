@@ -406,17 +406,51 @@ fn step<S: OdeSystem + ?Sized>(
     }
 }
 
+/// The dense output's three correction terms of component `i`: k_r = Σ_j H_rj U_j.
+fn corrections(u: &[Vec<f64>], i: usize) -> [f64; 3] {
+    let mut k = [0.0; 3];
+    for (r, kr) in k.iter_mut().enumerate() {
+        for j in 0..STAGES {
+            *kr += H[r][j] * u[j][i];
+        }
+    }
+    k
+}
+
+/// The order-4 continuous extension at θ ∈ [0, 1] of one component, from its values at the
+/// step's ends and its corrections.
+#[inline]
+fn extension(y0: f64, y1: f64, k: [f64; 3], theta: f64) -> f64 {
+    let t1 = 1.0 - theta;
+    t1 * y0 + theta * (y1 + t1 * (k[0] + theta * (k[1] + theta * k[2])))
+}
+
 /// Evaluate the dense output at θ into `buf` from y0, y1 and the stage vectors.
 fn interpolate(y0: &[f64], y1: &[f64], u: &[Vec<f64>], theta: f64, buf: &mut [f64]) {
-    let t1 = 1.0 - theta;
     for i in 0..y0.len() {
-        let mut k = [0.0; 3];
-        for (r, kr) in k.iter_mut().enumerate() {
-            for j in 0..STAGES {
-                *kr += H[r][j] * u[j][i];
-            }
-        }
-        buf[i] = t1 * y0[i] + theta * (y1[i] + t1 * (k[0] + theta * (k[1] + theta * k[2])));
+        buf[i] = extension(y0[i], y1[i], corrections(u, i), theta);
+    }
+}
+
+/// The corrections of every component into `coef` (k_0 for all components, then k_1, then
+/// k_2): the dense output of a step kept past the reported point.
+fn dense_coefficients(u: &[Vec<f64>], coef: &mut [f64]) {
+    let n = u[0].len();
+    for i in 0..n {
+        let k = corrections(u, i);
+        coef[i] = k[0];
+        coef[n + i] = k[1];
+        coef[2 * n + i] = k[2];
+    }
+}
+
+/// The dense output at θ of a kept step (see [`dense_coefficients`]) into `buf`: the same
+/// numbers as the output times of [`Integrator::advance_to_with_output`] get.
+pub(crate) fn dense(y0: &[f64], y1: &[f64], coef: &[f64], theta: f64, buf: &mut [f64]) {
+    let n = y0.len();
+    for i in 0..n {
+        let k = [coef[i], coef[n + i], coef[2 * n + i]];
+        buf[i] = extension(y0[i], y1[i], k, theta);
     }
 }
 
@@ -443,6 +477,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     t_end: f64,
+    limit: f64,
     times: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
@@ -451,7 +486,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         integ,
         stamp,
         |c| (&mut c.rodas, &mut c.rodas_lu),
-        |integ, w, lus| advance_with(integ, sys, t_end, times, out, w, lus, stamp),
+        |integ, w, lus| advance_with(integ, sys, (t_end, limit), times, out, w, lus, stamp),
     )
 }
 
@@ -459,7 +494,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
 fn advance_with<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
-    t_end: f64,
+    (t_end, limit): (f64, f64),
     times: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
     w: &mut Work,
@@ -496,11 +531,18 @@ fn advance_with<S: OdeSystem + ?Sized>(
             }
         };
         let quantise = stamp.is_some();
-        let (h, last, h_proposed) =
-            match plan_step(integ, t_end, &w.f0, &mut attempts, quantise, why_small)? {
-                NextStep::Done => return Ok(()),
-                NextStep::Step { h, last, proposed } => (h, last, proposed),
-            };
+        let (h, last, h_proposed) = match plan_step(
+            integ,
+            t_end,
+            limit,
+            &w.f0,
+            &mut attempts,
+            quantise,
+            why_small,
+        )? {
+            NextStep::Done => return Ok(()),
+            NextStep::Step { h, last, proposed } => (h, last, proposed),
+        };
         let t = integ.t;
         if !jac_ok {
             let opts = &integ.options;
@@ -542,10 +584,16 @@ fn advance_with<S: OdeSystem + ?Sized>(
             jac_ok = true;
         }
         // W = I/(h γ) - J, one LU for all 8 stages: with a constant J a kept one if it was
-        // made for this step size (to within SAME_STEP; see there), else a new one.
+        // made for this step size (to within SAME_STEP; see there) or, stepping freely, for a
+        // step up to SHORTER times shorter, else a new one.
         let (h, ok) = match stamp {
             Some(_) => {
-                let h_lu = integ.counted.factorisation_step(h, &mut integ.stats, 1);
+                // A step free to go past t_end that does not end on the limit may be
+                // shortened to use a kept LU.
+                let shorten = limit > t_end && !last;
+                let h_lu = integ
+                    .counted
+                    .factorisation_step(h, &mut integ.stats, 1, shorten);
                 let jac = &integ.cache.jac;
                 let pattern = &mut w.pattern;
                 let ok = front_factorisation(
@@ -583,7 +631,11 @@ fn advance_with<S: OdeSystem + ?Sized>(
         };
         match result {
             Ok(err) if err <= 1.0 => {
-                let t1 = if last { t_end } else { t + h };
+                let t1 = if last { limit } else { t + h };
+                // Past t_end (only when the caller allows it): keep the step and report t_end.
+                let free = limit > t_end;
+                let past = free && t1 > t_end;
+                let done = last || (free && t1 >= t_end);
                 if outputs.pending(t1) {
                     let (x0, x1, u) = (&integ.x, &w.x1, &w.u);
                     outputs.emit(
@@ -595,8 +647,16 @@ fn advance_with<S: OdeSystem + ?Sized>(
                         out,
                     );
                 }
-                integ.x.copy_from_slice(&w.x1);
-                integ.t = t1;
+                if past {
+                    integ.ahead.keep(t, t1, h, &integ.x, &w.x1);
+                    dense_coefficients(&w.u, &mut integ.ahead.coef);
+                    let a = &integ.ahead;
+                    dense(&a.x0, &a.x1, &a.coef, (t_end - t) / h, &mut integ.x);
+                    integ.t = t_end;
+                } else {
+                    integ.x.copy_from_slice(&w.x1);
+                    integ.t = t1;
+                }
                 integ.stats.accepted += 1;
                 consecutive_rejections = 0;
                 last_nonfinite = false;
@@ -616,11 +676,11 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 integ.hist.first = false;
                 let mut h_new = h * fac;
                 if last {
-                    // The step was shortened to hit t_end: do not let that shrink the next one.
+                    // The step was shortened to hit the limit: do not let that shrink the next.
                     h_new = h_new.max(h_proposed);
                 }
                 integ.h = h_new.min(integ.options.max_step);
-                if last {
+                if done {
                     return Ok(());
                 }
                 eval_f0(integ, sys, &mut w.f0)?;
