@@ -90,22 +90,34 @@
 //! A modulated TF or GY whose causality needs the inverse modulus divides by the signal; keep it
 //! away from zero.
 
-mod causality;
-mod compile;
-mod discretisation;
-mod dot;
-mod dual;
+// The graph and its checks.
 mod element;
 mod error;
 mod graph;
-mod structure;
 mod validate;
+// Compilation, in pipeline order: causality, lowering to equations, sorting, the flat plan, the
+// structure read off it.
+mod causality;
+mod lower;
+mod plan;
+mod sort;
+mod structure;
+// The compiled model: evaluation (values and dual numbers), energy, linearisation.
+mod compiled;
+mod discretisation;
+mod dual;
+mod energy;
+mod linearization;
+// Drawing.
+mod dot;
 
-pub use compile::{matrix_json, CompiledModel, Linearization, PowerBalance};
+pub use compiled::CompiledModel;
 pub use discretisation::ExactDiscretisation;
 pub use element::{
     Bond, BondId, Element, ElementId, ElementKind, Law, LawFn, Modulus, NonlinearLaw, OutputDef,
     OutputSource, Quantity, SignalBlock, SignalId, SignalKind, SourceValue,
 };
+pub use energy::PowerBalance;
 pub use error::BondGraphError;
 pub use graph::BondGraph;
+pub use linearization::{matrix_json, Linearization};

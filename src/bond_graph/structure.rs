@@ -17,7 +17,7 @@
 //!   quantity that depends on x, or applies a nonlinear law to one. Then J is the same at every
 //!   (x, u), and the solver may factorise it once per step size (the LOES with the plate).
 
-use super::compile::{Op, NONE};
+use super::plan::{Op, NONE};
 
 /// What the structure of the plan says about `f` and its Jacobian.
 #[derive(Clone, Debug)]

@@ -1,0 +1,399 @@
+//! The compiled model: the flat plan and its evaluation.
+//!
+//! [`CompiledModel`] holds the plan that lowering (`lower.rs`) built: the operations over
+//! numbered slots (`plan.rs`), the nonlinear laws they call, which slots hold the derivatives,
+//! outputs and bond variables, and the structure read off the plan (`structure.rs`: the
+//! derivative plan, the Jacobian's pattern and colouring). Evaluating is one loop over the
+//! operations ([`CompiledModel::derivatives`] and the others), generic over the scalar so that the
+//! same loop gives values (`f64`) and exact derivatives (dual numbers, `dual.rs`). The slots live
+//! in a per-thread scratch buffer, so running the plan allocates nothing once the buffer has
+//! grown, and one model serves several threads at once. The energy and power balance are in `energy.rs`, the linearisation in
+//! `linearization.rs`.
+
+use std::cell::RefCell;
+
+use nalgebra::DMatrix;
+
+use super::dual::{Dual, Scalar};
+use super::element::NonlinearLaw;
+use super::energy::{PowerTerm, Storage};
+use super::plan::{Op, NONE};
+use super::structure::Structure;
+
+/// A compiled bond graph: state equations `dx/dt = f(x, u)` and outputs `y = g(x, u)` as a flat
+/// plan of operations over slots, with exact derivatives.
+///
+/// States are the energy variables (momenta `p` of I elements, displacements `q` of C elements,
+/// both for fields) and the integrator outputs, in creation order.
+#[derive(Clone, Debug)]
+pub struct CompiledModel {
+    pub(super) name: String,
+    pub(super) state_names: Vec<String>,
+    pub(super) input_names: Vec<String>,
+    pub(super) output_names: Vec<String>,
+    pub(super) bond_names: Vec<String>,
+    pub(super) n_slots: usize,
+    pub(super) ops: Vec<Op>,
+    pub(super) terms: Vec<(f64, u32)>,
+    pub(super) laws: Vec<NonlinearLaw>,
+    pub(super) deriv_slots: Vec<u32>,
+    pub(super) output_slots: Vec<u32>,
+    pub(super) bond_slots: Vec<(u32, u32)>,
+    pub(super) storages: Vec<Storage>,
+    pub(super) power_terms: Vec<PowerTerm>,
+    pub(super) effort_to_head: Vec<bool>,
+    pub(super) slot_names: Vec<String>,
+    /// The plan before copy elimination, for [`CompiledModel::plan_listing`].
+    pub(super) listing_ops: Vec<Op>,
+    pub(super) listing_terms: Vec<(f64, u32)>,
+    /// Derivative plan, Jacobian pattern and colouring, constancy of J.
+    pub(super) structure: Structure,
+}
+
+thread_local! {
+    static WS_F64: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+    static WS_DUAL: RefCell<Vec<Dual>> = const { RefCell::new(Vec::new()) };
+}
+
+impl CompiledModel {
+    /// Name of the graph it was compiled from.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Number of states.
+    pub fn n_states(&self) -> usize {
+        self.state_names.len()
+    }
+    /// Number of inputs.
+    pub fn n_inputs(&self) -> usize {
+        self.input_names.len()
+    }
+    /// Number of outputs.
+    pub fn n_outputs(&self) -> usize {
+        self.output_names.len()
+    }
+    /// State names: `<I>.p`, `<C>.q`, `<field>.p[k]`, `<field>.q[k]` (1-based k), `<integrator>`.
+    pub fn state_names(&self) -> &[String] {
+        &self.state_names
+    }
+    /// Input names (the `add_input` signals, in creation order).
+    pub fn input_names(&self) -> &[String] {
+        &self.input_names
+    }
+    /// Output names, in creation order.
+    pub fn output_names(&self) -> &[String] {
+        &self.output_names
+    }
+    /// Bond names, in creation order.
+    pub fn bond_names(&self) -> &[String] {
+        &self.bond_names
+    }
+    /// Index of a state by name.
+    pub fn state_index(&self, name: &str) -> Option<usize> {
+        self.state_names.iter().position(|n| n == name)
+    }
+    /// Index of an input by name.
+    pub fn input_index(&self, name: &str) -> Option<usize> {
+        self.input_names.iter().position(|n| n == name)
+    }
+    /// Index of an output by name.
+    pub fn output_index(&self, name: &str) -> Option<usize> {
+        self.output_names.iter().position(|n| n == name)
+    }
+    /// Number of operations in the evaluation plan (after copy elimination).
+    pub fn plan_len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// The evaluation plan as text, one assignment per line in evaluation order, e.g.
+    /// `d(loes.C3.q)/dt = f(loes.chamber->loes.C3)`: the state equations as derived from the
+    /// graph, for people to read. `e(b)` and `f(b)` are the effort and flow of bond `b`.
+    pub fn plan_listing(&self) -> String {
+        super::plan::listing(
+            &self.listing_ops,
+            &self.listing_terms,
+            &self.laws,
+            &self.slot_names,
+        )
+    }
+    /// Causality per bond: `true` if the causal stroke is at the head (the `to` element receives
+    /// the effort).
+    pub fn causal_strokes(&self) -> &[bool] {
+        &self.effort_to_head
+    }
+
+    #[inline]
+    fn run<T: Scalar>(&self, ops: &[Op], s: &mut [T]) {
+        for op in ops {
+            match *op {
+                Op::Const { dst, c } => s[dst as usize] = T::cst(c),
+                Op::Copy { dst, src } => s[dst as usize] = s[src as usize],
+                Op::Lin { dst, start, end } => {
+                    let mut acc = T::cst(0.0);
+                    for &(k, src) in &self.terms[start as usize..end as usize] {
+                        acc = acc + s[src as usize].scale(k);
+                    }
+                    s[dst as usize] = acc;
+                }
+                Op::Law {
+                    dst,
+                    law,
+                    arg,
+                    ki,
+                    ko,
+                    m,
+                } => {
+                    let mv = if m == NONE {
+                        T::cst(0.0)
+                    } else {
+                        s[m as usize]
+                    };
+                    let y = T::law(&self.laws[law as usize], s[arg as usize].scale(ki), mv);
+                    s[dst as usize] = y.scale(ko);
+                }
+                Op::Mul { dst, a, b, k } => {
+                    s[dst as usize] = (s[a as usize] * s[b as usize]).scale(k)
+                }
+                Op::Div { dst, a, b, k } => {
+                    s[dst as usize] = (s[a as usize] / s[b as usize]).scale(k)
+                }
+            }
+        }
+    }
+
+    fn check_dims(&self, x: &[f64], u: &[f64]) {
+        assert_eq!(x.len(), self.n_states(), "state vector length");
+        assert_eq!(u.len(), self.n_inputs(), "input vector length");
+    }
+
+    /// Runs the full plan (`ops`) or the derivative plan at `(x, u)` and hands the slots to `f`.
+    pub(super) fn with_f64<R>(
+        &self,
+        ops: &[Op],
+        x: &[f64],
+        u: &[f64],
+        f: impl FnOnce(&[f64]) -> R,
+    ) -> R {
+        self.check_dims(x, u);
+        WS_F64.with(|ws| {
+            let mut ws = ws.borrow_mut();
+            if ws.len() < self.n_slots {
+                ws.resize(self.n_slots, 0.0);
+            }
+            let s = &mut ws[..self.n_slots];
+            let n = x.len();
+            s[..n].copy_from_slice(x);
+            s[n..n + u.len()].copy_from_slice(u);
+            self.run(ops, s);
+            f(s)
+        })
+    }
+
+    /// Evaluates `ops` with dual numbers seeded on the states and inputs `seeds` (index `i < n`
+    /// is state `i`, `n + k` input `k`), ascending.
+    pub(super) fn with_dual<R>(
+        &self,
+        ops: &[Op],
+        x: &[f64],
+        u: &[f64],
+        seeds: &[u32],
+        f: impl FnOnce(&[Dual]) -> R,
+    ) -> R {
+        self.with_tangent(
+            ops,
+            x,
+            u,
+            |s| {
+                for &k in seeds {
+                    s[k as usize].d = 1.0;
+                }
+            },
+            f,
+        )
+    }
+
+    /// Evaluates `ops` with dual numbers whose tangents on the states and inputs `seed` sets
+    /// (slot `i < n` is state `i`, `n + k` input `k`; all start at 0).
+    fn with_tangent<R>(
+        &self,
+        ops: &[Op],
+        x: &[f64],
+        u: &[f64],
+        seed: impl FnOnce(&mut [Dual]),
+        f: impl FnOnce(&[Dual]) -> R,
+    ) -> R {
+        self.check_dims(x, u);
+        WS_DUAL.with(|ws| {
+            let mut ws = ws.borrow_mut();
+            if ws.len() < self.n_slots {
+                ws.resize(self.n_slots, Dual::default());
+            }
+            let s = &mut ws[..self.n_slots];
+            for (i, v) in x.iter().chain(u.iter()).enumerate() {
+                s[i] = Dual { v: *v, d: 0.0 };
+            }
+            seed(s);
+            self.run(ops, s);
+            f(s)
+        })
+    }
+
+    /// State derivatives `dx = f(x, u)`.
+    pub fn derivatives(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
+        assert_eq!(dx.len(), self.n_states(), "derivative vector length");
+        self.with_f64(&self.structure.deriv_ops, x, u, |s| {
+            for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
+                *d = s[k as usize];
+            }
+        })
+    }
+
+    /// Derivatives and outputs from one pass through the plan.
+    pub fn evaluate(&self, x: &[f64], u: &[f64], dx: &mut [f64], y: &mut [f64]) {
+        assert_eq!(dx.len(), self.n_states(), "derivative vector length");
+        assert_eq!(y.len(), self.n_outputs(), "output vector length");
+        self.with_f64(&self.ops, x, u, |s| {
+            for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
+                *d = s[k as usize];
+            }
+            for (d, &k) in y.iter_mut().zip(&self.output_slots) {
+                *d = s[k as usize];
+            }
+        })
+    }
+
+    /// Outputs `y = g(x, u)`, in [`CompiledModel::output_names`] order.
+    pub fn outputs(&self, x: &[f64], u: &[f64], y: &mut [f64]) {
+        assert_eq!(y.len(), self.n_outputs(), "output vector length");
+        self.with_f64(&self.ops, x, u, |s| {
+            for (d, &k) in y.iter_mut().zip(&self.output_slots) {
+                *d = s[k as usize];
+            }
+        })
+    }
+
+    /// Calls `output(k, y_k)` for every output and `derivative(i, dx_i/dt)` for every state,
+    /// from one pass through the plan (no allocation).
+    pub fn for_each_output_and_derivative(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        mut output: impl FnMut(usize, f64),
+        mut derivative: impl FnMut(usize, f64),
+    ) {
+        self.with_f64(&self.ops, x, u, |s| {
+            for (k, &slot) in self.output_slots.iter().enumerate() {
+                output(k, s[slot as usize]);
+            }
+            for (i, &slot) in self.deriv_slots.iter().enumerate() {
+                derivative(i, s[slot as usize]);
+            }
+        })
+    }
+
+    /// Exact directional derivatives at `(x, u)` in the direction `(vx, vu)`: `ddx = A vx + B vu`
+    /// and `dy = C vx + D vu`, from one forward pass of dual numbers through the plan (the
+    /// Jacobian is never formed).
+    pub fn directional(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        (vx, vu): (&[f64], &[f64]),
+        ddx: &mut [f64],
+        dy: &mut [f64],
+    ) {
+        assert_eq!(vx.len(), self.n_states(), "state direction length");
+        assert_eq!(vu.len(), self.n_inputs(), "input direction length");
+        assert_eq!(ddx.len(), self.n_states(), "derivative vector length");
+        assert_eq!(dy.len(), self.n_outputs(), "output vector length");
+        let seed = |s: &mut [Dual]| {
+            for (slot, v) in s.iter_mut().zip(vx.iter().chain(vu)) {
+                slot.d = *v;
+            }
+        };
+        self.with_tangent(&self.ops, x, u, seed, |s| {
+            for (d, &k) in ddx.iter_mut().zip(&self.deriv_slots) {
+                *d = s[k as usize].d;
+            }
+            for (d, &k) in dy.iter_mut().zip(&self.output_slots) {
+                *d = s[k as usize].d;
+            }
+        });
+    }
+
+    /// Calls `each(k, y_k)` for every output, in [`CompiledModel::output_names`] order (no
+    /// allocation).
+    pub fn for_each_output(&self, x: &[f64], u: &[f64], mut each: impl FnMut(usize, f64)) {
+        self.with_f64(&self.ops, x, u, |s| {
+            for (k, &slot) in self.output_slots.iter().enumerate() {
+                each(k, s[slot as usize]);
+            }
+        })
+    }
+
+    /// Efforts and flows of all bonds (bond creation order), for inspection.
+    pub fn bond_values(&self, x: &[f64], u: &[f64], e: &mut [f64], f: &mut [f64]) {
+        self.with_f64(&self.ops, x, u, |s| {
+            for (i, &(se, sf)) in self.bond_slots.iter().enumerate() {
+                e[i] = s[se as usize];
+                f[i] = s[sf as usize];
+            }
+        })
+    }
+
+    /// Exact Jacobian `df/dx`: forward-mode dual numbers through the derivative plan, one pass
+    /// per group of structurally independent columns (see [`CompiledModel::jacobian_colours`]).
+    /// Entries outside [`CompiledModel::jacobian_pattern`] are zero.
+    pub fn jacobian(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
+        let n = self.n_states();
+        assert_eq!(jac.shape(), (n, n), "jacobian shape");
+        jac.fill(0.0);
+        let st = &self.structure;
+        for (group, row_column) in st.colours.iter().zip(&st.row_column) {
+            self.with_dual(&st.deriv_ops, x, u, group, |s| {
+                for (i, &k) in self.deriv_slots.iter().enumerate() {
+                    let j = row_column[i];
+                    if j != NONE {
+                        jac[(i, j as usize)] = s[k as usize].d;
+                    }
+                }
+            });
+        }
+    }
+
+    /// True if the Jacobian is the same at every `(x, u)`: the derivatives are affine in the
+    /// states with constant coefficients (no product of two state-dependent quantities, of a
+    /// state-dependent quantity and an input, no division by a state-dependent quantity, no
+    /// nonlinear law of a state).
+    pub fn jacobian_is_constant(&self) -> bool {
+        self.structure.constant
+    }
+
+    /// For each row `i` of the Jacobian, the states `dx_i/dt` depends on structurally.
+    pub fn jacobian_pattern(&self) -> &[Vec<u32>] {
+        &self.structure.pattern
+    }
+
+    /// The structural dependencies of the derivatives and of the outputs: for each derivative
+    /// (state order) and each output, the states `i < n` and inputs `n + k` it depends on
+    /// through the plan, ascending. A superset of the non-zero pattern of the linearisation at
+    /// any point.
+    pub fn dependencies(&self) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
+        let known = self.n_states() + self.n_inputs();
+        let run = |targets: &[u32]| {
+            super::structure::dependencies(&self.ops, &self.terms, self.n_slots, known, targets)
+        };
+        (run(&self.deriv_slots), run(&self.output_slots))
+    }
+
+    /// Number of dual-number passes one Jacobian takes (groups of columns with no row in common).
+    pub fn jacobian_colours(&self) -> usize {
+        self.structure.colours.len()
+    }
+
+    /// Number of operations of the derivative plan (the full plan's is
+    /// [`CompiledModel::plan_len`]).
+    pub fn derivative_plan_len(&self) -> usize {
+        self.structure.deriv_ops.len()
+    }
+}

@@ -1,0 +1,99 @@
+//! The linearisation `A, B, C, D` of the compiled model at an operating point, exact: dual
+//! numbers through the full plan, one pass per state and per input (outputs included, so not
+//! the coloured derivative plan the Jacobian uses). Used for frequency responses, the exact
+//! discretisation (`discretisation.rs`) and `hsp linearize`, which writes the matrices with
+//! [`matrix_json`].
+
+use nalgebra::DMatrix;
+
+use super::compiled::CompiledModel;
+
+/// Linearisation `dx = A dx + B du`, `dy = C dx + D du` at an operating point.
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    /// `df/dx`, n x n.
+    pub a: DMatrix<f64>,
+    /// `df/du`, n x m.
+    pub b: DMatrix<f64>,
+    /// `dy/dx`, p x n.
+    pub c: DMatrix<f64>,
+    /// `dy/du`, p x m.
+    pub d: DMatrix<f64>,
+    /// State names (rows of A).
+    pub state_names: Vec<String>,
+    /// Input names (columns of B, D).
+    pub input_names: Vec<String>,
+    /// Output names (rows of C, D).
+    pub output_names: Vec<String>,
+    /// Operating point: states.
+    pub x0: Vec<f64>,
+    /// Operating point: inputs.
+    pub u0: Vec<f64>,
+}
+
+/// A matrix as a JSON array of rows.
+pub fn matrix_json(m: &DMatrix<f64>) -> serde_json::Value {
+    serde_json::Value::Array(
+        (0..m.nrows())
+            .map(|i| serde_json::json!((0..m.ncols()).map(|j| m[(i, j)]).collect::<Vec<_>>()))
+            .collect(),
+    )
+}
+
+impl Linearization {
+    /// JSON object `{state_names, input_names, output_names, x0, u0, a, b, c, d}` with the
+    /// matrices as arrays of rows.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "state_names": self.state_names,
+            "input_names": self.input_names,
+            "output_names": self.output_names,
+            "x0": self.x0,
+            "u0": self.u0,
+            "a": matrix_json(&self.a),
+            "b": matrix_json(&self.b),
+            "c": matrix_json(&self.c),
+            "d": matrix_json(&self.d),
+        })
+    }
+}
+
+impl CompiledModel {
+    /// Exact linearisation at `(x, u)`.
+    pub fn linearize(&self, x: &[f64], u: &[f64]) -> Linearization {
+        let (n, m, p) = (self.n_states(), self.n_inputs(), self.n_outputs());
+        let mut a = DMatrix::zeros(n, n);
+        let mut b = DMatrix::zeros(n, m);
+        let mut c = DMatrix::zeros(p, n);
+        let mut d = DMatrix::zeros(p, m);
+        for j in 0..n + m {
+            self.with_dual(&self.ops, x, u, &[j as u32], |s| {
+                for (i, &k) in self.deriv_slots.iter().enumerate() {
+                    if j < n {
+                        a[(i, j)] = s[k as usize].d;
+                    } else {
+                        b[(i, j - n)] = s[k as usize].d;
+                    }
+                }
+                for (i, &k) in self.output_slots.iter().enumerate() {
+                    if j < n {
+                        c[(i, j)] = s[k as usize].d;
+                    } else {
+                        d[(i, j - n)] = s[k as usize].d;
+                    }
+                }
+            });
+        }
+        Linearization {
+            a,
+            b,
+            c,
+            d,
+            state_names: self.state_names.clone(),
+            input_names: self.input_names.clone(),
+            output_names: self.output_names.clone(),
+            x0: x.to_vec(),
+            u0: u.to_vec(),
+        }
+    }
+}
