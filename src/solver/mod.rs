@@ -14,6 +14,12 @@
 //!   control); see [`radau5`].
 //! * **Exact stop times.** [`Integrator::advance_to`] ends bit-exactly on `t_end`: the last
 //!   step is shortened to `t_end - t` and `t` is then *set* to `t_end` (no summing drift).
+//! * **Stepping past requested points.** [`Integrator::advance_past`] reports `t_end` too, but
+//!   lets Rodas5P's steps run past it (up to a limit) and reads the state at `t_end` from the
+//!   step's dense output; the step is kept, so that a run of closely spaced points costs about
+//!   the steps of one long call. A kept step is part of the saved state and is dropped by
+//!   [`Integrator::notify_discontinuity`]. Radau5 ends its steps on `t_end` all the same (its
+//!   dense output is of order 3 only).
 //! * **Failure is an error, not a panic.** Non-finite values, a step below the minimum, too
 //!   many steps or rejections return a [`SolverError`] carrying the time reached; the
 //!   integrator stays at the last accepted point and can continue (e.g. after the caller

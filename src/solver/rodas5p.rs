@@ -353,27 +353,26 @@ fn step<S: OdeSystem + ?Sized>(
     let t = integ.t;
     for s in 0..STAGES {
         // Stage argument Y_s and f(Y_s) (stage 1 is f0).
+        // The sums run over the stages j in the outer loop, a contiguous axpy per stage (the
+        // same additions in the same order as a per-component sum over j, so the same bits).
         if s == 0 {
             w.fy.copy_from_slice(&w.f0);
         } else {
-            for i in 0..n {
-                let mut acc = integ.x[i];
-                for j in 0..s {
-                    acc += A[s][j] * w.u[j][i];
-                }
-                w.y[i] = acc;
+            w.y.copy_from_slice(&integ.x);
+            for j in 0..s {
+                axpy(A[s][j], &w.u[j], &mut w.y);
             }
             eval(sys, &mut integ.stats, t + C_NODES[s] * h, &w.y, &mut w.fy);
         }
-        for i in 0..n {
-            let mut acc = w.fy[i];
-            for j in 0..s {
-                acc += (C[s][j] / h) * w.u[j][i];
+        let rhs = w.rhs.as_mut_slice();
+        rhs.copy_from_slice(&w.fy);
+        for j in 0..s {
+            axpy(C[s][j] / h, &w.u[j], rhs);
+        }
+        if !autonomous && D[s] != 0.0 {
+            for i in 0..n {
+                rhs[i] += h * D[s] * w.dfdt[i];
             }
-            if !autonomous && D[s] != 0.0 {
-                acc += h * D[s] * w.dfdt[i];
-            }
-            w.rhs[i] = acc;
         }
         lu.solve(w.rhs.as_mut_slice(), &mut w.scratch);
         if !all_finite(w.rhs.as_slice()) {
@@ -381,12 +380,9 @@ fn step<S: OdeSystem + ?Sized>(
         }
         w.u[s].copy_from_slice(w.rhs.as_slice());
     }
-    for i in 0..n {
-        let mut acc = integ.x[i];
-        for j in 0..STAGES {
-            acc += M[j] * w.u[j][i];
-        }
-        w.x1[i] = acc;
+    w.x1.copy_from_slice(&integ.x);
+    for j in 0..STAGES {
+        axpy(M[j], &w.u[j], &mut w.x1);
     }
     if !all_finite(&w.x1) {
         return Err(Reject::NonFinite);
@@ -403,6 +399,14 @@ fn step<S: OdeSystem + ?Sized>(
         Ok(err)
     } else {
         Err(Reject::NonFinite)
+    }
+}
+
+/// `y += a x`.
+#[inline]
+fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
     }
 }
 

@@ -716,7 +716,9 @@ degrees of motor angle) and read <code>y_pot</code>, <code>theta_hub</code>, <co
 the accelerometers.</p>
 <h3>Co-Simulation or Model Exchange</h3>
 <p>One binary offers both interfaces. In <em>Co-Simulation</em> the FMU integrates itself with
-its stiff solver and lands exactly on each communication point: the choice for co-simulation
+its stiff solver and delivers the state at each communication point (while the inputs are
+unchanged its steps run past the points, which are read from the solver's dense output within the
+tolerance; <code>solver.dense_output = false</code> ends a step on every point): the choice for co-simulation
 masters, Simulink's FMU block and fixed-step importers. In <em>Model Exchange</em> the importer's
 solver integrates the continuous states <code>x.*</code> from their derivatives
 <code>der(x.*)</code>: the choice for Modelica tools, which prefer it, and for coupling the model
