@@ -476,7 +476,9 @@ fn eval_f0<S: OdeSystem + ?Sized>(
     }
 }
 
-/// Advance `integ` to exactly `t_end` with Rodas5P (called by `Integrator::advance_to*`).
+/// Advance `integ` to exactly `t_end` with Rodas5P (called by `Integrator::advance_to*`), or
+/// with steps free to run past it up to `limit` (`Integrator::advance_past`): the step that
+/// covers `t_end` is then kept in `integ.ahead` and `t_end`'s state read from its dense output.
 pub(crate) fn advance<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,

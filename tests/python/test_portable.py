@@ -178,10 +178,9 @@ def test_win64_under_wine_matches_linux_on_the_complete_system(fmu_path, unzippe
                                                                drivers):
     # The FMU's defaults, the complete system, at rtol 1e-10. Its orifices, limits and amplifier
     # call sqrt, exp, tanh and log, whose last bits differ between glibc's libm and the Windows
-    # C runtime's; the adaptive step control turns that into a different sequence of steps (at
-    # rtol 1e-6: 420 and 430 steps by t = 0.05 s), so the results agree to the integrator's
-    # accuracy, not bit for bit: both lie within about rtol of the exact solution, asserted here
-    # as 1e-7 of each output's range over the run.
+    # C runtime's; the adaptive step control turns that into a different sequence of steps, so
+    # the results agree to the integrator's accuracy, not bit for bit: both lie within about
+    # rtol of the exact solution, asserted here as 1e-7 of each output's range over the run.
     a, b = run_both(fmu_path, unzipped, md, vr, drivers,
                     settings_of(md, vr, {"solver.rtol": 1e-10}))
     scale = {k: max(abs(row[1][k]) for row in a) for k in a[0][1]}
