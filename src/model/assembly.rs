@@ -412,6 +412,11 @@ impl OdeSystem for Assembled {
         self.constant_jacobian.as_ref().map(|(s, _)| *s)
     }
 
+    fn jacobian_pattern(&self) -> Option<&[Vec<u32>]> {
+        // The compiled plan's structural dependencies: J is zero outside them at every point.
+        Some(self.compiled.jacobian_pattern())
+    }
+
     fn is_autonomous(&self) -> bool {
         // The inputs are held constant over a communication step.
         true

@@ -126,6 +126,14 @@ pub trait OdeSystem {
     fn constant_jacobian(&self) -> Option<u64> {
         None
     }
+    /// Where J may be nonzero: for each row i, the columns j for which ∂f_i/∂x_j is not zero
+    /// at some point (a structural pattern, such as a compiled model knows; the diagonal need
+    /// not be listed). With it, the block partition of the iteration matrices ([`linalg`]) is
+    /// found once from this pattern instead of from J's nonzero entries at every evaluation,
+    /// which for a J evaluated at every step costs a scan of J each time. Default `None`.
+    fn jacobian_pattern(&self) -> Option<&[Vec<u32>]> {
+        None
+    }
     /// True if f does not depend on t explicitly (lets Rosenbrock skip df/dt). Default false.
     fn is_autonomous(&self) -> bool {
         false

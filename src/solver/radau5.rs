@@ -377,7 +377,7 @@ fn radcor<S: OdeSystem + ?Sized>(
         // Outcome of this attempt: the Newton result and the error, or a rejection reason with
         // the factor for h.
         let attempt: Result<(Newton, f64), (Why, f64)> = 'attempt: {
-            if !decompose(integ, work, lus, stamp, h) {
+            if !decompose(integ, work, lus, (stamp, sys.jacobian_pattern()), h) {
                 break 'attempt Err((Why::Singular, 0.5));
             }
             let Some(lu) = lus.first() else {
@@ -509,12 +509,13 @@ fn jacobian_at<S: OdeSystem + ?Sized>(
 /// The simplified Newton iteration converges with factorisations for a step size within
 /// SAME_STEP of h as with exact ones (the difference is rounding in t_end - t); with a constant J
 /// the factorisation in use is the one counted (also after a restore, which rebuilds it with the
-/// same bits). A changing J is refactorised in the memory of its last factorisation.
+/// same bits). A changing J is refactorised in the memory of its last factorisation, with the
+/// partition of the system's structural pattern (`structure`) if it has one.
 fn decompose(
     integ: &mut Integrator,
     work: &mut Work,
     lus: &mut Vec<Lu>,
-    stamp: Option<u64>,
+    (stamp, structure): (Option<u64>, Option<&[Vec<u32>]>),
     h: f64,
 ) -> bool {
     let Work {
@@ -543,7 +544,7 @@ fn decompose(
                     lus.extend(spare.take());
                 }
                 lus.truncate(1);
-                let part = pattern.partition(jac, None);
+                let part = pattern.partition_within(jac, structure);
                 match lus.first_mut() {
                     Some(lu) => {
                         if !factor_into(lu, part, jac, h) {

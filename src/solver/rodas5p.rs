@@ -617,7 +617,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
                     lus.extend(w.spare.take());
                 }
                 lus.truncate(1);
-                let part = w.pattern.partition(&w.jac, None);
+                let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
                 let ok = match lus.first_mut() {
                     Some(f) => {
                         f.h = h;
