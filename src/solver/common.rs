@@ -4,6 +4,8 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+use nalgebra::DMatrix;
+
 use super::integrator::{Cache, Integrator};
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
 
@@ -91,6 +93,36 @@ pub(crate) fn with_kept_memory<W: Workspace, R>(
     *work_slot = Some(w);
     keep_factorisations(lu_slot, lus, stamp);
     result
+}
+
+/// J = ∂f/∂x at the integrator's current point, into `jac`, or, for a constant Jacobian
+/// (`stamp`, [`OdeSystem::constant_jacobian`]), the one kept in the integrator's cache
+/// (evaluated once per stamp). `fd_tolerances` are the (atol, rtol) of a finite-difference
+/// Jacobian (None: the integrator's own). False if J is not finite.
+pub(crate) fn jacobian_here<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    stamp: Option<u64>,
+    f0: &[f64],
+    fd_tolerances: Option<(&Atol, f64)>,
+    jac: &mut DMatrix<f64>,
+) -> bool {
+    let Integrator {
+        t,
+        x,
+        stats,
+        counted,
+        cache,
+        options,
+        ..
+    } = integ;
+    match stamp {
+        Some(stamp) => cache.constant_jacobian(sys, stamp, *t, x, stats, counted),
+        None => {
+            let (atol, rtol) = fd_tolerances.unwrap_or((&options.atol, options.rtol));
+            super::jacobian::evaluate(sys, stats, *t, x, f0, atol, rtol, jac)
+        }
+    }
 }
 
 /// Evaluate f, counting it.

@@ -622,9 +622,7 @@ impl PatternCache {
         }
         &self.part
     }
-}
 
-impl PatternCache {
     /// The partition for a Jacobian whose nonzeros lie within `pattern` (for each row, the
     /// columns that may be nonzero; see
     /// [`OdeSystem::jacobian_pattern`](super::OdeSystem::jacobian_pattern)): found once from the

@@ -41,11 +41,11 @@ use std::sync::Arc;
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::common::{
-    all_finite, eval, initial_step, plan_step, with_kept_memory, NextStep, Outputs, Workspace,
+    all_finite, eval, initial_step, jacobian_here, plan_step, with_kept_memory, NextStep, Outputs,
+    Workspace,
 };
 use super::integrator::Integrator;
 use super::integrator::{front_factorisation, SAME_STEP};
-use super::jacobian;
 use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache};
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
 
@@ -472,33 +472,14 @@ fn jacobian_at<S: OdeSystem + ?Sized>(
     stamp: Option<u64>,
     rtol: f64,
 ) -> bool {
-    let t = integ.t;
-    match stamp {
-        Some(stamp) => integ.cache.constant_jacobian(
-            sys,
-            stamp,
-            t,
-            &integ.x,
-            &mut integ.stats,
-            &mut integ.counted,
-        ),
-        None => {
-            if let Some(lu) = lus.pop() {
-                work.spare = Some(lu);
-            }
-            lus.clear();
-            jacobian::evaluate(
-                sys,
-                &mut integ.stats,
-                t,
-                &integ.x,
-                &work.f0,
-                &work.atol_for_fd,
-                rtol,
-                &mut work.jac,
-            )
+    if stamp.is_none() {
+        if let Some(lu) = lus.pop() {
+            work.spare = Some(lu);
         }
+        lus.clear();
     }
+    let fd = Some((&work.atol_for_fd, rtol));
+    jacobian_here(integ, sys, stamp, &work.f0, fd, &mut work.jac)
 }
 
 /// Makes `lus[0]` the factorisations for step size `h` (RADAU5's DECOMR and DECOMC: the real LU
@@ -881,7 +862,7 @@ fn accept(
 /// The collocation polynomial of a step at θ ∈ [0, 1] of it (RADAU5's CONTR5, with
 /// s = θ - 1 measured back from the step's end), into `buf`, from the end state `x1` and the
 /// polynomial's coefficients `cont` (3 n numbers).
-pub(crate) fn dense(x1: &[f64], cont: &[f64], theta: f64, buf: &mut [f64]) {
+fn dense(x1: &[f64], cont: &[f64], theta: f64, buf: &mut [f64]) {
     let n = x1.len();
     let (c1, c2) = nodes();
     let (c1m1, c2m1) = (c1 - 1.0, c2 - 1.0);

@@ -33,8 +33,8 @@ use std::sync::Arc;
 use nalgebra::{DMatrix, DVector};
 
 use super::common::{
-    all_finite, eval, initial_step, plan_step, rms, scale_into, with_kept_memory, NextStep,
-    Outputs, Workspace,
+    all_finite, eval, initial_step, jacobian_here, plan_step, rms, scale_into, with_kept_memory,
+    NextStep, Outputs, Workspace,
 };
 use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
@@ -551,35 +551,16 @@ fn advance_with<S: OdeSystem + ?Sized>(
         };
         let t = integ.t;
         if !jac_ok {
-            let opts = &integ.options;
-            let ok = match stamp {
-                Some(stamp) => integ.cache.constant_jacobian(
-                    sys,
-                    stamp,
-                    t,
-                    &integ.x,
-                    &mut integ.stats,
-                    &mut integ.counted,
-                ),
-                None => jacobian::evaluate(
-                    sys,
-                    &mut integ.stats,
-                    t,
-                    &integ.x,
-                    &w.f0,
-                    &opts.atol,
-                    opts.rtol,
-                    &mut w.jac,
-                ),
-            } && (autonomous
-                || jacobian::time_derivative(
-                    sys,
-                    &mut integ.stats,
-                    t,
-                    &integ.x,
-                    &w.f0,
-                    &mut w.dfdt,
-                ));
+            let ok = jacobian_here(integ, sys, stamp, &w.f0, None, &mut w.jac)
+                && (autonomous
+                    || jacobian::time_derivative(
+                        sys,
+                        &mut integ.stats,
+                        t,
+                        &integ.x,
+                        &w.f0,
+                        &mut w.dfdt,
+                    ));
             if !ok {
                 return Err(SolverError::new(
                     SolverErrorKind::NonFinite,
