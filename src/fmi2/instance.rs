@@ -18,7 +18,7 @@ use super::calls::{Interface, MachineState, Operation, RESTORABLE};
 use super::ffi::{Fmi2CallbackFunctions, Fmi2EventInfo, Fmi2Status, FMI2_FALSE};
 use super::fmu_state::{SavedState, Snapshot};
 use super::logging::{Logger, Short};
-use super::variables::{check_value, Causality, Value, Values};
+use super::variables::{check_value, reals_of, Causality, Value, Values};
 use super::{Experiment, FmuModel, LogCategory};
 
 use MachineState::*;
@@ -81,6 +81,9 @@ pub struct Instance<M: FmuModel> {
     needs_evaluate: bool,
     /// Strings handed out by `fmi2GetString`, valid until the next call.
     string_buffer: Vec<CString>,
+    /// The Reals a step or the initialisation computes (outputs, calculated parameters and
+    /// locals): none may be handed out non-finite with fmi2OK.
+    results: Vec<usize>,
 }
 
 impl<M: FmuModel> Instance<M> {
@@ -140,6 +143,14 @@ impl<M: FmuModel> Instance<M> {
             needs_initialize: true,
             needs_evaluate: false,
             string_buffer: Vec::new(),
+            results: reals_of(
+                M::variables(),
+                &[
+                    Causality::Output,
+                    Causality::CalculatedParameter,
+                    Causality::Local,
+                ],
+            ),
         })
     }
 
@@ -287,16 +298,12 @@ impl<M: FmuModel> Instance<M> {
 
     /// The first output or calculated parameter that is a non-finite Real, as "name = value".
     fn non_finite_result(&self) -> Option<String> {
-        M::variables().iter().enumerate().find_map(|(i, v)| {
-            let result = matches!(
-                v.causality,
-                Causality::Output | Causality::CalculatedParameter | Causality::Local
-            );
-            match self.values.get(i) {
-                Value::Real(x) if result && !x.is_finite() => Some(format!("{} = {x}", v.name)),
-                _ => None,
-            }
-        })
+        let i = self.values.first_non_finite(&self.results)?;
+        Some(format!(
+            "{} = {}",
+            M::variables()[i].name,
+            self.values.real(i)
+        ))
     }
 
     /// Builds the model if a parameter changed since it was last built.

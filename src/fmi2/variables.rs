@@ -160,6 +160,25 @@ impl Values {
     pub fn set_integer(&mut self, index: usize, v: i32) {
         self.values[index] = Value::Integer(v);
     }
+
+    /// The first of `indices` whose value is a non-finite Real (checked after every step, so
+    /// the caller keeps the list of the variables worth checking rather than scanning the table).
+    pub fn first_non_finite(&self, indices: &[usize]) -> Option<usize> {
+        indices
+            .iter()
+            .copied()
+            .find(|&i| matches!(self.values[i], Value::Real(x) if !x.is_finite()))
+    }
+}
+
+/// The positions of the Real variables among `variables` whose causality is one of `causalities`.
+pub fn reals_of(variables: &[Variable], causalities: &[Causality]) -> Vec<usize> {
+    variables
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| matches!(v.kind, Kind::Real { .. }) && causalities.contains(&v.causality))
+        .map(|(i, _)| i)
+        .collect()
 }
 
 /// Checks `v` against a declared `min` and `max`; the error names the variable.

@@ -19,6 +19,7 @@ pub mod variables;
 use serde::{Deserialize, Serialize};
 
 use crate::fmi2::logging::Short;
+use crate::fmi2::variables::reals_of;
 use crate::fmi2::{
     Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
 };
@@ -72,14 +73,14 @@ impl HydraulicSlewingPlate {
 
     /// The first output that is not finite, as "name = value".
     fn non_finite_output(values: &Values) -> Option<String> {
-        variables::VARIABLES
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| v.causality == Causality::Output)
-            .find_map(|(i, v)| match values.get(i) {
-                Value::Real(x) if !x.is_finite() => Some(format!("{} = {x}", v.name)),
-                _ => None,
-            })
+        static OUTPUTS: std::sync::OnceLock<Vec<usize>> = std::sync::OnceLock::new();
+        let outputs = OUTPUTS.get_or_init(|| reals_of(&variables::VARIABLES, &[Causality::Output]));
+        let i = values.first_non_finite(outputs)?;
+        Some(format!(
+            "{} = {}",
+            variables::VARIABLES[i].name,
+            values.real(i)
+        ))
     }
 
     /// The inputs held over the step, as "r = 0, F1 = 1e300, F2 = 0", for messages.
