@@ -55,12 +55,14 @@ pub trait Scalar:
     + std::fmt::Debug
 {
     const ZERO: Self;
+    const ONE: Self;
     /// |re| + |im|, the pivot size LAPACK's `izamax` uses.
     fn norm1(self) -> f64;
 }
 
 impl Scalar for f64 {
     const ZERO: f64 = 0.0;
+    const ONE: f64 = 1.0;
     #[inline]
     fn norm1(self) -> f64 {
         self.abs()
@@ -69,6 +71,7 @@ impl Scalar for f64 {
 
 impl Scalar for Complex<f64> {
     const ZERO: Complex<f64> = Complex { re: 0.0, im: 0.0 };
+    const ONE: Complex<f64> = Complex { re: 1.0, im: 0.0 };
     #[inline]
     fn norm1(self) -> f64 {
         self.re.abs() + self.im.abs()
@@ -488,8 +491,14 @@ fn resize<T: Scalar>(v: &mut Vec<T>, len: usize) {
 }
 
 /// LU with partial pivoting of the column-major k × k matrix `a` in place (unit lower L below
-/// the diagonal, U on and above), interchanges in `piv` (row j was swapped with row piv[j]).
-/// False if a pivot is zero or below `floor` times the largest entry of `a`.
+/// the diagonal, U above it, and the reciprocals of U's diagonal on the diagonal), interchanges
+/// in `piv` (row j was swapped with row piv[j]). False if a pivot is zero or below `floor`
+/// times the largest entry of `a`.
+///
+/// The diagonal is stored inverted because every factorisation serves many solves (8 per
+/// Rodas5P step, several per Newton iteration of Radau5, hundreds of steps with a constant
+/// Jacobian): a solve then multiplies where it would divide, and a division (a complex one
+/// above all) costs several multiplications' latency on the solve's critical path.
 fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
     let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
     let tiny = floor * amax;
@@ -516,6 +525,8 @@ fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) 
         for r in j + 1..k {
             a[r + j * k] = a[r + j * k] / d;
         }
+        // The elimination below reads only rows and columns after j: the pivot is free to go.
+        a[j + j * k] = T::ONE / d;
         for c in j + 1..k {
             let f = a[j + c * k];
             if f != T::ZERO {
@@ -537,20 +548,20 @@ fn lu_solve<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
     // The plate's modes make blocks of one or two states: written out, the same operations in
     // the same order (so the same bits) cost a fraction of the loops' bookkeeping.
     match (k, a, piv, &mut *x) {
-        (1, &[d], _, [x0]) => *x0 = *x0 / d,
-        (2, &[a00, a10, a01, a11], &[p0, _], [x0, x1]) => {
+        (1, &[inv_u00], _, [x0]) => *x0 = *x0 * inv_u00,
+        (2, &[inv_u00, l10, u01, inv_u11], &[p0, _], [x0, x1]) => {
             if p0 != 0 {
                 std::mem::swap(x0, x1);
             }
             if *x0 != T::ZERO {
-                *x1 = *x1 - a10 * *x0;
+                *x1 = *x1 - l10 * *x0;
             }
-            let v = *x1 / a11;
+            let v = *x1 * inv_u11;
             *x1 = v;
             if v != T::ZERO {
-                *x0 = *x0 - a01 * v;
+                *x0 = *x0 - u01 * v;
             }
-            *x0 = *x0 / a00;
+            *x0 = *x0 * inv_u00;
         }
         _ => lu_solve_loops(a, k, piv, x),
     }
@@ -574,7 +585,7 @@ fn lu_solve_loops<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
     }
     for j in (0..k).rev() {
         let col = &a[j * k..j * k + k];
-        let v = x[j] / col[j];
+        let v = x[j] * col[j];
         x[j] = v;
         if v != T::ZERO {
             for r in 0..j {
