@@ -206,13 +206,24 @@ fn storage_energy(st: &Storage, x: &[f64]) -> f64 {
             }
         }
         Storage::Field { states, w, .. } => {
-            let mut e = 0.0;
-            for (i, &si) in states.iter().enumerate() {
-                for (j, &sj) in states.iter().enumerate() {
-                    e += 0.5 * x[si] * w[(i, j)] * x[sj];
-                }
-            }
-            e
+            // ½ xᵀ W x as Σ_j x_j (column j of W)ᵀ x: each column's sum is a chain of its own
+            // (the processor overlaps them) over contiguous memory, where one running sum over
+            // all (i, j) was a single chain of k² dependent additions, computed at every
+            // communication point.
+            let e: f64 = states
+                .iter()
+                .enumerate()
+                .map(|(j, &sj)| {
+                    let column: f64 = w
+                        .column(j)
+                        .iter()
+                        .zip(states)
+                        .map(|(wij, &si)| wij * x[si])
+                        .sum();
+                    column * x[sj]
+                })
+                .sum();
+            0.5 * e
         }
     }
 }

@@ -297,13 +297,18 @@ impl<M: FmuModel> Instance<M> {
     }
 
     /// The first output or calculated parameter that is a non-finite Real, as "name = value".
-    fn non_finite_result(&self) -> Option<String> {
-        let i = self.values.first_non_finite(&self.results)?;
-        Some(format!(
-            "{} = {}",
-            M::variables()[i].name,
-            self.values.real(i)
-        ))
+    fn non_finite_result(&mut self) -> Option<String> {
+        match self.values.first_non_finite(&self.results) {
+            Some(i) => Some(format!(
+                "{} = {}",
+                M::variables()[i].name,
+                self.values.real(i)
+            )),
+            None => {
+                self.values.recheck_finite();
+                None
+            }
+        }
     }
 
     /// Builds the model if a parameter changed since it was last built.

@@ -95,9 +95,24 @@ pub enum Value {
 }
 
 /// The current value of every variable of a model, in the order of its variable table.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Values {
     values: Vec<Value>,
+    /// A non-finite Real may have been written since the mark was last cleared: the check after
+    /// every step looks through the values only then. A restored set of values starts marked.
+    #[serde(skip, default = "marked")]
+    maybe_non_finite: bool,
+}
+
+fn marked() -> bool {
+    true
+}
+
+/// Equal values (the mark is bookkeeping, not content).
+impl PartialEq for Values {
+    fn eq(&self, other: &Self) -> bool {
+        self.values == other.values
+    }
 }
 
 impl Values {
@@ -112,7 +127,10 @@ impl Values {
                 Kind::String { start } => Value::String(start.unwrap_or("").to_string()),
             })
             .collect();
-        Values { values }
+        Values {
+            values,
+            maybe_non_finite: true,
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -128,6 +146,9 @@ impl Values {
     }
 
     pub fn set(&mut self, index: usize, value: Value) {
+        if let Value::Real(v) = value {
+            self.maybe_non_finite |= !v.is_finite();
+        }
         self.values[index] = value;
     }
 
@@ -154,6 +175,7 @@ impl Values {
     }
 
     pub fn set_real(&mut self, index: usize, v: f64) {
+        self.maybe_non_finite |= !v.is_finite();
         self.values[index] = Value::Real(v);
     }
 
@@ -161,13 +183,28 @@ impl Values {
         self.values[index] = Value::Integer(v);
     }
 
-    /// The first of `indices` whose value is a non-finite Real (checked after every step, so
-    /// the caller keeps the list of the variables worth checking rather than scanning the table).
+    /// The first of `indices` whose value is a non-finite Real. Checked after every step: it
+    /// looks only if a non-finite Real may have been written since [`Values::recheck_finite`]
+    /// last found them all finite.
     pub fn first_non_finite(&self, indices: &[usize]) -> Option<usize> {
+        if !self.maybe_non_finite {
+            return None;
+        }
         indices
             .iter()
             .copied()
             .find(|&i| matches!(self.values[i], Value::Real(x) if !x.is_finite()))
+    }
+
+    /// Clears the mark of [`Values::first_non_finite`] if every Real is finite (a scan of the
+    /// whole table, only while the mark is set).
+    pub fn recheck_finite(&mut self) {
+        if self.maybe_non_finite {
+            self.maybe_non_finite = self
+                .values
+                .iter()
+                .any(|v| matches!(v, Value::Real(x) if !x.is_finite()));
+        }
     }
 }
 
@@ -219,5 +256,43 @@ pub fn check_value(var: &Variable, value: &Value) -> Result<(), String> {
                 Value::String(_) => "String",
             }
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn three_reals() -> Values {
+        Values {
+            values: vec![Value::Real(1.0), Value::Integer(3), Value::Real(2.0)],
+            maybe_non_finite: true,
+        }
+    }
+
+    /// The mark lets the check after a step skip the scan only while every Real is finite: a
+    /// non-finite write is always found, and the mark clears only once none is left.
+    #[test]
+    fn the_non_finite_mark_never_hides_a_non_finite_real() {
+        let mut v = three_reals();
+        assert_eq!(v.first_non_finite(&[0, 2]), None);
+        v.recheck_finite();
+        assert!(!v.maybe_non_finite);
+        v.set_real(2, f64::NAN);
+        assert_eq!(v.first_non_finite(&[0, 2]), Some(2));
+        v.recheck_finite();
+        assert_eq!(v.first_non_finite(&[0, 2]), Some(2), "still there");
+        v.set(0, Value::Real(f64::INFINITY));
+        v.set_real(2, 0.5);
+        v.recheck_finite();
+        assert_eq!(v.first_non_finite(&[0, 2]), Some(0));
+        v.set_real(0, -1.0);
+        v.recheck_finite();
+        assert!(!v.maybe_non_finite);
+        // Values restored from a serialised state are scanned once before they are trusted.
+        let json = serde_json::to_string(&v).unwrap();
+        let restored: Values = serde_json::from_str(&json).unwrap();
+        assert!(restored.maybe_non_finite);
+        assert_eq!(restored, v);
     }
 }
