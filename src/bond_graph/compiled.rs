@@ -48,6 +48,9 @@ pub struct CompiledModel {
     pub(super) listing_terms: Vec<(f64, u32)>,
     /// Derivative plan, Jacobian pattern and colouring, constancy of J.
     pub(super) structure: Structure,
+    /// The Jacobian's constant entries (zero elsewhere) once
+    /// [`CompiledModel::fix_constant_entries`] has evaluated them.
+    pub(super) constant_entries: Option<DMatrix<f64>>,
 }
 
 thread_local! {
@@ -343,14 +346,40 @@ impl CompiledModel {
 
     /// Exact Jacobian `df/dx`: forward-mode dual numbers through the derivative plan, one pass
     /// per group of structurally independent columns (see [`CompiledModel::jacobian_colours`]).
-    /// Entries outside [`CompiledModel::jacobian_pattern`] are zero.
+    /// Entries outside [`CompiledModel::jacobian_pattern`] are zero. After
+    /// [`CompiledModel::fix_constant_entries`], the constant entries are copied and only the
+    /// varying ones evaluated ([`CompiledModel::variable_jacobian_colours`] passes), with the
+    /// same bits.
     pub fn jacobian(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
         let n = self.n_states();
         assert_eq!(jac.shape(), (n, n), "jacobian shape");
-        jac.fill(0.0);
         let st = &self.structure;
-        for (group, row_column) in st.colours.iter().zip(&st.row_column) {
-            self.with_dual(&st.deriv_ops, x, u, group, |s| {
+        match &self.constant_entries {
+            None => {
+                jac.fill(0.0);
+                self.jacobian_passes(&st.deriv_ops, &st.colours, &st.row_column, x, u, jac);
+            }
+            Some(fixed) => {
+                jac.copy_from(fixed);
+                let (colours, row_column) = (&st.variable_colours, &st.variable_row_column);
+                self.jacobian_passes(&st.variable_ops, colours, row_column, x, u, jac);
+            }
+        }
+    }
+
+    /// One dual-number pass through `ops` per group of `colours`, writing the entry
+    /// `(i, row_column[c][i])` of each row that has one.
+    fn jacobian_passes(
+        &self,
+        ops: &[Op],
+        colours: &[Vec<u32>],
+        row_column: &[Vec<u32>],
+        x: &[f64],
+        u: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) {
+        for (group, row_column) in colours.iter().zip(row_column) {
+            self.with_dual(ops, x, u, group, |s| {
                 for (i, &k) in self.deriv_slots.iter().enumerate() {
                     let j = row_column[i];
                     if j != NONE {
@@ -359,6 +388,53 @@ impl CompiledModel {
                 }
             });
         }
+    }
+
+    /// Evaluates the Jacobian's constant entries at `(x, u)` and keeps them: afterwards
+    /// [`CompiledModel::jacobian`] copies them and runs only the passes over the variable
+    /// columns. Call it once per parameter set (any point with finite values will do).
+    ///
+    /// Why the bits are those of a full evaluation at any point: in the pass that delivers a
+    /// constant entry `(i, j)`, the tangent reaching row `i` comes from column `j` alone (the
+    /// colouring keeps the other seeds of the group off row `i`), along operations whose
+    /// tangent coefficients do not depend on the point (constant coefficients of `Lin`, a
+    /// factor or divisor that depends on neither the states nor the inputs; see the rules in
+    /// `structure.rs`). The same floating-point operations on the same numbers give the same
+    /// result at every point. The point does enter as `a * 0` where a state-dependent value
+    /// meets the zero tangent of a constant factor, but adding that zero changes nothing
+    /// unless the tangent it is added to is itself a zero (then only its sign could differ).
+    /// The varying entries are evaluated fresh at every call, by the same passes restricted to
+    /// the operations their rows need (same operations in the same order, same values).
+    pub fn fix_constant_entries(&mut self, x: &[f64], u: &[f64]) {
+        let n = self.n_states();
+        let mut jac = DMatrix::zeros(n, n);
+        self.constant_entries = None;
+        self.jacobian(x, u, &mut jac);
+        for (i, row) in self.structure.varying.iter().enumerate() {
+            for &j in row {
+                jac[(i, j as usize)] = 0.0;
+            }
+        }
+        self.constant_entries = Some(jac);
+    }
+
+    /// True once [`CompiledModel::fix_constant_entries`] has kept the constant entries.
+    pub fn constant_entries_fixed(&self) -> bool {
+        self.constant_entries.is_some()
+    }
+
+    /// For each row `i` of the Jacobian, the columns `j` whose entry may vary with `(x, u)`
+    /// (a subset of [`CompiledModel::jacobian_pattern`]; the others are the same everywhere).
+    pub fn jacobian_varying_pattern(&self) -> &[Vec<u32>] {
+        &self.structure.varying
+    }
+
+    /// The variable columns of the Jacobian (those with a varying entry), ascending.
+    pub fn jacobian_variable_columns(&self) -> Vec<u32> {
+        let mut cols: Vec<u32> = self.structure.varying.concat();
+        cols.sort_unstable();
+        cols.dedup();
+        cols
     }
 
     /// True if the Jacobian is the same at every `(x, u)`: the derivatives are affine in the
@@ -386,9 +462,22 @@ impl CompiledModel {
         (run(&self.deriv_slots), run(&self.output_slots))
     }
 
-    /// Number of dual-number passes one Jacobian takes (groups of columns with no row in common).
+    /// Number of dual-number passes a full Jacobian takes (groups of columns with no row in
+    /// common): one evaluation without [`CompiledModel::fix_constant_entries`].
     pub fn jacobian_colours(&self) -> usize {
         self.structure.colours.len()
+    }
+
+    /// Number of dual-number passes a Jacobian takes once the constant entries are fixed
+    /// ([`CompiledModel::fix_constant_entries`]): groups of the variable columns.
+    pub fn variable_jacobian_colours(&self) -> usize {
+        self.structure.variable_colours.len()
+    }
+
+    /// Number of operations each of those passes runs (the operations the rows with a varying
+    /// entry need).
+    pub fn variable_plan_len(&self) -> usize {
+        self.structure.variable_ops.len()
     }
 
     /// Number of operations of the derivative plan (the full plan's is
