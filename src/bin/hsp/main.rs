@@ -12,11 +12,14 @@
 //!   draws the first mode shapes.
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
 //!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
+//! - `hsp info [--json] [--preset NAME] [--set ...]`: size and structure of the assembled model:
+//!   states, plan, the Jacobian's pattern, its varying entries and passes per evaluation.
 //! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
 //!   copied for the README.
 
 mod binaries;
 mod docpage;
+mod info;
 mod loader;
 mod modeshape;
 mod package;
@@ -73,6 +76,17 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Set a parameter, NAME=VALUE (repeatable); names are the FMU's variable names
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Start from a named parameter set (`hsp presets`); --set applies after it
+        #[arg(long)]
+        preset: Option<String>,
+    },
+    /// Size and structure of the assembled model: states, plan, Jacobian pattern and passes
+    Info {
+        /// Print JSON instead of text
+        #[arg(long)]
+        json: bool,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
         /// Start from a named parameter set (`hsp presets`); --set applies after it
@@ -196,6 +210,17 @@ fn linearize(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
     Ok(json.to_string())
 }
 
+fn model_info(preset: Option<&str>, sets: &[String], json: bool) -> Result<String, String> {
+    let values = values_with(preset, sets)?;
+    let parameters = Parameters::from_values(&values, &Experiment::default())?;
+    let system = Assembled::new(&parameters)?;
+    Ok(if json {
+        info::facts(&system).to_string()
+    } else {
+        info::text(&system)
+    })
+}
+
 fn graph(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
     let values = values_with(preset, sets)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
@@ -316,6 +341,9 @@ fn main() -> ExitCode {
             preset,
         } => linearize(preset.as_deref(), &set).map(|s| println!("{s}")),
         Command::Graph { set, preset } => graph(preset.as_deref(), &set).map(|s| println!("{s}")),
+        Command::Info { json, set, preset } => {
+            model_info(preset.as_deref(), &set, json).map(|s| println!("{s}"))
+        }
         Command::Modes {
             json: _,
             plot,
