@@ -397,14 +397,17 @@ impl CompiledModel {
     /// Why the bits are those of a full evaluation at any point: in the pass that delivers a
     /// constant entry `(i, j)`, the tangent reaching row `i` comes from column `j` alone (the
     /// colouring keeps the other seeds of the group off row `i`), along operations whose
-    /// tangent coefficients do not depend on the point (constant coefficients of `Lin`, a
+    /// tangent coefficients do not depend on the point (the constant coefficients of `Lin`, a
     /// factor or divisor that depends on neither the states nor the inputs; see the rules in
     /// `structure.rs`). The same floating-point operations on the same numbers give the same
-    /// result at every point. The point does enter as `a * 0` where a state-dependent value
-    /// meets the zero tangent of a constant factor, but adding that zero changes nothing
-    /// unless the tangent it is added to is itself a zero (then only its sign could differ).
-    /// The varying entries are evaluated fresh at every call, by the same passes restricted to
-    /// the operations their rows need (same operations in the same order, same values).
+    /// result at every point. The point enters only as `v * 0`, where a state-dependent value
+    /// `v` meets the zero tangent of such a constant factor, and adding a zero leaves a
+    /// non-zero tangent as it is: only an entry that is exactly zero (a structural non-zero that
+    /// cancels, or a zero parameter) could come out as `-0.0` at one point and `0.0` at another,
+    /// which compare equal. At a point with a non-finite value the full evaluation may give NaN
+    /// where the kept entry is finite (`inf * 0`). The varying entries are evaluated at every
+    /// call by the same passes restricted to the operations their rows need (the same
+    /// operations in the same order, so the same values).
     pub fn fix_constant_entries(&mut self, x: &[f64], u: &[f64]) {
         let n = self.n_states();
         let mut jac = DMatrix::zeros(n, n);
