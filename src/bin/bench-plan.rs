@@ -115,12 +115,12 @@ fn main() {
     };
     println!(
         "complete (servo valve) Jacobian, median of 5 alternating runs: every entry {:.2} us \
-         ({} passes of {} ops), constant entries fixed {:.2} us ({} passes of {} ops)",
+         ({} passes of {} ops), constant entries fixed {:.2} us ({} passes, {} ops in all)",
         median(&mut t_full),
         full.jacobian_colours(),
         full.derivative_plan_len(),
         median(&mut t_fixed),
         fixed.variable_jacobian_colours(),
-        fixed.variable_plan_len(),
+        fixed.variable_jacobian_ops(),
     );
 }

@@ -357,37 +357,39 @@ impl CompiledModel {
         match &self.constant_entries {
             None => {
                 jac.fill(0.0);
-                self.jacobian_passes(&st.deriv_ops, &st.colours, &st.row_column, x, u, jac);
+                for (group, row_column) in st.colours.iter().zip(&st.row_column) {
+                    self.jacobian_pass(&st.deriv_ops, group, row_column, x, u, jac);
+                }
             }
             Some(fixed) => {
                 jac.copy_from(fixed);
-                let (colours, row_column) = (&st.variable_colours, &st.variable_row_column);
-                self.jacobian_passes(&st.variable_ops, colours, row_column, x, u, jac);
+                let passes = st.variable_colours.iter().zip(&st.variable_row_column);
+                for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
+                    self.jacobian_pass(ops, group, row_column, x, u, jac);
+                }
             }
         }
     }
 
-    /// One dual-number pass through `ops` per group of `colours`, writing the entry
-    /// `(i, row_column[c][i])` of each row that has one.
-    fn jacobian_passes(
+    /// One dual-number pass through `ops` with the columns `group` seeded, writing the entry
+    /// `(i, row_column[i])` of each row that has one.
+    fn jacobian_pass(
         &self,
         ops: &[Op],
-        colours: &[Vec<u32>],
-        row_column: &[Vec<u32>],
+        group: &[u32],
+        row_column: &[u32],
         x: &[f64],
         u: &[f64],
         jac: &mut DMatrix<f64>,
     ) {
-        for (group, row_column) in colours.iter().zip(row_column) {
-            self.with_dual(ops, x, u, group, |s| {
-                for (i, &k) in self.deriv_slots.iter().enumerate() {
-                    let j = row_column[i];
-                    if j != NONE {
-                        jac[(i, j as usize)] = s[k as usize].d;
-                    }
+        self.with_dual(ops, x, u, group, |s| {
+            for (i, &k) in self.deriv_slots.iter().enumerate() {
+                let j = row_column[i];
+                if j != NONE {
+                    jac[(i, j as usize)] = s[k as usize].d;
                 }
-            });
-        }
+            }
+        });
     }
 
     /// Evaluates the Jacobian's constant entries at `(x, u)` and keeps them: afterwards
@@ -406,8 +408,8 @@ impl CompiledModel {
     /// cancels, or a zero parameter) could come out as `-0.0` at one point and `0.0` at another,
     /// which compare equal. At a point with a non-finite value the full evaluation may give NaN
     /// where the kept entry is finite (`inf * 0`). The varying entries are evaluated at every
-    /// call by the same passes restricted to the operations their rows need (the same
-    /// operations in the same order, so the same values).
+    /// call, each by a pass restricted to the operations the rows it reads need (the same
+    /// operations in the same order, so the same values and tangents).
     pub fn fix_constant_entries(&mut self, x: &[f64], u: &[f64]) {
         let n = self.n_states();
         let mut jac = DMatrix::zeros(n, n);
@@ -477,10 +479,11 @@ impl CompiledModel {
         self.structure.variable_colours.len()
     }
 
-    /// Number of operations each of those passes runs (the operations the rows with a varying
-    /// entry need).
-    pub fn variable_plan_len(&self) -> usize {
-        self.structure.variable_ops.len()
+    /// Number of operations those passes run in all (each runs the operations the rows it
+    /// reads need); a full Jacobian runs [`CompiledModel::jacobian_colours`] times
+    /// [`CompiledModel::derivative_plan_len`].
+    pub fn variable_jacobian_ops(&self) -> usize {
+        self.structure.variable_ops.iter().map(Vec::len).sum()
     }
 
     /// Number of operations of the derivative plan (the full plan's is

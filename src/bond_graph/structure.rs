@@ -39,7 +39,7 @@
 //!   columns, and in them only the varying entries: a column `j` may share a group with columns
 //!   that meet it in a row `i` as long as neither entry of that row needs reading, i.e. a group
 //!   may not hold a column whose entry `(i, j)` varies together with another column of row `i`.
-//!   These passes run only the operations the rows with a varying entry need.
+//!   Each of these passes runs only the operations the rows it reads need.
 use super::plan::{Op, NONE};
 
 /// What the structure of the plan says about `f` and its Jacobian.
@@ -63,9 +63,9 @@ pub(crate) struct Structure {
     /// `variable_row_column[c][i]`: the column of group `c` whose varying entry row `i`
     /// delivers in that pass, or `NONE`.
     pub variable_row_column: Vec<Vec<u32>>,
-    /// The operations the rows with a varying entry need, in plan order (a subset of
-    /// `deriv_ops`).
-    pub variable_ops: Vec<Op>,
+    /// For each group of `variable_colours`, the operations the rows read in its pass need, in
+    /// plan order (a subset of `deriv_ops`).
+    pub variable_ops: Vec<Vec<Op>>,
 }
 
 /// Calls `read` with every slot `op` reads.
@@ -229,13 +229,18 @@ pub(crate) fn analyse(
     let (variable_colours, variable_row_column) = colour(&pattern, n_states, |i, j| {
         varying[i].binary_search(&j).is_ok()
     });
-    let variable_rows: Vec<u32> = deriv_slots
+    let variable_ops = variable_row_column
         .iter()
-        .zip(&varying)
-        .filter(|(_, v)| !v.is_empty())
-        .map(|(&d, _)| d)
+        .map(|row_column| {
+            let rows: Vec<u32> = deriv_slots
+                .iter()
+                .zip(row_column)
+                .filter(|(_, &j)| j != NONE)
+                .map(|(&d, _)| d)
+                .collect();
+            needed_ops(&deriv_ops, terms, n_slots, &rows)
+        })
         .collect();
-    let variable_ops = needed_ops(&deriv_ops, terms, n_slots, &variable_rows);
     Structure {
         deriv_ops,
         pattern,

@@ -28,7 +28,8 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
             "constant": m.jacobian_is_constant(),
             "passes_full": m.jacobian_colours(),
             "passes_per_step": m.variable_jacobian_colours(),
-            "operations_per_step_pass": m.variable_plan_len(),
+            "operations_full": m.jacobian_colours() * m.derivative_plan_len(),
+            "operations_per_step": m.variable_jacobian_ops(),
             "constant_entries_fixed": m.constant_entries_fixed(),
         },
     })
@@ -78,10 +79,10 @@ pub fn text(system: &Assembled) -> String {
         format!("passes     {full}, once per parameter set\n")
     } else {
         format!(
-            "passes     {full} for every entry; {} of {} once the constant entries are fixed \
-             (each step)\n",
+            "passes     {full} for every entry; {} passes, {} operations in all, once the \
+             constant entries are fixed (each step)\n",
             m.variable_jacobian_colours(),
-            m.variable_plan_len()
+            m.variable_jacobian_ops()
         )
     });
     if !variable.is_empty() {
