@@ -33,13 +33,15 @@
 //!   Entry `(i, j)` *varies* if `j ∈ var(f_i)` (a superset: terms that cancel are not seen);
 //!   column `j` is *variable* if one of its entries varies. J is constant exactly when no column
 //!   is variable (the flag [`Structure::constant`], found by its own simpler propagation; a test
-//!   checks that both agree on every preset).
+//!   checks that both agree on every preset); then the solver may factorise it once per step
+//!   size (the LOES with the plate).
 //! * **Variable colouring.** Once the constant entries are known (evaluated once per parameter
 //!   set, `CompiledModel::fix_constant_entries`), a Jacobian needs only passes over the variable
 //!   columns, and in them only the varying entries: a column `j` may share a group with columns
 //!   that meet it in a row `i` as long as neither entry of that row needs reading, i.e. a group
 //!   may not hold a column whose entry `(i, j)` varies together with another column of row `i`.
 //!   Each of these passes runs only the operations the rows it reads need.
+
 use super::plan::{Op, NONE};
 
 /// What the structure of the plan says about `f` and its Jacobian.
@@ -367,5 +369,103 @@ mod tests {
         let mut all: Vec<u32> = colours.concat();
         all.sort();
         assert_eq!(all, [0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn known_entries_let_columns_share_a_row() {
+        // The arrowhead again, with only the diagonal entries (1, 1), (2, 2), (3, 3) to read:
+        // columns 1, 2, 3 meet only in row 0, whose entries are known, so one pass reads all
+        // three; column 0 has nothing to read and no pass.
+        let pattern: Vec<Vec<u32>> = vec![vec![0, 1, 2, 3], vec![0, 1], vec![0, 2], vec![0, 3]];
+        let (colours, row_column) = colour(&pattern, 4, |i, j| i > 0 && i == j as usize);
+        assert_eq!(colours, [vec![1, 2, 3]]);
+        assert_eq!(row_column, [vec![NONE, 1, 2, 3]]);
+        // Reading (0, 1) too: row 0 then meets columns 2 and 3 in the pass that reads it, so
+        // column 1 needs a pass of its own.
+        let read = |i: usize, j: u32| (i > 0 && i == j as usize) || (i, j) == (0, 1);
+        let (colours, row_column) = colour(&pattern, 4, read);
+        assert_eq!(colours, [vec![1], vec![2, 3]]);
+        assert_eq!(row_column, [vec![1, 1, NONE, NONE], vec![NONE, NONE, 2, 3]]);
+    }
+
+    #[test]
+    fn varying_entries_follow_the_rules_of_each_operation() {
+        // States x0, x1, x2 (slots 0..3), input u (slot 3), a constant c (slot 4); derivatives
+        // in slots 10, 11, 12, 13.
+        let terms = vec![(2.0, 0), (3.0, 5), (1.0, 1), (-1.0, 2)];
+        let ops = vec![
+            Op::Const { dst: 4, c: 2.5 },
+            // 5 = c x0: constant factor, constant gradient.
+            Op::Mul {
+                dst: 5,
+                a: 0,
+                b: 4,
+                k: 1.0,
+            },
+            // 10 = 2 x0 + 3 (c x0): linear throughout, nothing varies.
+            Op::Lin {
+                dst: 10,
+                start: 0,
+                end: 2,
+            },
+            // 6 = u x1: the input makes d/dx1 vary.
+            Op::Mul {
+                dst: 6,
+                a: 1,
+                b: 3,
+                k: 1.0,
+            },
+            // 7 = x1 - x2, 11 = L(7): a law of states, its gradient varies in both.
+            Op::Lin {
+                dst: 7,
+                start: 2,
+                end: 4,
+            },
+            Op::Law {
+                dst: 11,
+                law: 0,
+                arg: 7,
+                ki: 1.0,
+                ko: 1.0,
+                m: NONE,
+            },
+            // 12 = x0 / c: a constant divisor, nothing varies.
+            Op::Div {
+                dst: 12,
+                a: 0,
+                b: 4,
+                k: 1.0,
+            },
+            // 8 = c / x2: the divisor depends on x2.
+            Op::Div {
+                dst: 8,
+                a: 4,
+                b: 2,
+                k: 1.0,
+            },
+            // 13 = u x1 + c / x2 + 2 x0: varies in x1 and x2, not in x0.
+            Op::Lin {
+                dst: 13,
+                start: 4,
+                end: 7,
+            },
+        ];
+        let mut terms = terms;
+        terms.extend([(1.0, 6), (1.0, 8), (2.0, 0)]);
+        let st = analyse(&ops, &terms, 14, 3, 1, &[10, 11, 12, 13]);
+        assert_eq!(st.pattern, [vec![0], vec![1, 2], vec![0], vec![0, 1, 2]]);
+        assert_eq!(st.varying, [vec![], vec![1, 2], vec![], vec![1, 2]]);
+        assert!(!st.constant);
+        // Columns 1 and 2 vary, and rows 1 and 3 read both: two passes, each running the
+        // operations of rows 1 and 3 only (not the Mul and Lin of row 0 nor the Div of row 2).
+        assert_eq!(st.variable_colours.len(), 2);
+        for ops in &st.variable_ops {
+            assert_eq!(ops.len(), 6);
+            assert!(ops.iter().all(|op| !matches!(op, Op::Div { dst: 12, .. })));
+        }
+        // Without the rows that vary, the same plan has a constant Jacobian.
+        let st = analyse(&ops, &terms, 14, 3, 1, &[10, 12]);
+        assert!(st.constant && st.varying.iter().all(Vec::is_empty));
+        assert!(st.variable_colours.is_empty());
     }
 }
