@@ -48,6 +48,9 @@ pub struct CompiledModel {
     pub(super) listing_terms: Vec<(f64, u32)>,
     /// Derivative plan, Jacobian pattern and colouring, constancy of J.
     pub(super) structure: Structure,
+    /// The Jacobian's constant entries (zero elsewhere) once
+    /// [`CompiledModel::fix_constant_entries`] has evaluated them.
+    pub(super) constant_entries: Option<DMatrix<f64>>,
 }
 
 thread_local! {
@@ -343,22 +346,100 @@ impl CompiledModel {
 
     /// Exact Jacobian `df/dx`: forward-mode dual numbers through the derivative plan, one pass
     /// per group of structurally independent columns (see [`CompiledModel::jacobian_colours`]).
-    /// Entries outside [`CompiledModel::jacobian_pattern`] are zero.
+    /// Entries outside [`CompiledModel::jacobian_pattern`] are zero. After
+    /// [`CompiledModel::fix_constant_entries`], the constant entries are copied and only the
+    /// varying ones evaluated ([`CompiledModel::variable_jacobian_colours`] passes), with the
+    /// same bits.
     pub fn jacobian(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
         let n = self.n_states();
         assert_eq!(jac.shape(), (n, n), "jacobian shape");
-        jac.fill(0.0);
         let st = &self.structure;
-        for (group, row_column) in st.colours.iter().zip(&st.row_column) {
-            self.with_dual(&st.deriv_ops, x, u, group, |s| {
-                for (i, &k) in self.deriv_slots.iter().enumerate() {
-                    let j = row_column[i];
-                    if j != NONE {
-                        jac[(i, j as usize)] = s[k as usize].d;
-                    }
+        match &self.constant_entries {
+            None => {
+                jac.fill(0.0);
+                for (group, row_column) in st.colours.iter().zip(&st.row_column) {
+                    self.jacobian_pass(&st.deriv_ops, group, row_column, x, u, jac);
                 }
-            });
+            }
+            Some(fixed) => {
+                jac.copy_from(fixed);
+                let passes = st.variable_colours.iter().zip(&st.variable_row_column);
+                for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
+                    self.jacobian_pass(ops, group, row_column, x, u, jac);
+                }
+            }
         }
+    }
+
+    /// One dual-number pass through `ops` with the columns `group` seeded, writing the entry
+    /// `(i, row_column[i])` of each row that has one.
+    fn jacobian_pass(
+        &self,
+        ops: &[Op],
+        group: &[u32],
+        row_column: &[u32],
+        x: &[f64],
+        u: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) {
+        self.with_dual(ops, x, u, group, |s| {
+            for (i, &k) in self.deriv_slots.iter().enumerate() {
+                let j = row_column[i];
+                if j != NONE {
+                    jac[(i, j as usize)] = s[k as usize].d;
+                }
+            }
+        });
+    }
+
+    /// Evaluates the Jacobian's constant entries at `(x, u)` and keeps them: afterwards
+    /// [`CompiledModel::jacobian`] copies them and runs only the passes over the variable
+    /// columns. Call it once per parameter set (any point with finite values will do).
+    ///
+    /// Why the bits are those of a full evaluation at any point: in the pass that delivers a
+    /// constant entry `(i, j)`, the tangent reaching row `i` comes from column `j` alone (the
+    /// colouring keeps the other seeds of the group off row `i`), along operations whose
+    /// tangent coefficients do not depend on the point (the constant coefficients of `Lin`, a
+    /// factor or divisor that depends on neither the states nor the inputs; see the rules in
+    /// `structure.rs`). The same floating-point operations on the same numbers give the same
+    /// result at every point. The point enters only as `v * 0`, where a state-dependent value
+    /// `v` meets the zero tangent of such a constant factor, and adding a zero leaves a
+    /// non-zero tangent as it is: only an entry that is exactly zero (a structural non-zero that
+    /// cancels, or a zero parameter) could come out as `-0.0` at one point and `0.0` at another,
+    /// which compare equal. At a point with a non-finite value the full evaluation may give NaN
+    /// where the kept entry is finite (`inf * 0`). The varying entries are evaluated at every
+    /// call, each by a pass restricted to the operations the rows it reads need (the same
+    /// operations in the same order, so the same values and tangents).
+    pub fn fix_constant_entries(&mut self, x: &[f64], u: &[f64]) {
+        let n = self.n_states();
+        let mut jac = DMatrix::zeros(n, n);
+        self.constant_entries = None;
+        self.jacobian(x, u, &mut jac);
+        for (i, row) in self.structure.varying.iter().enumerate() {
+            for &j in row {
+                jac[(i, j as usize)] = 0.0;
+            }
+        }
+        self.constant_entries = Some(jac);
+    }
+
+    /// True once [`CompiledModel::fix_constant_entries`] has kept the constant entries.
+    pub fn constant_entries_fixed(&self) -> bool {
+        self.constant_entries.is_some()
+    }
+
+    /// For each row `i` of the Jacobian, the columns `j` whose entry may vary with `(x, u)`
+    /// (a subset of [`CompiledModel::jacobian_pattern`]; the others are the same everywhere).
+    pub fn jacobian_varying_pattern(&self) -> &[Vec<u32>] {
+        &self.structure.varying
+    }
+
+    /// The variable columns of the Jacobian (those with a varying entry), ascending.
+    pub fn jacobian_variable_columns(&self) -> Vec<u32> {
+        let mut cols: Vec<u32> = self.structure.varying.concat();
+        cols.sort_unstable();
+        cols.dedup();
+        cols
     }
 
     /// True if the Jacobian is the same at every `(x, u)`: the derivatives are affine in the
@@ -386,9 +467,23 @@ impl CompiledModel {
         (run(&self.deriv_slots), run(&self.output_slots))
     }
 
-    /// Number of dual-number passes one Jacobian takes (groups of columns with no row in common).
+    /// Number of dual-number passes a full Jacobian takes (groups of columns with no row in
+    /// common): one evaluation without [`CompiledModel::fix_constant_entries`].
     pub fn jacobian_colours(&self) -> usize {
         self.structure.colours.len()
+    }
+
+    /// Number of dual-number passes a Jacobian takes once the constant entries are fixed
+    /// ([`CompiledModel::fix_constant_entries`]): groups of the variable columns.
+    pub fn variable_jacobian_colours(&self) -> usize {
+        self.structure.variable_colours.len()
+    }
+
+    /// Number of operations those passes run in all (each runs the operations the rows it
+    /// reads need); a full Jacobian runs [`CompiledModel::jacobian_colours`] times
+    /// [`CompiledModel::derivative_plan_len`].
+    pub fn variable_jacobian_ops(&self) -> usize {
+        self.structure.variable_ops.iter().map(Vec::len).sum()
     }
 
     /// Number of operations of the derivative plan (the full plan's is

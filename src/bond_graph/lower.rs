@@ -503,5 +503,6 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         slot_names,
         listing_ops,
         listing_terms,
+        constant_entries: None,
     })
 }

@@ -80,7 +80,9 @@
 //! dual-number pass: columns that share no row, by a colouring of the sparsity pattern read off
 //! the plan. The plan also tells whether the Jacobian is constant (affine equations with constant
 //! coefficients, as the LOES with the plate), which lets the solver factorise it once per step
-//! size ([`CompiledModel::jacobian_is_constant`]).
+//! size ([`CompiledModel::jacobian_is_constant`]). Short of that, it tells which entries vary
+//! with `(x, u)`: [`CompiledModel::fix_constant_entries`] evaluates the others once, and each
+//! Jacobian afterwards runs passes over the variable columns only, with the same bits.
 //! [`BondGraph::to_dot`] draws the graph with its causal strokes.
 //!
 //! `CompiledModel` is `Clone + Send + Sync`; evaluation uses a per-thread scratch buffer, so one

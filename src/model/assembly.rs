@@ -217,7 +217,7 @@ impl Affine {
 impl Assembled {
     pub fn new(p: &Parameters) -> Result<Self, String> {
         let graph = bond_graph(p)?;
-        let compiled = graph.compile().map_err(|e| e.to_string())?;
+        let mut compiled = graph.compile().map_err(|e| e.to_string())?;
         let position = |name: &str| VARIABLES.iter().position(|v| v.name == name);
         let input_index = compiled
             .input_names()
@@ -257,6 +257,7 @@ impl Assembled {
                 &nominal,
             )?,
         };
+        compiled.fix_constant_entries(&rest, &inputs);
         let constant_jacobian = compiled.jacobian_is_constant().then(|| {
             let n = compiled.n_states();
             let mut jac = DMatrix::zeros(n, n);

@@ -12,11 +12,14 @@
 //!   draws the first mode shapes.
 //! - `hsp frf --input r --output acc_tip --from 0.5 --to 120 [--json] [--set ...]`: frequency
 //!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
+//! - `hsp info [--json] [--preset NAME] [--set ...]`: size and structure of the assembled model:
+//!   states, plan, the Jacobian's pattern, its varying entries and passes per evaluation.
 //! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
 //!   copied for the README.
 
 mod binaries;
 mod docpage;
+mod info;
 mod loader;
 mod modeshape;
 mod package;
@@ -47,6 +50,27 @@ struct Cli {
     command: Command,
 }
 
+/// The parameter set a command works on: the FMU's start values, a preset, then `--set`.
+#[derive(clap::Args)]
+struct ModelArgs {
+    /// Set a parameter, NAME=VALUE (repeatable); names are the FMU's variable names
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Start from a named parameter set (`hsp presets`); --set applies after it
+    #[arg(long)]
+    preset: Option<String>,
+}
+
+impl ModelArgs {
+    fn parameters(&self) -> Result<Parameters, String> {
+        let values = values_with(self.preset.as_deref(), &self.set)?;
+        Parameters::from_values(&values, &Experiment::default())
+    }
+    fn assembled(&self) -> Result<Assembled, String> {
+        Assembled::new(&self.parameters()?)
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Build the release library and package fmu/HydraulicSlewingPlate.fmu
@@ -72,20 +96,21 @@ enum Command {
         /// Print JSON (the only format)
         #[arg(long)]
         json: bool,
-        /// Set a parameter, NAME=VALUE (repeatable); names are the FMU's variable names
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
-        /// Start from a named parameter set (`hsp presets`); --set applies after it
+        #[command(flatten)]
+        model: ModelArgs,
+    },
+    /// Size and structure of the assembled model: states, plan, Jacobian pattern and passes
+    Info {
+        /// Print JSON instead of text
         #[arg(long)]
-        preset: Option<String>,
+        json: bool,
+        #[command(flatten)]
+        model: ModelArgs,
     },
     /// Print the model's bond graph as Graphviz DOT
     Graph {
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
-        /// Start from a named parameter set (`hsp presets`); --set applies after it
-        #[arg(long)]
-        preset: Option<String>,
+        #[command(flatten)]
+        model: ModelArgs,
     },
     /// Natural frequencies of the plate model (eq. 14): {"f_hz": [...], "labels": ["(n,m)", ...]}
     Modes {
@@ -98,11 +123,8 @@ enum Command {
         /// How many mode shapes --plot draws
         #[arg(long, default_value_t = 6)]
         count: usize,
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
-        /// Start from a named parameter set (`hsp presets`); --set applies after it
-        #[arg(long)]
-        preset: Option<String>,
+        #[command(flatten)]
+        model: ModelArgs,
     },
     /// Copy the packaged FMU's documentation figures into a folder (the README's docs/img)
     DocFigures {
@@ -136,11 +158,8 @@ enum Command {
         /// Also draw the Bode plot into FILE.png and FILE.svg (a .png/.svg extension is dropped)
         #[arg(long, value_name = "FILE")]
         plot: Option<String>,
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
-        /// Start from a named parameter set (`hsp presets`); --set applies after it
-        #[arg(long)]
-        preset: Option<String>,
+        #[command(flatten)]
+        model: ModelArgs,
     },
 }
 
@@ -178,10 +197,8 @@ fn presets_text(json: bool) -> String {
     s.trim_end().to_string()
 }
 
-fn linearize(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
-    let values = values_with(preset, sets)?;
-    let parameters = Parameters::from_values(&values, &Experiment::default())?;
-    let system = Assembled::new(&parameters)?;
+fn linearize(model: &ModelArgs) -> Result<String, String> {
+    let system = model.assembled()?;
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
     let json = serde_json::json!({
@@ -196,20 +213,22 @@ fn linearize(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
     Ok(json.to_string())
 }
 
-fn graph(preset: Option<&str>, sets: &[String]) -> Result<String, String> {
-    let values = values_with(preset, sets)?;
-    let parameters = Parameters::from_values(&values, &Experiment::default())?;
+fn model_info(model: &ModelArgs, json: bool) -> Result<String, String> {
+    let system = model.assembled()?;
+    Ok(if json {
+        info::facts(&system).to_string()
+    } else {
+        info::text(&system)
+    })
+}
+
+fn graph(model: &ModelArgs) -> Result<String, String> {
+    let parameters = model.parameters()?;
     Ok(bond_graph(&parameters)?.to_dot())
 }
 
-fn modes(
-    preset: Option<&str>,
-    sets: &[String],
-    plot_file: Option<&str>,
-    count: usize,
-) -> Result<String, String> {
-    let values = values_with(preset, sets)?;
-    let parameters = Parameters::from_values(&values, &Experiment::default())?;
+fn modes(model: &ModelArgs, plot_file: Option<&str>, count: usize) -> Result<String, String> {
+    let parameters = model.parameters()?;
     let modes = plate_modes(&parameters)?;
     if let Some(file) = plot_file {
         let shapes = modeshape::mode_shapes(&parameters.plate, count, 41, 17)?;
@@ -243,10 +262,8 @@ fn is_plate_signal(output: &str) -> bool {
     output.starts_with("acc") || output.starts_with("w_tip") || output.starts_with("plate.")
 }
 
-fn frf(a: &FrfArgs, preset: Option<&str>, sets: &[String]) -> Result<String, String> {
-    let values = values_with(preset, sets)?;
-    let parameters = Parameters::from_values(&values, &Experiment::default())?;
-    let system = Assembled::new(&parameters)?;
+fn frf(a: &FrfArgs, model: &ModelArgs) -> Result<String, String> {
+    let system = model.assembled()?;
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
     let h = frequency_response(&lin, a.input, a.output, a.from, a.to, a.points)?;
@@ -310,19 +327,15 @@ fn main() -> ExitCode {
             println!("{}", presets_text(json));
             Ok(())
         }
-        Command::Linearize {
-            json: _,
-            set,
-            preset,
-        } => linearize(preset.as_deref(), &set).map(|s| println!("{s}")),
-        Command::Graph { set, preset } => graph(preset.as_deref(), &set).map(|s| println!("{s}")),
+        Command::Linearize { json: _, model } => linearize(&model).map(|s| println!("{s}")),
+        Command::Graph { model } => graph(&model).map(|s| println!("{s}")),
+        Command::Info { json, model } => model_info(&model, json).map(|s| println!("{s}")),
         Command::Modes {
             json: _,
             plot,
             count,
-            set,
-            preset,
-        } => modes(preset.as_deref(), &set, plot.as_deref(), count).map(|s| println!("{s}")),
+            model,
+        } => modes(&model, plot.as_deref(), count).map(|s| println!("{s}")),
         Command::Frf {
             input,
             output,
@@ -331,8 +344,7 @@ fn main() -> ExitCode {
             points,
             json,
             plot,
-            set,
-            preset,
+            model,
         } => frf(
             &FrfArgs {
                 input: &input,
@@ -343,8 +355,7 @@ fn main() -> ExitCode {
                 json,
                 plot: plot.as_deref(),
             },
-            preset.as_deref(),
-            &set,
+            &model,
         )
         .map(|s| println!("{s}")),
     };

@@ -1,0 +1,124 @@
+//! `hsp info`: the size and structure of the assembled model for a parameter set: states,
+//! inputs, outputs, the evaluation plan, and the Jacobian the integrator evaluates at every step
+//! (its pattern, which entries vary with the state and inputs, and how many dual-number passes
+//! one evaluation takes with and without the constant entries fixed).
+
+use hydraulic_slewing_plate::model::assembly::Assembled;
+
+/// The facts `hsp info` prints, as JSON.
+pub fn facts(system: &Assembled) -> serde_json::Value {
+    let m = system.compiled();
+    let names = |cols: &[u32]| -> Vec<&str> {
+        cols.iter()
+            .map(|&j| m.state_names()[j as usize].as_str())
+            .collect()
+    };
+    let nonzeros: usize = m.jacobian_pattern().iter().map(Vec::len).sum();
+    let varying: usize = m.jacobian_varying_pattern().iter().map(Vec::len).sum();
+    serde_json::json!({
+        "states": m.n_states(),
+        "inputs": m.input_names(),
+        "outputs": m.n_outputs(),
+        "plan_operations": m.plan_len(),
+        "derivative_operations": m.derivative_plan_len(),
+        "jacobian": {
+            "nonzeros": nonzeros,
+            "varying_entries": varying,
+            "variable_columns": names(&m.jacobian_variable_columns()),
+            "constant": m.jacobian_is_constant(),
+            "passes_full": m.jacobian_colours(),
+            "passes_per_step": m.variable_jacobian_colours(),
+            "operations_full": m.jacobian_colours() * m.derivative_plan_len(),
+            "operations_per_step": m.variable_jacobian_ops(),
+            "constant_entries_fixed": m.constant_entries_fixed(),
+        },
+    })
+}
+
+/// The facts as text for people.
+pub fn text(system: &Assembled) -> String {
+    let m = system.compiled();
+    let f = facts(system);
+    let j = &f["jacobian"];
+    let n = m.n_states();
+    let variable: Vec<&str> = j["variable_columns"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|v| v.as_str())
+        .collect();
+    let mut s = format!(
+        "states     {n}\ninputs     {} ({})\noutputs    {}\n",
+        m.n_inputs(),
+        m.input_names().join(", "),
+        m.n_outputs()
+    );
+    s.push_str(&format!(
+        "plan       {} operations, {} of them for the state derivatives\n",
+        m.plan_len(),
+        m.derivative_plan_len()
+    ));
+    s.push_str(&format!(
+        "Jacobian   {} structural nonzeros of {}; {} vary with (x, u), in {} variable columns{}\n",
+        j["nonzeros"],
+        n * n,
+        j["varying_entries"],
+        variable.len(),
+        if m.jacobian_is_constant() {
+            " (J is constant)"
+        } else {
+            ""
+        }
+    ));
+    let full = format!(
+        "{} dual-number passes of {} operations",
+        m.jacobian_colours(),
+        m.derivative_plan_len()
+    );
+    s.push_str(&if m.jacobian_is_constant() {
+        format!("passes     {full}, once per parameter set\n")
+    } else {
+        format!(
+            "passes     {full} for every entry; {} passes, {} operations in all, once the \
+             constant entries are fixed (each step)\n",
+            m.variable_jacobian_colours(),
+            m.variable_jacobian_ops()
+        )
+    });
+    if !variable.is_empty() {
+        s.push_str(&format!("variable   {}\n", variable.join(", ")));
+    }
+    s.trim_end().to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+    use hydraulic_slewing_plate::model::parameters::Parameters;
+    use hydraulic_slewing_plate::model::presets;
+    use hydraulic_slewing_plate::model::variables::VARIABLES;
+
+    #[test]
+    fn info_of_the_complete_system_names_the_passes_and_the_variable_columns() {
+        let mut values = Values::from_start(&VARIABLES);
+        presets::apply(&mut values, presets::COMPLETE).unwrap();
+        let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+        let system = Assembled::new(&p).unwrap();
+        let m = system.compiled();
+        let f = facts(&system);
+        let j = &f["jacobian"];
+        assert_eq!(j["passes_full"], m.jacobian_colours());
+        assert_eq!(j["passes_per_step"], m.variable_jacobian_colours());
+        assert_eq!(j["constant"], false);
+        assert_eq!(j["constant_entries_fixed"], true);
+        let cols = j["variable_columns"].as_array().unwrap();
+        assert_eq!(cols.len(), m.jacobian_variable_columns().len());
+        assert!(cols
+            .iter()
+            .all(|c| c.as_str().unwrap().starts_with("servo_valve.")));
+        let t = text(&system);
+        assert!(t.contains(&format!("{} dual-number passes", m.jacobian_colours())));
+        assert!(t.contains("variable   servo_valve."), "{t}");
+    }
+}
