@@ -193,6 +193,7 @@ fn storage_rate(st: &Storage, x: &[f64], v: &[f64]) -> f64 {
     }
 }
 
+#[inline]
 fn storage_energy(st: &Storage, x: &[f64]) -> f64 {
     match st {
         Storage::One { state, law, .. } => {

@@ -57,6 +57,9 @@ pub(crate) struct Structure {
     pub row_column: Vec<Vec<u32>>,
     /// J is independent of x and u.
     pub constant: bool,
+    /// For every slot, whether it is affine in x with coefficients independent of x and u
+    /// (`s(x, u) = g x + s(0, u)`): its gradient in x does not vary.
+    pub affine_slots: Vec<bool>,
     /// For each row i, the columns j (ascending) whose entry `J_ij` may vary with `(x, u)`: a
     /// subset of `pattern[i]`.
     pub varying: Vec<Vec<u32>>,
@@ -165,7 +168,9 @@ pub(crate) fn analyse(
     };
     let mut acc = vec![0u64; words];
     let mut vacc = vec![0u64; words];
-    for op in &deriv_ops {
+    // Over the whole plan, so that the outputs' slots are classified too; the derivatives'
+    // operations are among them, in the same order.
+    for op in ops {
         acc.fill(0);
         vacc.fill(0);
         let mut u = false;
@@ -214,6 +219,7 @@ pub(crate) fn analyse(
         jvar[d] = var;
     }
     let constant = deriv_slots.iter().all(|&d| !jvar[d as usize]);
+    let affine_slots = jvar.iter().map(|v| !v).collect();
     let rows_of = |table: &[u64]| -> Vec<Vec<u32>> {
         deriv_slots
             .iter()
@@ -249,6 +255,7 @@ pub(crate) fn analyse(
         colours,
         row_column,
         constant,
+        affine_slots,
         varying,
         variable_colours,
         variable_row_column,

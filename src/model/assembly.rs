@@ -160,40 +160,76 @@ pub struct Assembled {
     affine: Option<Affine>,
 }
 
-/// `dx/dt = J x + f(0, u)` for a model whose Jacobian J is constant (the LOES with the plate).
+/// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
+/// as (column, value).
+#[derive(Clone, Debug)]
+struct SparseRows {
+    row_start: Vec<usize>,
+    entries: Vec<(u32, f64)>,
+}
+
+impl SparseRows {
+    fn from_dense(m: &DMatrix<f64>) -> Self {
+        let mut row_start = vec![0];
+        let mut entries = Vec::new();
+        for i in 0..m.nrows() {
+            entries.extend(
+                (0..m.ncols())
+                    .filter(|&j| m[(i, j)] != 0.0)
+                    .map(|j| (j as u32, m[(i, j)])),
+            );
+            row_start.push(entries.len());
+        }
+        SparseRows { row_start, entries }
+    }
+
+    /// `offset_i + (row i) x`.
+    #[inline]
+    fn row_times(&self, i: usize, x: &[f64], offset: f64) -> f64 {
+        self.entries[self.row_start[i]..self.row_start[i + 1]]
+            .iter()
+            .fold(offset, |acc, &(j, a)| acc + a * x[j as usize])
+    }
+}
+
+/// The most outputs [`Affine`] evaluates as `C x + y(0, u)` (on the stack, so that a
+/// communication point allocates nothing); the model has 23 to 31.
+const MAX_AFFINE_OUTPUTS: usize = 64;
+
+/// `dx/dt = J x + f(0, u)` for a model whose Jacobian J is constant (the LOES with the plate),
+/// and `y = C x + y(0, u)` when its outputs are affine too.
 ///
 /// A constant J means `f` is affine in x with coefficients that depend on neither x nor u, so
 /// the identity is exact; only the rounding differs from the plan's. J is 1–5 % dense (the
 /// plate's modes meet only at the hub and the torsion bar), so the product over its nonzeros
 /// costs a fraction of a pass through the plan, which also evaluates every bond variable on
-/// the way. The offset `f(0, u)` is evaluated through the plan whenever the held inputs change.
+/// the way. The offsets `f(0, u)` and `y(0, u)` are evaluated through the plan whenever the
+/// held inputs change.
 #[derive(Clone, Debug)]
 struct Affine {
-    /// Row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`, as (column, value).
-    row_start: Vec<usize>,
-    entries: Vec<(u32, f64)>,
+    jac: SparseRows,
     /// `f(0, u)` at the held inputs.
     offset: Vec<f64>,
+    /// C (dense: the accelerometers sum over every mode) and `y(0, u)`, if every output is
+    /// affine in x and there are at most [`MAX_AFFINE_OUTPUTS`].
+    outputs: Option<(DMatrix<f64>, Vec<f64>)>,
     /// The state 0, kept so that an input change allocates nothing.
     zero: Vec<f64>,
 }
 
 impl Affine {
-    fn new(jac: &DMatrix<f64>, compiled: &CompiledModel, inputs: &[f64]) -> Self {
-        let mut row_start = vec![0];
-        let mut entries = Vec::new();
-        for i in 0..jac.nrows() {
-            entries.extend(
-                (0..jac.ncols())
-                    .filter(|&j| jac[(i, j)] != 0.0)
-                    .map(|j| (j as u32, jac[(i, j)])),
-            );
-            row_start.push(entries.len());
-        }
+    fn new(jac: &DMatrix<f64>, compiled: &CompiledModel, rest: &[f64], inputs: &[f64]) -> Self {
+        let affine_outputs =
+            compiled.outputs_are_affine() && compiled.n_outputs() <= MAX_AFFINE_OUTPUTS;
+        let outputs = affine_outputs.then(|| {
+            let c = compiled.linearize(rest, inputs).c;
+            let rows = c.nrows();
+            (c, vec![0.0; rows])
+        });
         let mut affine = Affine {
-            row_start,
-            entries,
+            jac: SparseRows::from_dense(jac),
             offset: vec![0.0; jac.nrows()],
+            outputs,
             zero: vec![0.0; jac.nrows()],
         };
         affine.set_inputs(compiled, inputs);
@@ -202,14 +238,14 @@ impl Affine {
 
     fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
         compiled.derivatives(&self.zero, inputs, &mut self.offset);
+        if let Some((_, y0)) = &mut self.outputs {
+            compiled.outputs(&self.zero, inputs, y0);
+        }
     }
 
     fn derivatives(&self, x: &[f64], dx: &mut [f64]) {
         for (i, d) in dx.iter_mut().enumerate() {
-            let row = &self.entries[self.row_start[i]..self.row_start[i + 1]];
-            *d = row
-                .iter()
-                .fold(self.offset[i], |acc, &(j, a)| acc + a * x[j as usize]);
+            *d = self.jac.row_times(i, x, self.offset[i]);
         }
     }
 }
@@ -266,7 +302,7 @@ impl Assembled {
         });
         let affine = constant_jacobian
             .as_ref()
-            .map(|(_, jac)| Affine::new(jac, &compiled, &inputs));
+            .map(|(_, jac)| Affine::new(jac, &compiled, &rest, &inputs));
         Ok(Assembled {
             constant_jacobian,
             affine,
@@ -369,22 +405,53 @@ impl Assembled {
     /// for state `x` into the FMU's values. A declared state the model does not have keeps its
     /// value, with derivative 0.
     pub fn write_outputs(&self, x: &[f64], values: &mut Values) {
-        let values = std::cell::RefCell::new(values);
-        self.compiled.for_each_output_and_derivative(
-            x,
-            &self.inputs,
-            |k, v| {
-                if let Some(i) = self.output_index[k] {
-                    values.borrow_mut().set_real(i, v);
+        match &self.affine {
+            Some(
+                affine @ Affine {
+                    outputs: Some((c, y0)),
+                    ..
+                },
+            ) => {
+                // Linear outputs: y(0, u) plus C's columns scaled by x (contiguous, so the
+                // additions run several outputs at a time), instead of a pass through the plan.
+                let mut y = [0.0; MAX_AFFINE_OUTPUTS];
+                let y = &mut y[..y0.len()];
+                y.copy_from_slice(y0);
+                for (column, &xj) in c.as_slice().chunks_exact(y0.len()).zip(x) {
+                    for (yk, ckj) in y.iter_mut().zip(column) {
+                        *yk += ckj * xj;
+                    }
                 }
-            },
-            |i, v| {
-                if let Some(k) = self.state_slot[i] {
-                    values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
+                for (&yk, target) in y.iter().zip(&self.output_index) {
+                    if let Some(i) = *target {
+                        values.set_real(i, yk);
+                    }
                 }
-            },
-        );
-        let values = values.into_inner();
+                for (i, slot) in self.state_slot.iter().enumerate() {
+                    if let Some(k) = *slot {
+                        let dx = affine.jac.row_times(i, x, affine.offset[i]);
+                        values.set_real(CONTINUOUS_STATES[k].1, dx);
+                    }
+                }
+            }
+            _ => {
+                let values = std::cell::RefCell::new(&mut *values);
+                self.compiled.for_each_output_and_derivative(
+                    x,
+                    &self.inputs,
+                    |k, v| {
+                        if let Some(i) = self.output_index[k] {
+                            values.borrow_mut().set_real(i, v);
+                        }
+                    },
+                    |i, v| {
+                        if let Some(k) = self.state_slot[i] {
+                            values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
+                        }
+                    },
+                );
+            }
+        }
         for (slot, &xi) in self.state_slot.iter().zip(x) {
             if let Some(k) = slot {
                 values.set_real(CONTINUOUS_STATES[*k].0, xi);
@@ -513,10 +580,10 @@ mod tests {
     }
 
     /// The sparse product `J x + f(0, u)` is the plan's `f(x, u)` to rounding, at points far
-    /// from rest and after the inputs change (held or restored); a model with a varying
-    /// Jacobian keeps the plan.
+    /// from rest and after the inputs change (held or restored), and so are the outputs
+    /// `C x + y(0, u)`; a model with a varying Jacobian keeps the plan.
     #[test]
-    fn affine_derivatives_are_the_plans() {
+    fn affine_derivatives_and_outputs_are_the_plans() {
         let (mut a, mut values) = assembled(&[
             ("hydraulics.model", "1"),
             ("controller.saturation", "false"),
@@ -556,7 +623,30 @@ mod tests {
                 );
             }
         }
+        // The outputs written as C x + y(0, u) are the plan's, to rounding.
+        assert!(a.affine.as_ref().unwrap().outputs.is_some());
+        let x: Vec<f64> = a.nominal().iter().map(|s| s * next() * 100.0).collect();
+        let mut written = Values::from_start(&VARIABLES);
+        a.write_outputs(&x, &mut written);
+        let mut y = vec![0.0; a.compiled.n_outputs()];
+        a.compiled.outputs(&x, &a.inputs, &mut y);
+        let scale = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let mut compared = 0;
+        for (k, target) in a.output_index.iter().enumerate() {
+            if let Some(i) = *target {
+                let v = written.real(i);
+                assert!(
+                    (v - y[k]).abs() <= 1e-12 * scale,
+                    "{}: {v} against {}",
+                    a.compiled.output_names()[k],
+                    y[k]
+                );
+                compared += 1;
+            }
+        }
+        assert!(compared >= 20, "{compared} outputs compared");
         let (servo_valve, _) = assembled(&[("hydraulics.model", "2")]);
         assert!(servo_valve.affine.is_none());
+        assert!(!servo_valve.compiled.outputs_are_affine());
     }
 }
