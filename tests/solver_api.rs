@@ -106,6 +106,12 @@ mod solver_api {
             cosim(&mut a, &plant, 0, 20, dt);
             // Save (serialise) the state at a communication point.
             let json = serde_json::to_string(&a).unwrap();
+            // Radau5's state holds the Jacobian it goes on with.
+            assert_eq!(
+                json.contains("kept_jac"),
+                method == Method::Radau5,
+                "{method:?}"
+            );
             let copy = a.clone();
             cosim(&mut a, &plant, 20, 50, dt);
 
@@ -124,6 +130,50 @@ mod solver_api {
             }
             assert!(a.stats().accepted > 50);
         }
+    }
+
+    /// Radau5 keeps a (varying) Jacobian from call to call while Newton converges fast, as
+    /// RADAU5 keeps it from step to step: one call per communication step must not cost a
+    /// Jacobian and two LUs each. The kept J is part of the saved state (a restored copy,
+    /// whose cache starts empty, rebuilds it and its LUs uncounted and continues with the same
+    /// bits: `checkpoint_restore_continue_is_bit_identical`), survives input jumps, and is
+    /// dropped by a reset.
+    #[test]
+    fn radau5_keeps_its_jacobian_across_calls() {
+        let dt = 1e-3;
+        // A unit step of the input, then 200 points with the input held, and a jump.
+        let plant = Plant { u: Cell::new(1.0) };
+        let mut a = Integrator::new(opts(Method::Radau5, 1e-7, 1e-9), 0.0, vec![0.0; 3]).unwrap();
+        for k in 1..=200 {
+            a.advance_to(&plant, k as f64 * dt).unwrap();
+        }
+        let s = *a.stats();
+        assert!(s.accepted >= 200, "{s:?}");
+        // The plant's J is the same everywhere (though not declared constant), so Newton
+        // converges at once: J is evaluated afresh only after a rejected step (as RADAU5 does),
+        // not once per call as before.
+        assert!(s.jac_evals <= s.rejected + 1, "{s:?}");
+        assert!(s.jac_evals < 200, "{s:?}");
+        let before = s.jac_evals;
+        cosim(&mut a, &plant, 200, 201, dt);
+        assert!(
+            a.stats().rejected > s.rejected || a.stats().jac_evals == before,
+            "an input jump keeps J"
+        );
+        let json = serde_json::to_string(&a).unwrap();
+        assert!(json.contains("\"kept_jac\""), "{json}");
+        // Rodas5P needs J at every step (a Rosenbrock method's order rests on it) and keeps
+        // none.
+        let mut r = Integrator::new(opts(Method::Rodas5P, 1e-7, 1e-9), 0.0, vec![0.0; 3]).unwrap();
+        cosim(&mut r, &plant, 0, 20, dt);
+        assert!(!serde_json::to_string(&r).unwrap().contains("kept_jac"));
+        // A reset drops it: the next call evaluates J at the new point.
+        a.reset(a.t(), vec![0.5, 0.0, 0.0]);
+        assert!(!serde_json::to_string(&a).unwrap().contains("kept_jac"));
+        let (before, rejected) = (a.stats().jac_evals, a.stats().rejected);
+        cosim(&mut a, &plant, 201, 202, dt);
+        assert!(a.stats().jac_evals > before, "{:?}", a.stats());
+        assert!(a.stats().jac_evals <= before + 1 + a.stats().rejected - rejected);
     }
 
     #[test]

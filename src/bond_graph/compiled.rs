@@ -178,14 +178,28 @@ impl CompiledModel {
         f: impl FnOnce(&[f64]) -> R,
     ) -> R {
         self.check_dims(x, u);
+        self.with_f64_slots(ops, Some(x), u, f)
+    }
+
+    /// [`CompiledModel::with_f64`] at the states `x`, or at x = 0 for `None`.
+    fn with_f64_slots<R>(
+        &self,
+        ops: &[Op],
+        x: Option<&[f64]>,
+        u: &[f64],
+        f: impl FnOnce(&[f64]) -> R,
+    ) -> R {
         WS_F64.with(|ws| {
             let mut ws = ws.borrow_mut();
             if ws.len() < self.n_slots {
                 ws.resize(self.n_slots, 0.0);
             }
             let s = &mut ws[..self.n_slots];
-            let n = x.len();
-            s[..n].copy_from_slice(x);
+            let n = self.n_states();
+            match x {
+                Some(x) => s[..n].copy_from_slice(x),
+                None => s[..n].fill(0.0),
+            }
             s[n..n + u.len()].copy_from_slice(u);
             self.run(ops, s);
             f(s)
@@ -247,6 +261,73 @@ impl CompiledModel {
         self.with_f64(&self.structure.deriv_ops, x, u, |s| {
             for (d, &k) in dx.iter_mut().zip(&self.deriv_slots) {
                 *d = s[k as usize];
+            }
+        })
+    }
+
+    /// The derivatives of the rows that are not affine in x
+    /// ([`CompiledModel::nonaffine_rows`]) into their places in `dx`, the other entries left as
+    /// they are: one pass through the operations those rows need, with the same values as
+    /// [`CompiledModel::derivatives`] gives them.
+    pub fn nonaffine_derivatives(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
+        assert_eq!(dx.len(), self.n_states(), "derivative vector length");
+        let st = &self.structure;
+        self.with_f64(&st.nonaffine_ops, x, u, |s| {
+            for &i in &st.nonaffine_rows {
+                let i = i as usize;
+                dx[i] = s[self.deriv_slots[i] as usize];
+            }
+        })
+    }
+
+    /// The derivatives of the affine rows at x = 0, `f_i(0, u)`, into their places in `dx` (the
+    /// entries of the other rows are left as they are): the offsets of `f_i = J_i x + f_i(0, u)`.
+    pub fn affine_offsets(&self, u: &[f64], dx: &mut [f64]) {
+        assert_eq!(dx.len(), self.n_states(), "derivative vector length");
+        assert_eq!(u.len(), self.n_inputs(), "input vector length");
+        let st = &self.structure;
+        self.with_f64_slots(&st.affine_ops, None, u, |s| {
+            for (i, (d, &k)) in dx.iter_mut().zip(&self.deriv_slots).enumerate() {
+                if st.nonaffine_rows.binary_search(&(i as u32)).is_err() {
+                    *d = s[k as usize];
+                }
+            }
+        })
+    }
+
+    /// Calls `output(k, y_k)` for every output that is not affine in x
+    /// ([`CompiledModel::nonaffine_outputs`]) and `derivative(i, dx_i/dt)` for every row that is
+    /// not ([`CompiledModel::nonaffine_rows`]), from one pass through the operations they need
+    /// (the same values as the full plan's).
+    pub fn for_each_nonaffine_output_and_derivative(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        mut output: impl FnMut(usize, f64),
+        mut derivative: impl FnMut(usize, f64),
+    ) {
+        let st = &self.structure;
+        self.with_f64(&st.nonaffine_point_ops, x, u, |s| {
+            for &k in &st.nonaffine_outputs {
+                output(k as usize, s[self.output_slots[k as usize] as usize]);
+            }
+            for &i in &st.nonaffine_rows {
+                derivative(i as usize, s[self.deriv_slots[i as usize] as usize]);
+            }
+        })
+    }
+
+    /// The affine outputs at x = 0, `y_k(0, u)`, into their places in `y` (the others left as
+    /// they are): the offsets of `y_k = C_k x + y_k(0, u)`.
+    pub fn affine_output_offsets(&self, u: &[f64], y: &mut [f64]) {
+        assert_eq!(y.len(), self.n_outputs(), "output vector length");
+        assert_eq!(u.len(), self.n_inputs(), "input vector length");
+        let st = &self.structure;
+        self.with_f64_slots(&st.affine_output_ops, None, u, |s| {
+            for (k, (d, &slot)) in y.iter_mut().zip(&self.output_slots).enumerate() {
+                if st.nonaffine_outputs.binary_search(&(k as u32)).is_err() {
+                    *d = s[slot as usize];
+                }
             }
         })
     }
@@ -492,6 +573,36 @@ impl CompiledModel {
     /// [`CompiledModel::derivative_plan_len`].
     pub fn variable_jacobian_ops(&self) -> usize {
         self.structure.variable_ops.iter().map(Vec::len).sum()
+    }
+
+    /// The rows `i` whose derivative `dx_i/dt` is not affine in x with constant coefficients
+    /// (by the rules of [`CompiledModel::jacobian_is_constant`]), ascending: the servo valve's
+    /// nonlinear orifices and laws; every other row is `J_i x + f_i(0, u)` with `J_i` among
+    /// the constant entries.
+    pub fn nonaffine_rows(&self) -> &[u32] {
+        &self.structure.nonaffine_rows
+    }
+
+    /// The constant entries of the Jacobian (zero at the varying ones), once
+    /// [`CompiledModel::fix_constant_entries`] has evaluated them.
+    pub fn constant_entries(&self) -> Option<&DMatrix<f64>> {
+        self.constant_entries.as_ref()
+    }
+
+    /// The outputs `k` that are not affine in x with constant coefficients, ascending (see
+    /// [`CompiledModel::outputs_are_affine`]).
+    pub fn nonaffine_outputs(&self) -> &[u32] {
+        &self.structure.nonaffine_outputs
+    }
+
+    /// Number of operations [`CompiledModel::for_each_nonaffine_output_and_derivative`] runs.
+    pub fn nonaffine_point_plan_len(&self) -> usize {
+        self.structure.nonaffine_point_ops.len()
+    }
+
+    /// Number of operations [`CompiledModel::nonaffine_derivatives`] runs.
+    pub fn nonaffine_plan_len(&self) -> usize {
+        self.structure.nonaffine_ops.len()
     }
 
     /// Number of operations of the derivative plan (the full plan's is

@@ -482,6 +482,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         state_names.len(),
         input_names.len(),
         &deriv_slots,
+        &output_slots,
     );
     Ok(CompiledModel {
         structure,

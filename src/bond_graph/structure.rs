@@ -71,6 +71,21 @@ pub(crate) struct Structure {
     /// For each group of `variable_colours`, the operations the rows read in its pass need, in
     /// plan order (a subset of `deriv_ops`).
     pub variable_ops: Vec<Vec<Op>>,
+    /// The rows `i` whose derivative is not affine in x (`affine_slots` false), ascending.
+    pub nonaffine_rows: Vec<u32>,
+    /// The operations those rows need, in plan order (a subset of `deriv_ops`): with the affine
+    /// rows as a product with their constant gradients, `f` needs only these.
+    pub nonaffine_ops: Vec<Op>,
+    /// The operations the affine rows need (for their values at x = 0): affine slots read only
+    /// affine slots, so none of these is a nonlinear law of a state.
+    pub affine_ops: Vec<Op>,
+    /// The outputs `k` that are not affine in x, ascending.
+    pub nonaffine_outputs: Vec<u32>,
+    /// The operations of the full plan that the outputs and rows that are not affine need: a
+    /// communication point's pass when the rest are products.
+    pub nonaffine_point_ops: Vec<Op>,
+    /// The operations of the full plan that the affine outputs need (for their values at x = 0).
+    pub affine_output_ops: Vec<Op>,
 }
 
 /// Calls `read` with every slot `op` reads.
@@ -143,6 +158,7 @@ pub(crate) fn analyse(
     n_states: usize,
     n_inputs: usize,
     deriv_slots: &[u32],
+    output_slots: &[u32],
 ) -> Structure {
     // Backwards from the derivatives: the operations they need.
     let deriv_ops = needed_ops(ops, terms, n_slots, deriv_slots);
@@ -249,7 +265,24 @@ pub(crate) fn analyse(
             needed_ops(&deriv_ops, terms, n_slots, &rows)
         })
         .collect();
+    let (affine_derivs, nonaffine_derivs) = split_by_affinity(deriv_slots, &jvar);
+    let slots_of = |rows: &[(usize, u32)]| rows.iter().map(|&(_, d)| d).collect::<Vec<u32>>();
+    let nonaffine_ops = needed_ops(&deriv_ops, terms, n_slots, &slots_of(&nonaffine_derivs));
+    let affine_ops = needed_ops(&deriv_ops, terms, n_slots, &slots_of(&affine_derivs));
+    let nonaffine_rows = nonaffine_derivs.iter().map(|&(i, _)| i as u32).collect();
+    let (affine_outs, nonaffine_outs) = split_by_affinity(output_slots, &jvar);
+    let mut point_targets = slots_of(&nonaffine_outs);
+    point_targets.extend(slots_of(&nonaffine_derivs));
+    let nonaffine_point_ops = needed_ops(ops, terms, n_slots, &point_targets);
+    let affine_output_ops = needed_ops(ops, terms, n_slots, &slots_of(&affine_outs));
+    let nonaffine_outputs = nonaffine_outs.iter().map(|&(k, _)| k as u32).collect();
     Structure {
+        nonaffine_outputs,
+        nonaffine_point_ops,
+        affine_output_ops,
+        nonaffine_rows,
+        nonaffine_ops,
+        affine_ops,
         deriv_ops,
         pattern,
         colours,
@@ -261,6 +294,18 @@ pub(crate) fn analyse(
         variable_row_column,
         variable_ops,
     }
+}
+
+/// `(index, slot)` pairs of some of a list of slots.
+type IndexedSlots = Vec<(usize, u32)>;
+
+/// Splits `slots` (with their indices) into those affine in x (`jvar` false) and the others.
+fn split_by_affinity(slots: &[u32], jvar: &[bool]) -> (IndexedSlots, IndexedSlots) {
+    slots
+        .iter()
+        .copied()
+        .enumerate()
+        .partition(|&(_, d)| !jvar[d as usize])
 }
 
 /// Greedy column colouring of a sparsity pattern (rows -> columns), columns by decreasing
@@ -459,7 +504,7 @@ mod tests {
         ];
         let mut terms = terms;
         terms.extend([(1.0, 6), (1.0, 8), (2.0, 0)]);
-        let st = analyse(&ops, &terms, 14, 3, 1, &[10, 11, 12, 13]);
+        let st = analyse(&ops, &terms, 14, 3, 1, &[10, 11, 12, 13], &[]);
         assert_eq!(st.pattern, [vec![0], vec![1, 2], vec![0], vec![0, 1, 2]]);
         assert_eq!(st.varying, [vec![], vec![1, 2], vec![], vec![1, 2]]);
         assert!(!st.constant);
@@ -471,7 +516,7 @@ mod tests {
             assert!(ops.iter().all(|op| !matches!(op, Op::Div { dst: 12, .. })));
         }
         // Without the rows that vary, the same plan has a constant Jacobian.
-        let st = analyse(&ops, &terms, 14, 3, 1, &[10, 12]);
+        let st = analyse(&ops, &terms, 14, 3, 1, &[10, 12], &[]);
         assert!(st.constant && st.varying.iter().all(Vec::is_empty));
         assert!(st.variable_colours.is_empty());
     }

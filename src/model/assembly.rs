@@ -196,56 +196,76 @@ impl SparseRows {
 /// communication point allocates nothing); the model has 23 to 31.
 const MAX_AFFINE_OUTPUTS: usize = 64;
 
-/// `dx/dt = J x + f(0, u)` for a model whose Jacobian J is constant (the LOES with the plate),
-/// and `y = C x + y(0, u)` when its outputs are affine too.
+/// `dx_i/dt = J_i x + f_i(0, u)` for the rows `i` of `f` that are affine in x (every row of the
+/// LOES with the plate, whose Jacobian J is constant; all but the servo valve's 7 with the full
+/// valve), the other rows through the part of the plan they need, and `y = C x + y(0, u)` when
+/// every output is affine too.
 ///
-/// A constant J means `f` is affine in x with coefficients that depend on neither x nor u, so
-/// the identity is exact; only the rounding differs from the plan's. J is 1–5 % dense (the
-/// plate's modes meet only at the hub and the torsion bar), so the product over its nonzeros
-/// costs a fraction of a pass through the plan, which also evaluates every bond variable on
-/// the way. The offsets `f(0, u)` and `y(0, u)` are evaluated through the plan whenever the
-/// held inputs change.
+/// An affine row has coefficients `J_i` that depend on neither x nor u (they are among the
+/// Jacobian's constant entries), so the identity is exact; only the rounding differs from the
+/// plan's. J is 1–5 % dense (the plate's modes meet only at the hub and the torsion bar), so
+/// the product over its nonzeros costs a fraction of a pass through the plan, which also
+/// evaluates every bond variable on the way. The offsets `f(0, u)` and `y(0, u)` are evaluated
+/// through the plan whenever the held inputs change.
 #[derive(Clone, Debug)]
 struct Affine {
+    /// The affine rows of J (the other rows empty).
     jac: SparseRows,
+    /// Some rows are not affine (their entries in `offset` are unused).
+    partial: bool,
     /// `f(0, u)` at the held inputs.
     offset: Vec<f64>,
-    /// C (dense: the accelerometers sum over every mode) and `y(0, u)`, if every output is
-    /// affine in x and there are at most [`MAX_AFFINE_OUTPUTS`].
+    /// C (dense: the accelerometers sum over every mode) and `y(0, u)` of the affine outputs
+    /// (the other rows unused), if there are at most [`MAX_AFFINE_OUTPUTS`] outputs.
     outputs: Option<(DMatrix<f64>, Vec<f64>)>,
-    /// The state 0, kept so that an input change allocates nothing.
-    zero: Vec<f64>,
 }
 
 impl Affine {
+    /// From the Jacobian's constant entries `jac` (all of J when it is constant).
     fn new(jac: &DMatrix<f64>, compiled: &CompiledModel, rest: &[f64], inputs: &[f64]) -> Self {
-        let affine_outputs =
-            compiled.outputs_are_affine() && compiled.n_outputs() <= MAX_AFFINE_OUTPUTS;
-        let outputs = affine_outputs.then(|| {
-            let c = compiled.linearize(rest, inputs).c;
+        let partial = !compiled.nonaffine_rows().is_empty();
+        let outputs = (compiled.n_outputs() <= MAX_AFFINE_OUTPUTS).then(|| {
+            // The affine outputs' rows (the others, evaluated through the plan, zero).
+            let mut c = compiled.linearize(rest, inputs).c;
+            for &k in compiled.nonaffine_outputs() {
+                c.row_mut(k as usize).fill(0.0);
+            }
             let rows = c.nrows();
             (c, vec![0.0; rows])
         });
+        let mut rows = SparseRows::from_dense(jac);
+        if partial {
+            rows = SparseRows::from_dense(&jac.map_with_location(|i, _, v| {
+                if compiled.nonaffine_rows().contains(&(i as u32)) {
+                    0.0
+                } else {
+                    v
+                }
+            }));
+        }
         let mut affine = Affine {
-            jac: SparseRows::from_dense(jac),
+            jac: rows,
+            partial,
             offset: vec![0.0; jac.nrows()],
             outputs,
-            zero: vec![0.0; jac.nrows()],
         };
         affine.set_inputs(compiled, inputs);
         affine
     }
 
     fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
-        compiled.derivatives(&self.zero, inputs, &mut self.offset);
+        compiled.affine_offsets(inputs, &mut self.offset);
         if let Some((_, y0)) = &mut self.outputs {
-            compiled.outputs(&self.zero, inputs, y0);
+            compiled.affine_output_offsets(inputs, y0);
         }
     }
 
-    fn derivatives(&self, x: &[f64], dx: &mut [f64]) {
+    fn derivatives(&self, compiled: &CompiledModel, x: &[f64], u: &[f64], dx: &mut [f64]) {
         for (i, d) in dx.iter_mut().enumerate() {
             *d = self.jac.row_times(i, x, self.offset[i]);
+        }
+        if self.partial {
+            compiled.nonaffine_derivatives(x, u, dx);
         }
     }
 }
@@ -300,9 +320,15 @@ impl Assembled {
             compiled.jacobian(&rest, &inputs, &mut jac);
             (stamp(&jac), jac)
         });
-        let affine = constant_jacobian
-            .as_ref()
-            .map(|(_, jac)| Affine::new(jac, &compiled, &rest, &inputs));
+        // All rows affine with a constant J; with a varying one the rows that are not affine
+        // go through their part of the plan (worth it while they are a minority).
+        let affine = match (&constant_jacobian, compiled.constant_entries()) {
+            (Some((_, jac)), _) => Some(Affine::new(jac, &compiled, &rest, &inputs)),
+            (None, Some(fixed)) if 2 * compiled.nonaffine_rows().len() < compiled.n_states() => {
+                Some(Affine::new(fixed, &compiled, &rest, &inputs))
+            }
+            _ => None,
+        };
         Ok(Assembled {
             constant_jacobian,
             affine,
@@ -422,15 +448,28 @@ impl Assembled {
                         *yk += ckj * xj;
                     }
                 }
-                for (&yk, target) in y.iter().zip(&self.output_index) {
-                    if let Some(i) = *target {
-                        values.set_real(i, yk);
-                    }
-                }
                 for (i, slot) in self.state_slot.iter().enumerate() {
                     if let Some(k) = *slot {
                         let dx = affine.jac.row_times(i, x, affine.offset[i]);
                         values.set_real(CONTINUOUS_STATES[k].1, dx);
+                    }
+                }
+                if affine.partial {
+                    // The valve's outputs and rows through their part of the plan.
+                    self.compiled.for_each_nonaffine_output_and_derivative(
+                        x,
+                        &self.inputs,
+                        |k, v| y[k] = v,
+                        |i, v| {
+                            if let Some(k) = self.state_slot[i] {
+                                values.set_real(CONTINUOUS_STATES[k].1, v);
+                            }
+                        },
+                    );
+                }
+                for (&yk, target) in y.iter().zip(&self.output_index) {
+                    if let Some(i) = *target {
+                        values.set_real(i, yk);
                     }
                 }
             }
@@ -536,7 +575,7 @@ impl OdeSystem for Assembled {
 
     fn rhs(&self, _t: f64, x: &[f64], dxdt: &mut [f64]) {
         match &self.affine {
-            Some(affine) => affine.derivatives(x, dxdt),
+            Some(affine) => affine.derivatives(&self.compiled, x, &self.inputs, dxdt),
             None => self.compiled.derivatives(x, &self.inputs, dxdt),
         }
     }
@@ -645,8 +684,80 @@ mod tests {
             }
         }
         assert!(compared >= 20, "{compared} outputs compared");
-        let (servo_valve, _) = assembled(&[("hydraulics.model", "2")]);
-        assert!(servo_valve.affine.is_none());
-        assert!(!servo_valve.compiled.outputs_are_affine());
+        // The full servo valve: its 7 valve rows through their part of the plan (the same
+        // operations on the same numbers: the same bits), the other rows as the product.
+        let (mut sv, mut values) = assembled(&[("hydraulics.model", "2")]);
+        assert!(!sv.compiled.outputs_are_affine());
+        let rows = sv.compiled.nonaffine_rows().to_vec();
+        assert!(!rows.is_empty() && 2 * rows.len() < sv.dim(), "{rows:?}");
+        let affine = sv.affine.as_ref().expect("partly affine");
+        assert!(affine.partial && affine.outputs.is_some());
+        assert!(!sv.compiled.nonaffine_outputs().is_empty());
+        let n = sv.dim();
+        let (mut mixed, mut plan) = (vec![0.0; n], vec![0.0; n]);
+        for trial in 0..20 {
+            let x: Vec<f64> = (sv.rest.iter().zip(sv.nominal()))
+                .map(|(r, s)| r + s * next() * 0.2)
+                .collect();
+            if trial % 2 == 0 {
+                values.set_real(idx::R, next());
+                values.set_real(idx::F2, 50.0 * next());
+                assert!(sv.set_inputs(&values));
+            }
+            sv.rhs(0.0, &x, &mut mixed);
+            sv.compiled.derivatives(&x, &sv.inputs, &mut plan);
+            assert!(plan.iter().all(|v| v.is_finite()), "trial {trial}");
+            let scale = plan.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for i in 0..n {
+                let name = &sv.compiled.state_names()[i];
+                if rows.contains(&(i as u32)) {
+                    assert_eq!(
+                        mixed[i].to_bits(),
+                        plan[i].to_bits(),
+                        "trial {trial}, {name}"
+                    );
+                } else {
+                    assert!(
+                        (mixed[i] - plan[i]).abs() <= 1e-12 * scale,
+                        "trial {trial}, {name}: {} against {}",
+                        mixed[i],
+                        plan[i]
+                    );
+                }
+            }
+            // The outputs and derivatives written at a communication point: the valve's from
+            // the plan's operations (the same bits), the others as products.
+            let mut written = Values::from_start(&VARIABLES);
+            sv.write_outputs(&x, &mut written);
+            let mut y = vec![0.0; sv.compiled.n_outputs()];
+            sv.compiled.evaluate(&x, &sv.inputs, &mut plan, &mut y);
+            let scale = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for (k, target) in sv.output_index.iter().enumerate() {
+                let (Some(i), name) = (*target, &sv.compiled.output_names()[k]) else {
+                    continue;
+                };
+                let v = written.real(i);
+                if sv.compiled.nonaffine_outputs().contains(&(k as u32)) {
+                    assert_eq!(v.to_bits(), y[k].to_bits(), "trial {trial}, {name}");
+                } else {
+                    let tol = 1e-12 * scale;
+                    assert!(
+                        (v - y[k]).abs() <= tol,
+                        "trial {trial}, {name}: {v}, {}",
+                        y[k]
+                    );
+                }
+            }
+            for (i, slot) in sv.state_slot.iter().enumerate() {
+                if let Some(k) = *slot {
+                    let v = written.real(CONTINUOUS_STATES[k].1);
+                    let scale = plan.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+                    assert!(
+                        (v - plan[i]).abs() <= 1e-12 * scale,
+                        "trial {trial}, der {i}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -6,7 +6,7 @@
 //! - [`parameters`]: the typed parameter set read from the FMU's values, and `--set NAME=VALUE`.
 //! - [`presets`]: the paper's configurations as named parameter sets (`hsp run --preset NAME`).
 //! - [`assembly`]: which fragments make up the model for a parameter set, and the resulting
-//!   [`OdeSystem`](crate::solver::OdeSystem).
+//!   [`OdeSystem`].
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
@@ -23,7 +23,7 @@ use crate::fmi2::variables::reals_of;
 use crate::fmi2::{
     Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
 };
-use crate::solver::Integrator;
+use crate::solver::{Integrator, OdeSystem};
 use assembly::Assembled;
 use parameters::Parameters;
 use variables::idx;
@@ -352,6 +352,9 @@ impl FmuModel for HydraulicSlewingPlate {
                 system.inputs().len()
             ));
         }
+        integrator
+            .kept_jac
+            .check(system.dim(), system.jacobian_pattern())?;
         if let Some(u) = state.inputs.iter().find(|u| !u.is_finite()) {
             return Err(format!("a held input is not finite: {u}"));
         }

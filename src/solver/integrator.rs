@@ -215,6 +215,107 @@ impl Cache {
     }
 }
 
+/// Radau5's Jacobian kept from one call to the next. RADAU5 keeps J for as long as the simplified
+/// Newton iteration converges fast (contraction θ ≤ 0.001), and with it the factorisations while
+/// the step size stays the same; when every call ends on a communication point, a J evaluated
+/// afresh at each call would cost a Jacobian and two LUs per step. The kept J is part of the
+/// saved state, so that a restored copy (whose cache starts empty) rebuilds the same matrix and,
+/// from it, the same factorisations, and continues bit-identically. Empty while none is kept;
+/// never used for a constant Jacobian (the cache keeps that one).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub(crate) struct KeptJacobian {
+    /// J's entries: with the system's structural pattern ([`OdeSystem::jacobian_pattern`]) row
+    /// by row, the diagonal first and then the pattern's other columns in its order; without
+    /// one all n² entries, column by column. Empty: no Jacobian is kept.
+    pub entries: Vec<f64>,
+    /// Step size of the factorisations made with it (0: none made).
+    pub lu_h: f64,
+}
+
+impl KeptJacobian {
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        self.entries.clear();
+        self.lu_h = 0.0;
+    }
+
+    /// The number of entries kept of an `n` × `n` Jacobian with structural pattern `pattern`.
+    pub fn len_for(n: usize, pattern: Option<&[Vec<u32>]>) -> usize {
+        match pattern {
+            Some(rows) if rows.len() == n => rows
+                .iter()
+                .enumerate()
+                .map(|(i, cols)| 1 + cols.iter().filter(|&&j| j as usize != i).count())
+                .sum(),
+            _ => n * n,
+        }
+    }
+
+    /// Keeps `jac`'s entries (see [`KeptJacobian::entries`]), reusing the memory.
+    pub fn store(&mut self, jac: &DMatrix<f64>, pattern: Option<&[Vec<u32>]>) {
+        let n = jac.nrows();
+        self.entries.clear();
+        match pattern {
+            Some(rows) if rows.len() == n => {
+                for (i, cols) in rows.iter().enumerate() {
+                    self.entries.push(jac[(i, i)]);
+                    let off_diagonal = cols.iter().map(|&j| j as usize).filter(|&j| j != i);
+                    self.entries.extend(off_diagonal.map(|j| jac[(i, j)]));
+                }
+            }
+            _ => self.entries.extend_from_slice(jac.as_slice()),
+        }
+    }
+
+    /// Rebuilds the kept J into `jac` (n × n; zero outside the pattern, where J is zero by the
+    /// pattern's promise). False, leaving `jac` unspecified, if the entries do not fit.
+    pub fn rebuild(&self, pattern: Option<&[Vec<u32>]>, jac: &mut DMatrix<f64>) -> bool {
+        let n = jac.nrows();
+        if jac.ncols() != n || self.entries.len() != Self::len_for(n, pattern) {
+            return false;
+        }
+        match pattern {
+            Some(rows) if rows.len() == n => {
+                jac.fill(0.0);
+                let mut e = self.entries.iter().copied();
+                for (i, cols) in rows.iter().enumerate() {
+                    jac[(i, i)] = e.next().unwrap_or(0.0);
+                    for j in cols.iter().map(|&j| j as usize).filter(|&j| j != i) {
+                        jac[(i, j)] = e.next().unwrap_or(0.0);
+                    }
+                }
+            }
+            _ => jac.as_mut_slice().copy_from_slice(&self.entries),
+        }
+        true
+    }
+
+    /// Checks a restored one against the system's size and pattern: entries that fit, all finite,
+    /// and a finite non-negative step size.
+    pub fn check(&self, n: usize, pattern: Option<&[Vec<u32>]>) -> Result<(), String> {
+        if self.is_empty() {
+            return Ok(());
+        }
+        let len = Self::len_for(n, pattern);
+        if self.entries.len() != len {
+            return Err(format!(
+                "its kept Jacobian holds {} entries, the model's has {len}",
+                self.entries.len()
+            ));
+        }
+        if !(self.entries.iter().all(|v| v.is_finite())
+            && self.lu_h.is_finite()
+            && self.lu_h >= 0.0)
+        {
+            return Err("its kept Jacobian holds a non-finite number or a negative step".into());
+        }
+        Ok(())
+    }
+}
+
 /// The last accepted step when the integrator has stepped past the point it reports (see
 /// [`Integrator::advance_within`]): the step from `t0` to `t1` of size `h`, its end state `x1`
 /// (where integration goes on), its start state `x0` and the coefficients of its dense output,
@@ -323,6 +424,9 @@ pub struct Integrator {
     /// The step that went past the reported point, if the last call stepped past it.
     #[serde(default, skip_serializing_if = "Ahead::is_idle")]
     pub(crate) ahead: Ahead,
+    /// Radau5's Jacobian kept for the next call, if any.
+    #[serde(default, skip_serializing_if = "KeptJacobian::is_empty")]
+    pub(crate) kept_jac: KeptJacobian,
     #[serde(skip)]
     pub(crate) cache: Cache,
 }
@@ -344,6 +448,7 @@ impl Integrator {
             hist: History::fresh(),
             counted: Counted::default(),
             ahead: Ahead::default(),
+            kept_jac: KeptJacobian::default(),
             cache: Cache::default(),
         })
     }
@@ -378,6 +483,7 @@ impl Integrator {
             self.counted = Counted::default();
         }
         self.options = options;
+        self.kept_jac.clear();
         self.notify_discontinuity();
         Ok(())
     }
@@ -552,8 +658,9 @@ impl Integrator {
 
     /// The inputs of the system jumped (zero-order hold at a communication point): forget
     /// whatever history assumes smoothness across this point (controller history, Newton
-    /// start polynomial; Jacobian and LU are not kept between calls unless they are constant,
-    /// see [`OdeSystem::constant_jacobian`]). Keeps h as a guess.
+    /// start polynomial). Keeps h as a guess, and Radau5's kept Jacobian: the simplified Newton
+    /// iteration needs only an approximate one, and its convergence monitor asks for a new J
+    /// when the old one no longer serves (RADAU5 knows nothing of jumps either).
     pub fn notify_discontinuity(&mut self) {
         // Keeps the buffer of the collocation polynomial (emptied, so unused): an input jump at
         // every communication point must not cost an allocation.
@@ -576,6 +683,8 @@ impl Integrator {
         }
         self.t = t;
         self.x = x;
+        // A Jacobian kept from elsewhere is no guide at the new point.
+        self.kept_jac.clear();
         self.notify_discontinuity();
     }
 

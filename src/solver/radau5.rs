@@ -28,9 +28,12 @@
 //!   RADAU5 does).
 //! * Dense output: the collocation polynomial (CONTR5).
 //!
-//! Jacobian and LU live only within one `advance` call (the call starts with a fresh
-//! Jacobian), so a restored state continues bit-identically; a constant Jacobian
-//! ([`OdeSystem::constant_jacobian`]) and its factorisations are kept across calls instead,
+//! A Jacobian that varies is kept across calls too, as RADAU5 keeps it across steps, while Newton
+//! converges fast: a call that ends on every communication point would otherwise evaluate J and
+//! factorise twice at every step. Its entries and the step size of its factorisations are part
+//! of the saved state (the integrator's `KeptJacobian`); a restored integrator rebuilds J and the
+//! factorisations from them, uncounted, and continues bit-identically. A constant Jacobian
+//! ([`OdeSystem::constant_jacobian`]) and its factorisations are kept in the cache instead,
 //! rebuilt identically after a restore.
 
 // Index loops over stages and components mirror the formulas they implement.
@@ -202,9 +205,14 @@ pub(crate) struct Work {
     scratch_c: Vec<Complex<f64>>,
     /// Partition of J into blocks and border (see [`super::linalg`]).
     pattern: PatternCache,
-    /// The memory of the last factorisations of a Jacobian that changes from step to step
-    /// (their contents are stale): refactorised into, so a step allocates nothing.
+    /// The memory of the last factorisations of a Jacobian that changes from step to step:
+    /// refactorised into, so a step allocates nothing. Their contents are stale unless
+    /// `kept_synced` says otherwise.
     spare: Option<Lu>,
+    /// `jac` holds the integrator's [`KeptJacobian`](super::integrator::KeptJacobian), and if that has factorisations, `spare`
+    /// holds them (set when a call ends keeping J; a new workspace, as after a restore, starts
+    /// without).
+    kept_synced: bool,
 }
 
 impl Workspace for Work {
@@ -229,6 +237,7 @@ impl Workspace for Work {
             scratch_c: vec![Complex::new(0.0, 0.0); n],
             pattern: PatternCache::default(),
             spare: None,
+            kept_synced: false,
         }
     }
     fn dim(&self) -> usize {
@@ -252,8 +261,88 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         integ,
         stamp,
         |c| (&mut c.radau, &mut c.radau_lu),
-        |integ, w, lus| radcor(integ, sys, t_end, times, out, w, lus, stamp),
+        |integ, w, lus| {
+            let mut need_jac = !resume_kept_jacobian(integ, sys, w, lus, stamp);
+            let jac_evals = integ.stats.jac_evals;
+            let result = radcor(integ, sys, t_end, times, out, w, lus, stamp, &mut need_jac);
+            let keep = stamp.is_none() && !need_jac && result.is_ok();
+            let evaluated = integ.stats.jac_evals != jac_evals;
+            keep_jacobian(integ, sys, w, lus, keep, evaluated);
+            result
+        },
     )
+}
+
+/// Takes up the Jacobian the last call kept (see
+/// [`KeptJacobian`](super::integrator::KeptJacobian)): from the workspace if it
+/// still holds it with its factorisations, else rebuilt from the saved entries, and its
+/// factorisations made again for their saved step size, uncounted (they were counted when first
+/// made, so a restored copy counts as the original does). False if there is none to take up (a
+/// constant Jacobian, nothing kept, or entries that do not fit the system).
+fn resume_kept_jacobian<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    work: &mut Work,
+    lus: &mut Vec<Lu>,
+    stamp: Option<u64>,
+) -> bool {
+    let kept = &integ.kept_jac;
+    if stamp.is_some() || kept.is_empty() {
+        return false;
+    }
+    if work.kept_synced {
+        if kept.lu_h > 0.0 {
+            match work.spare.take() {
+                Some(lu) if lu.h == kept.lu_h => lus.push(lu),
+                other => {
+                    work.spare = other;
+                    work.kept_synced = false;
+                }
+            }
+        }
+        if work.kept_synced {
+            return true;
+        }
+    }
+    let pattern = sys.jacobian_pattern();
+    if !kept.rebuild(pattern, &mut work.jac) {
+        integ.kept_jac.clear();
+        return false;
+    }
+    if kept.lu_h > 0.0 {
+        let part = work.pattern.partition_within(&work.jac, pattern);
+        let Some(lu) = factor(&work.jac, part, kept.lu_h, work.spare.take()) else {
+            integ.kept_jac.clear();
+            return false;
+        };
+        lus.push(lu);
+    }
+    work.kept_synced = true;
+    true
+}
+
+/// After a call: keeps J (and notes the step size of its factorisation) for the next call if
+/// the step control would go on with it (`keep`), storing its entries in the saved state when
+/// it was `evaluated` in this call; otherwise keeps nothing.
+fn keep_jacobian<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    work: &mut Work,
+    lus: &[Lu],
+    keep: bool,
+    evaluated: bool,
+) {
+    if !keep {
+        integ.kept_jac.clear();
+        work.kept_synced = false;
+        return;
+    }
+    if evaluated || integ.kept_jac.is_empty() {
+        integ.kept_jac.store(&work.jac, sys.jacobian_pattern());
+    }
+    // The factorisation in use is the front one; `with_kept_memory` moves it into `spare`.
+    integ.kept_jac.lu_h = lus.first().map_or(0.0, |lu| lu.h);
+    work.kept_synced = true;
 }
 
 /// The tolerances the step control works with (RADAU5's prologue and RADCOR's FNEWT).
@@ -305,6 +394,7 @@ fn radcor<S: OdeSystem + ?Sized>(
     work: &mut Work,
     lus: &mut Vec<Lu>,
     stamp: Option<u64>,
+    need_jac: &mut bool,
 ) -> Result<(), SolverError> {
     let n = integ.x.len();
     let tol = transformed_tolerances(integ, work);
@@ -329,7 +419,6 @@ fn radcor<S: OdeSystem + ?Sized>(
     }
     let mut outputs = Outputs::new(times, integ.t, n);
 
-    let mut need_jac = true;
     let mut jac_fresh = false; // J evaluated at the current point?
     let mut attempts: u64 = 0;
     let mut consecutive_rejections: u32 = 0;
@@ -362,7 +451,7 @@ fn radcor<S: OdeSystem + ?Sized>(
             NextStep::Step { h, last, proposed } => (h, last, proposed),
         };
         let t = integ.t;
-        if need_jac {
+        if *need_jac {
             if !jacobian_at(integ, sys, work, lus, stamp, tol.rtol) {
                 return Err(SolverError::new(
                     SolverErrorKind::NonFinite,
@@ -370,7 +459,7 @@ fn radcor<S: OdeSystem + ?Sized>(
                     "the Jacobian is not finite at the current point",
                 ));
             }
-            need_jac = false;
+            *need_jac = false;
             jac_fresh = true;
         }
 
@@ -409,6 +498,8 @@ fn radcor<S: OdeSystem + ?Sized>(
                     hnew = hnew.min(integ.options.max_step);
                     if last {
                         integ.h = hnew.max(h_proposed);
+                        // The next call goes on with this J only while Newton converges fast.
+                        *need_jac = newton.theta > THET;
                         return Ok(());
                     }
                     eval(sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
@@ -424,7 +515,7 @@ fn radcor<S: OdeSystem + ?Sized>(
                     } else {
                         integ.h = hnew;
                         // Reuse J (new LU) only while Newton converges very fast.
-                        need_jac = newton.theta > THET;
+                        *need_jac = newton.theta > THET;
                     }
                     continue;
                 }
@@ -442,7 +533,7 @@ fn radcor<S: OdeSystem + ?Sized>(
         integ.hist.last_rejected = true;
         consecutive_rejections += 1;
         if !jac_fresh {
-            need_jac = true;
+            *need_jac = true;
         }
         if consecutive_rejections > integ.options.max_consecutive_rejections {
             let kind = match why {

@@ -21,6 +21,10 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
         "outputs": m.n_outputs(),
         "plan_operations": m.plan_len(),
         "derivative_operations": m.derivative_plan_len(),
+        "nonaffine_rows": m.nonaffine_rows().len(),
+        "nonaffine_operations": m.nonaffine_plan_len(),
+        "nonaffine_outputs": m.nonaffine_outputs().len(),
+        "communication_point_operations": m.nonaffine_point_plan_len(),
         "jacobian": {
             "nonzeros": nonzeros,
             "varying_entries": varying,
@@ -57,6 +61,20 @@ pub fn text(system: &Assembled) -> String {
         "plan       {} operations, {} of them for the state derivatives\n",
         m.plan_len(),
         m.derivative_plan_len()
+    ));
+    s.push_str(&format!(
+        "f          {} of {n} rows affine in x (a product with their constant gradients); {} \
+         through the {} operations they need\n",
+        n - m.nonaffine_rows().len(),
+        m.nonaffine_rows().len(),
+        m.nonaffine_plan_len()
+    ));
+    s.push_str(&format!(
+        "points     {} of {} outputs affine in x (C x + y(0, u)); the others and the rows above from {} \
+         operations at a communication point\n",
+        m.n_outputs() - m.nonaffine_outputs().len(),
+        m.n_outputs(),
+        m.nonaffine_point_plan_len()
     ));
     s.push_str(&format!(
         "Jacobian   {} structural nonzeros of {}; {} vary with (x, u), in {} variable columns{}\n",
@@ -112,6 +130,10 @@ mod tests {
         assert_eq!(j["passes_per_step"], m.variable_jacobian_colours());
         assert_eq!(j["constant"], false);
         assert_eq!(j["constant_entries_fixed"], true);
+        // The valve's rows are not affine, and need fewer operations than all the rows.
+        let rows = f["nonaffine_rows"].as_u64().unwrap() as usize;
+        assert!(rows > 0 && rows < m.n_states(), "{rows}");
+        assert!(f["nonaffine_operations"].as_u64().unwrap() < m.derivative_plan_len() as u64);
         let cols = j["variable_columns"].as_array().unwrap();
         assert_eq!(cols.len(), m.jacobian_variable_columns().len());
         assert!(cols
