@@ -26,10 +26,13 @@
 //!   changes the inputs or tolerances).
 //! * **Checkpointing.** [`Integrator`] is `Clone + Serialize + Deserialize` and holds
 //!   everything that influences later results (t, x, h, controller history, Radau's Newton
-//!   start polynomial, statistics). Jacobians and LU factors are *not* saved: every
-//!   `advance_to` call evaluates f and the Jacobian afresh at its start (the inputs may have
-//!   changed since), except for a system with a constant Jacobian
-//!   ([`OdeSystem::constant_jacobian`]), whose J and factorisations are kept in memory while the
+//!   start polynomial, statistics, and the Jacobian Radau5 goes on with). LU factors are *not*
+//!   saved: every `advance_to` call evaluates f afresh at its start (the inputs may have changed
+//!   since); Rodas5P evaluates J at every step, Radau5 keeps a varying J across calls while
+//!   Newton converges fast, as RADAU5 keeps it across steps, with its entries and the step size
+//!   of its LUs in the saved state, from which a restored copy rebuilds J and the LUs
+//!   bit-identically and uncounted. A system with a constant Jacobian
+//!   ([`OdeSystem::constant_jacobian`]) has J and its factorisations kept in memory while the
 //!   step size is unchanged and rebuilt, bit-identically, by a restored copy. The work counters
 //!   count a factorisation once per (Jacobian, step size) in that case, so they too agree between
 //!   a restored copy and the original. Serialise with
@@ -121,8 +124,9 @@ pub trait OdeSystem {
     /// say). The integrator then evaluates J once, and keeps J and its factorisations across
     /// steps and [`Integrator::advance_to`] calls for as long as the stamp and the step size stay
     /// the same. `jacobian` must give bit-identical values under one stamp, so that a restored
-    /// integrator (which rebuilds them) continues bit-identically. Default `None`: J is evaluated
-    /// afresh at the start of every call and as the method requires.
+    /// integrator (which rebuilds them) continues bit-identically. Default `None`: Rodas5P
+    /// evaluates J at every step; Radau5 keeps it across steps and calls while Newton converges
+    /// fast (saved with the integrator) and evaluates it afresh when not.
     fn constant_jacobian(&self) -> Option<u64> {
         None
     }
