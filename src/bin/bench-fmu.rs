@@ -361,6 +361,13 @@ fn main() {
             }
         }
     }
+    if with_scipy && !std::path::Path::new(PYTHON).exists() {
+        eprintln!(
+            "{PYTHON} does not exist: `bash tests/setup.sh` makes the virtual environment with \
+             scipy (or pass --no-scipy)"
+        );
+        std::process::exit(2);
+    }
     let fmu = Fmu::load(std::path::Path::new(&fmu_path)).unwrap_or_else(|e| {
         eprintln!("{e} (build it with: cargo run --release --bin hsp -- package)");
         std::process::exit(1)
@@ -443,7 +450,7 @@ fn main() {
                 },
                 scipy_cells.join(" | ")
             );
-            eprintln!("{line}");
+            println!("{line}");
             writeln!(md, "{line}").unwrap();
         }
     }
