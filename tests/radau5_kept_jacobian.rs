@@ -7,7 +7,7 @@
 #[path = "common/fmu.rs"]
 mod fmu;
 
-use fmu::Fmu;
+use fmu::{find_key, Fmu};
 use hydraulic_slewing_plate::fmi2::ffi::*;
 
 const STEP: f64 = 1e-3;
@@ -40,12 +40,8 @@ fn run(f: &Fmu, k0: usize, k1: usize, r: impl Fn(usize) -> f64) -> Vec<f64> {
 }
 
 fn counter(f: &Fmu, name: &str) -> i32 {
-    let mut n = 0;
-    let vr = Fmu::vr(name);
-    assert_eq!(
-        unsafe { hydraulic_slewing_plate::fmi2_exports::fmi2GetInteger(f.c, &vr, 1, &mut n) },
-        Fmi2Status::Ok
-    );
+    let (s, n) = f.get_integer(name);
+    assert_eq!(s, Fmi2Status::Ok);
     n
 }
 
@@ -75,20 +71,6 @@ fn until_kept(f: &Fmu, mut k: usize) -> (usize, Fmi2FmuState, serde_json::Value)
         assert!(k < 1000, "no Jacobian kept at any point up to 1000");
         run(f, k, k + 1, |_| 2.0);
         k += 1;
-    }
-}
-
-/// The first value under `key` anywhere in `v`.
-fn find_key<'a>(v: &'a mut serde_json::Value, key: &str) -> Option<&'a mut serde_json::Value> {
-    match v {
-        serde_json::Value::Object(m) => {
-            if m.contains_key(key) {
-                return m.get_mut(key);
-            }
-            m.values_mut().find_map(|x| find_key(x, key))
-        }
-        serde_json::Value::Array(a) => a.iter_mut().find_map(|x| find_key(x, key)),
-        _ => None,
     }
 }
 

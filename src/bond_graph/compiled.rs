@@ -534,9 +534,7 @@ impl CompiledModel {
     /// True if every output is affine in the states with coefficients independent of x and u
     /// (`y(x, u) = C x + y(0, u)`, by the rules of [`CompiledModel::jacobian_is_constant`]).
     pub fn outputs_are_affine(&self) -> bool {
-        self.output_slots
-            .iter()
-            .all(|&s| self.structure.affine_slots[s as usize])
+        self.structure.nonaffine_outputs.is_empty()
     }
 
     /// For each row `i` of the Jacobian, the states `dx_i/dt` depends on structurally.

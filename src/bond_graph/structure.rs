@@ -57,9 +57,6 @@ pub(crate) struct Structure {
     pub row_column: Vec<Vec<u32>>,
     /// J is independent of x and u.
     pub constant: bool,
-    /// For every slot, whether it is affine in x with coefficients independent of x and u
-    /// (`s(x, u) = g x + s(0, u)`): its gradient in x does not vary.
-    pub affine_slots: Vec<bool>,
     /// For each row i, the columns j (ascending) whose entry `J_ij` may vary with `(x, u)`: a
     /// subset of `pattern[i]`.
     pub varying: Vec<Vec<u32>>,
@@ -71,7 +68,8 @@ pub(crate) struct Structure {
     /// For each group of `variable_colours`, the operations the rows read in its pass need, in
     /// plan order (a subset of `deriv_ops`).
     pub variable_ops: Vec<Vec<Op>>,
-    /// The rows `i` whose derivative is not affine in x (`affine_slots` false), ascending.
+    /// The rows `i` whose derivative is not affine in x with coefficients independent of x and
+    /// u (`s(x, u) = g x + s(0, u)`: its gradient in x does not vary), ascending.
     pub nonaffine_rows: Vec<u32>,
     /// The operations those rows need, in plan order (a subset of `deriv_ops`): with the affine
     /// rows as a product with their constant gradients, `f` needs only these.
@@ -235,7 +233,6 @@ pub(crate) fn analyse(
         jvar[d] = var;
     }
     let constant = deriv_slots.iter().all(|&d| !jvar[d as usize]);
-    let affine_slots = jvar.iter().map(|v| !v).collect();
     let rows_of = |table: &[u64]| -> Vec<Vec<u32>> {
         deriv_slots
             .iter()
@@ -288,7 +285,6 @@ pub(crate) fn analyse(
         colours,
         row_column,
         constant,
-        affine_slots,
         varying,
         variable_colours,
         variable_row_column,

@@ -156,7 +156,8 @@ pub struct Assembled {
     /// The Jacobian and its stamp (a hash of its bits) when it is constant (the LOES with the
     /// plate: linear with constant coefficients), evaluated once per parameter set.
     constant_jacobian: Option<(u64, DMatrix<f64>)>,
-    /// With a constant Jacobian, `dx/dt` as a sparse product (see [`Affine`]).
+    /// `dx/dt` and the outputs as sparse products for their affine rows (see [`Affine`]): all
+    /// of them with a constant Jacobian, all but the servo valve's with the full valve.
     affine: Option<Affine>,
 }
 
@@ -169,15 +170,15 @@ struct SparseRows {
 }
 
 impl SparseRows {
-    fn from_dense(m: &DMatrix<f64>) -> Self {
+    /// The nonzeros of `m`'s rows `i` for which `keep(i)`; the other rows are left empty.
+    fn from_dense(m: &DMatrix<f64>, keep: impl Fn(usize) -> bool) -> Self {
         let mut row_start = vec![0];
         let mut entries = Vec::new();
         for i in 0..m.nrows() {
-            entries.extend(
-                (0..m.ncols())
-                    .filter(|&j| m[(i, j)] != 0.0)
-                    .map(|j| (j as u32, m[(i, j)])),
-            );
+            if keep(i) {
+                let nonzeros = (0..m.ncols()).filter(|&j| m[(i, j)] != 0.0);
+                entries.extend(nonzeros.map(|j| (j as u32, m[(i, j)])));
+            }
             row_start.push(entries.len());
         }
         SparseRows { row_start, entries }
@@ -250,8 +251,8 @@ const MAX_AFFINE_OUTPUTS: usize = 64;
 
 /// `dx_i/dt = J_i x + f_i(0, u)` for the rows `i` of `f` that are affine in x (every row of the
 /// LOES with the plate, whose Jacobian J is constant; all but the servo valve's 7 with the full
-/// valve), the other rows through the part of the plan they need, and `y = C x + y(0, u)` when
-/// every output is affine too.
+/// valve), the other rows through the part of the plan they need; likewise `y_k = C_k x +
+/// y_k(0, u)` for the outputs that are affine, the others through the plan.
 ///
 /// An affine row has coefficients `J_i` that depend on neither x nor u (they are among the
 /// Jacobian's constant entries), so the identity is exact; only the rounding differs from the
@@ -285,18 +286,14 @@ impl Affine {
             let rows = c.nrows();
             (BlockRows::from_dense(&c), vec![0.0; rows])
         });
-        let mut rows = SparseRows::from_dense(jac);
-        if partial {
-            rows = SparseRows::from_dense(&jac.map_with_location(|i, _, v| {
-                if compiled.nonaffine_rows().contains(&(i as u32)) {
-                    0.0
-                } else {
-                    v
-                }
-            }));
-        }
+        let affine_row = |i: usize| {
+            compiled
+                .nonaffine_rows()
+                .binary_search(&(i as u32))
+                .is_err()
+        };
         let mut affine = Affine {
-            jac: rows,
+            jac: SparseRows::from_dense(jac, affine_row),
             partial,
             offset: vec![0.0; jac.nrows()],
             outputs,
@@ -693,7 +690,8 @@ mod tests {
 
     /// The sparse product `J x + f(0, u)` is the plan's `f(x, u)` to rounding, at points far
     /// from rest and after the inputs change (held or restored), and so are the outputs
-    /// `C x + y(0, u)`; a model with a varying Jacobian keeps the plan.
+    /// `C x + y(0, u)`; with the full servo valve, the valve's rows and outputs come from the
+    /// plan's operations (the same bits) and the others from the products.
     #[test]
     fn affine_derivatives_and_outputs_are_the_plans() {
         let (mut a, mut values) = assembled(&[

@@ -242,32 +242,35 @@ impl KeptJacobian {
         self.lu_h = 0.0;
     }
 
+    /// The positions `(i, j)` of the kept entries of an `n` × `n` Jacobian with structural
+    /// pattern `pattern`, in the order of [`KeptJacobian::entries`].
+    fn positions(
+        n: usize,
+        pattern: Option<&[Vec<u32>]>,
+    ) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let rows = pattern.filter(|rows| rows.len() == n);
+        let structural = rows
+            .into_iter()
+            .flatten()
+            .enumerate()
+            .flat_map(|(i, cols)| {
+                let off_diagonal = cols.iter().map(|&j| j as usize).filter(move |&j| j != i);
+                std::iter::once(i).chain(off_diagonal).map(move |j| (i, j))
+            });
+        let dense = (0..if rows.is_none() { n * n } else { 0 }).map(move |k| (k % n, k / n));
+        structural.chain(dense)
+    }
+
     /// The number of entries kept of an `n` × `n` Jacobian with structural pattern `pattern`.
     pub fn len_for(n: usize, pattern: Option<&[Vec<u32>]>) -> usize {
-        match pattern {
-            Some(rows) if rows.len() == n => rows
-                .iter()
-                .enumerate()
-                .map(|(i, cols)| 1 + cols.iter().filter(|&&j| j as usize != i).count())
-                .sum(),
-            _ => n * n,
-        }
+        Self::positions(n, pattern).count()
     }
 
     /// Keeps `jac`'s entries (see [`KeptJacobian::entries`]), reusing the memory.
     pub fn store(&mut self, jac: &DMatrix<f64>, pattern: Option<&[Vec<u32>]>) {
-        let n = jac.nrows();
         self.entries.clear();
-        match pattern {
-            Some(rows) if rows.len() == n => {
-                for (i, cols) in rows.iter().enumerate() {
-                    self.entries.push(jac[(i, i)]);
-                    let off_diagonal = cols.iter().map(|&j| j as usize).filter(|&j| j != i);
-                    self.entries.extend(off_diagonal.map(|j| jac[(i, j)]));
-                }
-            }
-            _ => self.entries.extend_from_slice(jac.as_slice()),
-        }
+        let kept = Self::positions(jac.nrows(), pattern).map(|(i, j)| jac[(i, j)]);
+        self.entries.extend(kept);
     }
 
     /// Rebuilds the kept J into `jac` (n × n; zero outside the pattern, where J is zero by the
@@ -277,18 +280,9 @@ impl KeptJacobian {
         if jac.ncols() != n || self.entries.len() != Self::len_for(n, pattern) {
             return false;
         }
-        match pattern {
-            Some(rows) if rows.len() == n => {
-                jac.fill(0.0);
-                let mut e = self.entries.iter().copied();
-                for (i, cols) in rows.iter().enumerate() {
-                    jac[(i, i)] = e.next().unwrap_or(0.0);
-                    for j in cols.iter().map(|&j| j as usize).filter(|&j| j != i) {
-                        jac[(i, j)] = e.next().unwrap_or(0.0);
-                    }
-                }
-            }
-            _ => jac.as_mut_slice().copy_from_slice(&self.entries),
+        jac.fill(0.0);
+        for ((i, j), &v) in Self::positions(n, pattern).zip(&self.entries) {
+            jac[(i, j)] = v;
         }
         true
     }

@@ -209,9 +209,9 @@ pub(crate) struct Work {
     /// refactorised into, so a step allocates nothing. Their contents are stale unless
     /// `kept_synced` says otherwise.
     spare: Option<Lu>,
-    /// `jac` holds the integrator's [`KeptJacobian`](super::integrator::KeptJacobian), and if that has factorisations, `spare`
-    /// holds them (set when a call ends keeping J; a new workspace, as after a restore, starts
-    /// without).
+    /// `jac` holds the integrator's [`KeptJacobian`](super::integrator::KeptJacobian), and if
+    /// that has factorisations, `spare` holds them (set when a call ends keeping J; a new
+    /// workspace, as after a restore, starts without).
     kept_synced: bool,
 }
 
@@ -291,17 +291,16 @@ fn resume_kept_jacobian<S: OdeSystem + ?Sized>(
         return false;
     }
     if work.kept_synced {
-        if kept.lu_h > 0.0 {
-            match work.spare.take() {
-                Some(lu) if lu.h == kept.lu_h => lus.push(lu),
-                other => {
-                    work.spare = other;
-                    work.kept_synced = false;
-                }
-            }
-        }
-        if work.kept_synced {
+        if kept.lu_h == 0.0 {
             return true;
+        }
+        match work.spare.take() {
+            Some(lu) if lu.h == kept.lu_h => {
+                lus.push(lu);
+                return true;
+            }
+            // Not the factorisation expected: rebuild as after a restore.
+            other => work.spare = other,
         }
     }
     let pattern = sys.jacobian_pattern();

@@ -105,6 +105,12 @@ impl Fmu {
         (s, v)
     }
 
+    pub fn get_integer(&self, name: &str) -> (Fmi2Status, i32) {
+        let mut v = 0;
+        let s = unsafe { fmi2GetInteger(self.c, &Self::vr(name), 1, &mut v) };
+        (s, v)
+    }
+
     pub fn setup(&self, start: f64) -> Fmi2Status {
         unsafe { fmi2SetupExperiment(self.c, FMI2_FALSE, 0.0, start, FMI2_FALSE, 0.0) }
     }
@@ -197,4 +203,18 @@ pub fn blob(payload: &serde_json::Value) -> Vec<u8> {
     b.extend_from_slice(&fnv1a64(&p).to_le_bytes());
     b.extend_from_slice(&p);
     b
+}
+
+/// The first value under `key` anywhere in `v` (a state payload, say).
+pub fn find_key<'a>(v: &'a mut serde_json::Value, key: &str) -> Option<&'a mut serde_json::Value> {
+    match v {
+        serde_json::Value::Object(m) => {
+            if m.contains_key(key) {
+                return m.get_mut(key);
+            }
+            m.values_mut().find_map(|x| find_key(x, key))
+        }
+        serde_json::Value::Array(a) => a.iter_mut().find_map(|x| find_key(x, key)),
+        _ => None,
+    }
 }

@@ -70,8 +70,8 @@ pub fn text(system: &Assembled) -> String {
         m.nonaffine_plan_len()
     ));
     s.push_str(&format!(
-        "points     {} of {} outputs affine in x (C x + y(0, u)); the others and the rows above from {} \
-         operations at a communication point\n",
+        "points     {} of {} outputs affine in x (C x + y(0, u)); the others and the rows \
+         above from {} operations at a communication point\n",
         m.n_outputs() - m.nonaffine_outputs().len(),
         m.n_outputs(),
         m.nonaffine_point_plan_len()
