@@ -10,6 +10,7 @@
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
+mod affine;
 pub mod assembly;
 pub mod frf;
 pub mod parameters;

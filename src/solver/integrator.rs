@@ -55,6 +55,11 @@ pub(crate) struct Counted {
     /// Step sizes of the factorisations kept with `jac`, most recently used first (at most
     /// [`KEPT_FACTORISATIONS`]).
     pub lu_h: Vec<f64>,
+    /// Steps accepted with the front factorisation since it came to the front (made, or taken
+    /// up again): Radau5 builds its step map ([`super::step_map`]) for a factorisation once it
+    /// has served this many. Saved, so that a restored copy builds it at the same step.
+    #[serde(default)]
+    pub front_steps: u32,
 }
 
 /// How many factorisations of a constant Jacobian (for different step sizes) are kept: a
@@ -97,12 +102,15 @@ impl Counted {
                 .max_by(|&i, &j| self.lu_h[i].total_cmp(&self.lu_h[j]))
         };
         match same.or_else(|| if shorten { shorter() } else { None }) {
+            Some(0) => self.lu_h[0],
             Some(i) => {
+                self.front_steps = 0;
                 let k = self.lu_h.remove(i);
                 self.lu_h.insert(0, k);
                 k
             }
             None => {
+                self.front_steps = 0;
                 stats.lu_decompositions += count;
                 self.lu_h.insert(0, h);
                 self.lu_h.truncate(KEPT_FACTORISATIONS);

@@ -102,6 +102,7 @@ pub mod jacobian;
 pub mod linalg;
 pub mod radau5;
 pub mod rodas5p;
+mod step_map;
 pub mod testset;
 
 pub use integrator::Integrator;
@@ -124,7 +125,9 @@ pub trait OdeSystem {
     /// say). The integrator then evaluates J once, and keeps J and its factorisations across
     /// steps and [`Integrator::advance_to`] calls for as long as the stamp and the step size stay
     /// the same. `jacobian` must give bit-identical values under one stamp, so that a restored
-    /// integrator (which rebuilds them) continues bit-identically. Default `None`: Rodas5P
+    /// integrator (which rebuilds them) continues bit-identically. With
+    /// [`OdeSystem::is_autonomous`] as well, f is `J x + f(t, 0)`, and Radau5 may take its steps
+    /// as affine maps built from J (see `step_map`). Default `None`: Rodas5P
     /// evaluates J at every step; Radau5 keeps it across steps and calls while Newton converges
     /// fast (saved with the integrator) and evaluates it afresh when not.
     fn constant_jacobian(&self) -> Option<u64> {

@@ -27,6 +27,14 @@
 //!   tolerance is never looser than the user's (only for rtol > 1e-3 is it scaled down, as
 //!   RADAU5 does).
 //! * Dense output: the collocation polynomial (CONTR5).
+//! * A system that is affine in x with a constant Jacobian (and autonomous) has every step of a
+//!   given size as one affine map of its start (module `step_map`): once a factorisation has
+//!   served n/2 steps, its map is built from it (n + 1 responses of the Newton and ESTRAD solves)
+//!   and further steps with it are one dense product, end point and error vector together, in
+//!   place of the stage evaluations, the Newton iteration and the error estimate's solve. The
+//!   result is the converged Newton iterate, so only rounding differs. An attempt whose error
+//!   ESTRAD would refine (on the first step or after a rejection, when ≥ 1), or with output
+//!   times inside the step (which need the collocation polynomial), goes the ordinary way.
 //!
 //! A Jacobian that varies is kept across calls too, as RADAU5 keeps it across steps, while Newton
 //! converges fast: a call that ends on every communication point would otherwise evaluate J and
@@ -50,6 +58,7 @@ use super::common::{
 use super::integrator::Integrator;
 use super::integrator::{front_factorisation, SAME_STEP};
 use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache};
+use super::step_map::{self, StepMap};
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind};
 
 /// √6.
@@ -145,6 +154,9 @@ pub(crate) struct Lu {
     real: Factorisation<f64>,
     complex: Factorisation<Complex<f64>>,
     h: f64,
+    /// A step of size `h` as one affine map, for a system affine in x (see [`StepMap`]); made
+    /// from these factorisations, cleared when they are remade.
+    map: StepMap,
 }
 
 /// Factorises both iteration matrices for step size `h` into `lu` (reusing its memory) with the
@@ -154,6 +166,7 @@ fn factor_into(lu: &mut Lu, part: &Arc<Partition>, jac: &DMatrix<f64>, h: f64) -
     let fac1 = u1 / h;
     let (alphn, betan) = (alph / h, beta / h);
     lu.h = h;
+    lu.map.clear();
     factor_with_fallback(&mut lu.real, part, |i, j| {
         if i == j {
             fac1 - jac[(i, j)]
@@ -176,6 +189,7 @@ fn factor(jac: &DMatrix<f64>, part: &Arc<Partition>, h: f64, old: Option<Lu>) ->
         real: Factorisation::new(Arc::clone(part)),
         complex: Factorisation::new(Arc::clone(part)),
         h,
+        map: StepMap::default(),
     });
     factor_into(&mut lu, part, jac, h).then_some(lu)
 }
@@ -195,6 +209,10 @@ pub(crate) struct Work {
     ytmp: Vec<f64>,
     f2: Vec<f64>,
     x1: Vec<f64>,
+    /// f(t, 0), the constant part of an affine f, for the step map (evaluated once per call).
+    c0: Vec<f64>,
+    /// The step map's result: Z3 (rows 0..n) and the error estimate's vector (n..2n).
+    mapped: Vec<f64>,
     atol: Vec<f64>,
     /// `atol` again, in the form the finite-difference Jacobian takes.
     atol_for_fd: Atol,
@@ -229,6 +247,8 @@ impl Workspace for Work {
             ytmp: v(),
             f2: v(),
             x1: v(),
+            c0: v(),
+            mapped: vec![0.0; 2 * n],
             atol: v(),
             atol_for_fd: Atol::Vector(v()),
             rr: DVector::zeros(n),
@@ -417,6 +437,11 @@ fn radcor<S: OdeSystem + ?Sized>(
         );
     }
     let mut outputs = Outputs::new(times, integ.t, n);
+    // A constant J of an autonomous system: f = J x + c, and a step can be a step map.
+    let mappable = stamp.is_some() && n <= step_map::MAX_DIM && sys.is_autonomous();
+    // f(t, 0) = c for the step map, evaluated when first wanted in this call: None until then,
+    // then whether it is finite.
+    let mut offsets: Option<bool> = None;
 
     let mut jac_fresh = false; // J evaluated at the current point?
     let mut attempts: u64 = 0;
@@ -464,13 +489,41 @@ fn radcor<S: OdeSystem + ?Sized>(
 
         // Outcome of this attempt: the Newton result and the error, or a rejection reason with
         // the factor for h.
+        let t1 = if last { t_end } else { t + h };
+        // The step was taken by the step map (no collocation polynomial to keep).
+        let mut mapped = false;
         let attempt: Result<(Newton, f64), (Why, f64)> = 'attempt: {
             if !decompose(integ, work, lus, (stamp, sys.jacobian_pattern()), h) {
                 break 'attempt Err((Why::Singular, 0.5));
             }
-            let Some(lu) = lus.first() else {
+            let Some(lu) = lus.first_mut() else {
                 break 'attempt Err((Why::Singular, 0.5));
             };
+            if mappable
+                && !outputs.pending(t1)
+                && integ.counted.front_steps >= map_after(n)
+                && *offsets.get_or_insert_with(|| {
+                    work.ytmp.fill(0.0);
+                    eval(sys, &mut integ.stats, t, &work.ytmp, &mut work.c0);
+                    all_finite(&work.c0)
+                })
+            {
+                let err = mapped_step(integ, work, lu);
+                // ESTRAD's refinement after a rejection or on the first step needs f at a
+                // point off the map: such an attempt goes the ordinary way.
+                if err.is_finite() && (err < 1.0 || !(integ.hist.first || integ.hist.last_rejected))
+                {
+                    mapped = true;
+                    break 'attempt Ok((
+                        Newton {
+                            iterations: 1,
+                            theta: THET,
+                        },
+                        err,
+                    ));
+                }
+            }
+            let lu = &*lu;
             start_values(integ, work, h);
             let newton = match newton(integ, sys, work, lu, &tol, h) {
                 Ok(newton) => newton,
@@ -486,8 +539,10 @@ fn radcor<S: OdeSystem + ?Sized>(
             Ok((newton, err)) => {
                 let mut hnew = step_size(integ, err, h, newton.iterations);
                 if err < 1.0 {
-                    let t1 = if last { t_end } else { t + h };
-                    accept(integ, work, &mut outputs, out, &tol, t, h, t1)?;
+                    accept(integ, work, &mut outputs, out, &tol, (t, h, t1), mapped)?;
+                    if stamp.is_some() {
+                        integ.counted.front_steps = integ.counted.front_steps.saturating_add(1);
+                    }
                     consecutive_rejections = 0;
                     why = Why::Error;
                     if integ.hist.last_rejected {
@@ -605,7 +660,16 @@ fn decompose(
                 lus,
                 lu_h,
                 |l| l.h,
-                |old| factor(jac, pattern.partition(jac, stamp), lu_h, old),
+                |old| {
+                    let fresh = old.is_none();
+                    let mut lu = factor(jac, pattern.partition(jac, stamp), lu_h, old)?;
+                    let n = jac.nrows();
+                    if fresh && n <= step_map::MAX_DIM {
+                        // Its step map is built later, mid-run: take its memory with the rest.
+                        lu.map.reserve(2 * n, n);
+                    }
+                    Some(lu)
+                },
             )
         }
         None => {
@@ -893,23 +957,108 @@ fn step_size(integ: &mut Integrator, err: f64, h: f64, newt: usize) -> f64 {
     hnew
 }
 
+/// Steps taken with one factorisation before its step map is built: building costs n + 1
+/// [`map_response`]s of three solves each, about as much as n/2 ordinary steps (each a few f
+/// evaluations and three solves), so a factorisation that has already served that many is
+/// likely to serve as many more (the cost of building never exceeds that of the steps taken
+/// without the map by much, whatever the run of steps at one size).
+fn map_after(n: usize) -> u32 {
+    u32::try_from(n.div_ceil(2)).unwrap_or(u32::MAX)
+}
+
+/// A step of size `lu.h` from the integrator's state by the factorisation's step map (built or
+/// refitted to the offsets `work.c0` first if need be): the end point into `work.x1`, and the
+/// error estimate's norm returned (ESTRAD's, before any refinement). Stands for the simplified
+/// Newton iteration converged in one iteration (it has the exact J of an affine f), so the
+/// convergence-rate memory ages as in [`newton`].
+fn mapped_step(integ: &mut Integrator, work: &mut Work, lu: &mut Lu) -> f64 {
+    let n = integ.x.len();
+    let Work {
+        c0,
+        rr,
+        rc,
+        scratch_r,
+        scratch_c,
+        ..
+    } = work;
+    let solves = (&lu.real, &lu.complex, lu.h);
+    let response = |v: &[f64], out: &mut [f64]| {
+        map_response(
+            solves,
+            v,
+            out,
+            (rr.as_mut_slice(), rc.as_mut_slice()),
+            (scratch_r, scratch_c),
+        )
+    };
+    if !lu.map.is_built() {
+        lu.map.build(2 * n, &integ.cache.jac, c0, response);
+    } else if !lu.map.fits(c0) {
+        lu.map.refit(c0, response);
+    }
+    integ.hist.faccon = integ.hist.faccon.max(f64::EPSILON).powf(0.8);
+    lu.map.apply(&integ.x, &mut work.mapped);
+    let (z3, e) = work.mapped.split_at(n);
+    let mut sum = 0.0;
+    for i in 0..n {
+        work.x1[i] = integ.x[i] + z3[i];
+        sum += (e[i] / work.scal[i]).powi(2);
+    }
+    (sum / n as f64).sqrt().max(1e-10)
+}
+
+/// What a step of size `h` computes when f ≡ v at the three stages and at its start, without
+/// the start state: Z3 into `out[..n]` and the vector of the error estimate (ESTRAD's, before
+/// its norm) into `out[n..]`. That is one simplified Newton iteration from Z = 0 ([`slvrad`]
+/// with W = 0, then Z = T W), followed by ESTRAD's solve with f(y0) = v; for f = J x + c and
+/// the factorisations of this J, the iteration's first result is its converged one.
+fn map_response(
+    (real, complex, h): (&Factorisation<f64>, &Factorisation<Complex<f64>>, f64),
+    v: &[f64],
+    out: &mut [f64],
+    (rr, rc): (&mut [f64], &mut [Complex<f64>]),
+    (scratch_r, scratch_c): (&mut [f64], &mut [Complex<f64>]),
+) {
+    let n = v.len();
+    let (dd1, dd2, dd3) = error_weights();
+    let (hee1, hee2, hee3) = (dd1 / h, dd2 / h, dd3 / h);
+    for i in 0..n {
+        let (a1, a2, a3) = (v[i], v[i], v[i]);
+        rr[i] = TI[0][0] * a1 + TI[0][1] * a2 + TI[0][2] * a3;
+        rc[i] = Complex::new(
+            TI[1][0] * a1 + TI[1][1] * a2 + TI[1][2] * a3,
+            TI[2][0] * a1 + TI[2][1] * a2 + TI[2][2] * a3,
+        );
+    }
+    real.solve(rr, scratch_r);
+    complex.solve(rc, scratch_c);
+    let (z3, e) = out.split_at_mut(n);
+    for i in 0..n {
+        let (w1, w2, w3) = (rr[i], rc[i].re, rc[i].im);
+        let z1 = T[0][0] * w1 + T[0][1] * w2 + T[0][2] * w3;
+        let z2 = T[1][0] * w1 + T[1][1] * w2 + T[1][2] * w3;
+        z3[i] = T[2][0] * w1 + w2;
+        e[i] = hee1 * z1 + hee2 * z2 + hee3 * z3[i] + v[i];
+    }
+    real.solve(e, scratch_r);
+}
+
 /// Accepts the step from `t` to `t1` (RADCOR, "step is accepted"): y1 = y0 + Z3, the collocation
 /// polynomial of the step for dense output and the next Newton start (RADAU5's CONT, evaluated
-/// by CONTR5), the outputs due within the step, and the new error weights.
-#[allow(clippy::too_many_arguments)]
+/// by CONTR5), the outputs due within the step, and the new error weights. A `mapped` step
+/// ([`mapped_step`]) has its end point in `work.x1` already and leaves no polynomial (the next
+/// ordinary step starts Newton from zero, which on the affine system it was made for costs
+/// nothing: one iteration converges from anywhere).
 fn accept(
     integ: &mut Integrator,
     work: &mut Work,
     outputs: &mut Outputs,
     out: &mut dyn FnMut(f64, &[f64]),
     tol: &Tolerances,
-    t: f64,
-    h: f64,
-    t1: f64,
+    (t, h, t1): (f64, f64, f64),
+    mapped: bool,
 ) -> Result<(), SolverError> {
     let n = integ.x.len();
-    let (c1, c2) = nodes();
-    let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
     let Work {
         z: [z1, z2, z3],
         x1,
@@ -917,13 +1066,41 @@ fn accept(
         scal,
         ..
     } = work;
-    for i in 0..n {
-        x1[i] = integ.x[i] + z3[i];
+    if !mapped {
+        for i in 0..n {
+            x1[i] = integ.x[i] + z3[i];
+        }
     }
     if !all_finite(x1) {
         return Err(nonfinite_here(t));
     }
-    // Collocation polynomial of this step (CONT(N+1..4N) of RADAU5).
+    if mapped {
+        integ.hist.cont.clear();
+    } else {
+        collocation_polynomial(integ, (z1, z2, z3), x1, outputs, out, (t, h, t1));
+    }
+    integ.hist.h_old = h;
+    integ.hist.first = false;
+    integ.x.copy_from_slice(x1);
+    integ.t = t1;
+    integ.stats.accepted += 1;
+    set_scal(atol, tol.rtol, &integ.x, scal);
+    Ok(())
+}
+
+/// The collocation polynomial of an accepted step (CONT(N+1..4N) of RADAU5) from its stage
+/// increments, into the integrator's history, and the outputs due within the step from it.
+fn collocation_polynomial(
+    integ: &mut Integrator,
+    (z1, z2, z3): (&[f64], &[f64], &[f64]),
+    x1: &[f64],
+    outputs: &mut Outputs,
+    out: &mut dyn FnMut(f64, &[f64]),
+    (t, h, t1): (f64, f64, f64),
+) {
+    let n = x1.len();
+    let (c1, c2) = nodes();
+    let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
     let mut cont = std::mem::take(&mut integ.hist.cont);
     cont.resize(3 * n, 0.0);
     for i in 0..n {
@@ -936,17 +1113,9 @@ fn accept(
         cont[2 * n + i] = k2 - acont3;
     }
     if outputs.pending(t1) {
-        let (cref, x1r) = (&cont, &*x1);
-        outputs.emit(t, h, t1, x1, &mut |th, buf| dense(x1r, cref, th, buf), out);
+        outputs.emit(t, h, t1, x1, &mut |th, buf| dense(x1, &cont, th, buf), out);
     }
     integ.hist.cont = cont;
-    integ.hist.h_old = h;
-    integ.hist.first = false;
-    integ.x.copy_from_slice(x1);
-    integ.t = t1;
-    integ.stats.accepted += 1;
-    set_scal(atol, tol.rtol, &integ.x, scal);
-    Ok(())
 }
 
 /// The collocation polynomial of a step at θ ∈ [0, 1] of it (RADAU5's CONTR5, with

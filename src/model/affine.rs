@@ -1,0 +1,215 @@
+//! The model's right-hand side and outputs as sparse products where they are affine in x.
+//!
+//! The analysis of the compiled plan (`bond_graph::structure`) tells which rows of
+//! `dx/dt = f(x, u)` and which outputs are affine in x with coefficients that depend on neither
+//! x nor u: every one of them for the LOES with the plate (a linear model), all but the servo
+//! valve's with the full valve. For those, `f_i(x, u) = J_i x + f_i(0, u)` and
+//! `y_k = C_k x + y_k(0, u)` exactly; J is 1–5 % dense and C has a few dense rows (the
+//! accelerometers sum over every mode), so the products cost a fraction of a pass through the
+//! plan. [`Affine`] holds them; [`super::assembly::Assembled`] uses it for `f` at every stage
+//! of the integrator and for the outputs at the communication points.
+
+use nalgebra::DMatrix;
+
+use crate::bond_graph::CompiledModel;
+
+/// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
+/// as (column, value).
+#[derive(Clone, Debug)]
+pub(super) struct SparseRows {
+    row_start: Vec<usize>,
+    entries: Vec<(u32, f64)>,
+}
+
+impl SparseRows {
+    /// The nonzeros of `m`'s rows `i` for which `keep(i)`; the other rows are left empty.
+    pub(super) fn from_dense(m: &DMatrix<f64>, keep: impl Fn(usize) -> bool) -> Self {
+        let mut row_start = vec![0];
+        let mut entries = Vec::new();
+        for i in 0..m.nrows() {
+            if keep(i) {
+                let nonzeros = (0..m.ncols()).filter(|&j| m[(i, j)] != 0.0);
+                entries.extend(nonzeros.map(|j| (j as u32, m[(i, j)])));
+            }
+            row_start.push(entries.len());
+        }
+        SparseRows { row_start, entries }
+    }
+
+    /// `offset_i + (row i) x`.
+    #[inline]
+    pub(super) fn row_times(&self, i: usize, x: &[f64], offset: f64) -> f64 {
+        self.entries[self.row_start[i]..self.row_start[i + 1]]
+            .iter()
+            .fold(offset, |acc, &(j, a)| acc + a * x[j as usize])
+    }
+}
+
+/// `C x` four outputs at a time, for a C whose rows are partly dense (the accelerometers sum over
+/// every mode, most other outputs read one or two states): for each block of four consecutive
+/// outputs, the columns where one of the four has a non-zero entry, with the four entries. The
+/// four sums stay in registers across the columns instead of going through memory at each, and
+/// the columns no output of a block reads are skipped.
+#[derive(Clone, Debug)]
+pub(super) struct BlockRows {
+    rows: usize,
+    /// Block `b`'s columns are `entries[block_start[b]..block_start[b + 1]]`.
+    block_start: Vec<usize>,
+    entries: Vec<(u32, [f64; 4])>,
+}
+
+impl BlockRows {
+    pub(super) fn from_dense(c: &DMatrix<f64>) -> Self {
+        let (rows, cols) = c.shape();
+        let mut block_start = vec![0];
+        let mut entries = Vec::new();
+        for first in (0..rows).step_by(4) {
+            let entry = |k: usize, j: usize| if k < rows { c[(k, j)] } else { 0.0 };
+            for j in 0..cols {
+                let four = [0, 1, 2, 3].map(|d| entry(first + d, j));
+                if four.iter().any(|&v| v != 0.0) {
+                    entries.push((j as u32, four));
+                }
+            }
+            block_start.push(entries.len());
+        }
+        BlockRows {
+            rows,
+            block_start,
+            entries,
+        }
+    }
+
+    /// `y = y0 + C x`; each output's sum runs over its columns in ascending order.
+    pub(super) fn product(&self, x: &[f64], y0: &[f64], y: &mut [f64]) {
+        for (b, range) in self.block_start.windows(2).enumerate() {
+            let first = 4 * b;
+            let mut acc = [0, 1, 2, 3].map(|d| y0.get(first + d).copied().unwrap_or(0.0));
+            for &(j, c) in &self.entries[range[0]..range[1]] {
+                let xj = x[j as usize];
+                for d in 0..4 {
+                    acc[d] += c[d] * xj;
+                }
+            }
+            let last = (first + 4).min(self.rows);
+            y[first..last].copy_from_slice(&acc[..last - first]);
+        }
+    }
+}
+
+/// The most outputs [`Affine`] evaluates as `C x + y(0, u)` (on the stack, so that a
+/// communication point allocates nothing); the model has 23 to 31.
+pub(super) const MAX_AFFINE_OUTPUTS: usize = 64;
+
+/// `dx_i/dt = J_i x + f_i(0, u)` for the rows `i` of `f` that are affine in x (every row of the
+/// LOES with the plate, whose Jacobian J is constant; all but the servo valve's 7 with the full
+/// valve), the other rows through the part of the plan they need; likewise `y_k = C_k x +
+/// y_k(0, u)` for the outputs that are affine, the others through the plan.
+///
+/// An affine row has coefficients `J_i` that depend on neither x nor u (they are among the
+/// Jacobian's constant entries), so the identity is exact; only the rounding differs from the
+/// plan's. J is 1–5 % dense (the plate's modes meet only at the hub and the torsion bar), so
+/// the product over its nonzeros costs a fraction of a pass through the plan, which also
+/// evaluates every bond variable on the way. The offsets `f(0, u)` and `y(0, u)` are evaluated
+/// through the plan whenever the held inputs change.
+#[derive(Clone, Debug)]
+pub(super) struct Affine {
+    /// The affine rows of J (the other rows empty).
+    pub(super) jac: SparseRows,
+    /// Some rows are not affine (their entries in `offset` are unused).
+    pub(super) partial: bool,
+    /// `f(0, u)` at the held inputs.
+    pub(super) offset: Vec<f64>,
+    /// C and `y(0, u)` of the affine outputs (the other rows unused), if there are at most
+    /// [`MAX_AFFINE_OUTPUTS`] outputs.
+    pub(super) outputs: Option<(BlockRows, Vec<f64>)>,
+}
+
+impl Affine {
+    /// From the Jacobian's constant entries `jac` (all of J when it is constant).
+    pub(super) fn new(
+        jac: &DMatrix<f64>,
+        compiled: &CompiledModel,
+        rest: &[f64],
+        inputs: &[f64],
+    ) -> Self {
+        let partial = !compiled.nonaffine_rows().is_empty();
+        let outputs = (compiled.n_outputs() <= MAX_AFFINE_OUTPUTS).then(|| {
+            // The affine outputs' rows (the others, evaluated through the plan, zero).
+            let mut c = compiled.linearize(rest, inputs).c;
+            for &k in compiled.nonaffine_outputs() {
+                c.row_mut(k as usize).fill(0.0);
+            }
+            let rows = c.nrows();
+            (BlockRows::from_dense(&c), vec![0.0; rows])
+        });
+        let affine_row = |i: usize| {
+            compiled
+                .nonaffine_rows()
+                .binary_search(&(i as u32))
+                .is_err()
+        };
+        let mut affine = Affine {
+            jac: SparseRows::from_dense(jac, affine_row),
+            partial,
+            offset: vec![0.0; jac.nrows()],
+            outputs,
+        };
+        affine.set_inputs(compiled, inputs);
+        affine
+    }
+
+    pub(super) fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
+        compiled.affine_offsets(inputs, &mut self.offset);
+        if let Some((_, y0)) = &mut self.outputs {
+            compiled.affine_output_offsets(inputs, y0);
+        }
+    }
+
+    pub(super) fn derivatives(
+        &self,
+        compiled: &CompiledModel,
+        x: &[f64],
+        u: &[f64],
+        dx: &mut [f64],
+    ) {
+        for (i, d) in dx.iter_mut().enumerate() {
+            *d = self.jac.row_times(i, x, self.offset[i]);
+        }
+        if self.partial {
+            compiled.nonaffine_derivatives(x, u, dx);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The blocked product is the plain dense one, to the bit, for rows that are not a
+    /// multiple of four and columns that no row of a block reads.
+    #[test]
+    fn blocked_output_product_is_the_dense_product() {
+        let (rows, cols) = (11, 9);
+        let c = DMatrix::from_fn(rows, cols, |k, j| {
+            if (k * 7 + j * 3) % 5 == 0 || j == 4 {
+                0.0
+            } else {
+                (k as f64 + 1.0) * 0.37 - j as f64 * 1.9
+            }
+        });
+        let x: Vec<f64> = (0..cols).map(|j| (j as f64 * 0.77).sin() * 1e3).collect();
+        let y0: Vec<f64> = (0..rows).map(|k| k as f64 - 3.5).collect();
+        let mut y = vec![f64::NAN; rows];
+        let blocked = BlockRows::from_dense(&c);
+        blocked.product(&x, &y0, &mut y);
+        for k in 0..rows {
+            let dense = (0..cols)
+                .filter(|&j| c[(k, j)] != 0.0)
+                .fold(y0[k], |acc, j| acc + c[(k, j)] * x[j]);
+            assert_eq!(y[k].to_bits(), dense.to_bits(), "row {k}");
+        }
+        // Column 4 is zero everywhere: no block stores it.
+        assert!(blocked.entries.iter().all(|&(j, _)| j != 4));
+    }
+}
