@@ -52,8 +52,8 @@ use std::sync::Arc;
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::common::{
-    all_finite, eval, initial_step, jacobian_here, plan_step, with_kept_memory, NextStep, Outputs,
-    Workspace,
+    all_finite, eval, initial_step, jacobian_here, plan_step, rounding_floor, with_kept_memory,
+    NextStep, Outputs, Workspace,
 };
 use super::integrator::Integrator;
 use super::integrator::{front_factorisation, SAME_STEP};
@@ -419,9 +419,25 @@ fn radcor<S: OdeSystem + ?Sized>(
     let tol = transformed_tolerances(integ, work);
     set_scal(&work.atol, tol.rtol, &integ.x, &mut work.scal);
 
-    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
-    if !all_finite(&work.f0) {
-        return Err(nonfinite_here(integ.t));
+    // A constant J of an autonomous system: f = J x + c, and a step can be a step map.
+    let mappable = stamp.is_some() && n <= step_map::MAX_DIM && sys.is_autonomous();
+    // `work.f0` holds f at the integrator's current point. RADAU5 evaluates it at the start and
+    // after every accepted step; a system that may take mapped steps, which do not need it, has
+    // it evaluated only when an ordinary step, the initial step size or the last tiny remainder
+    // does (`f0_here`).
+    let mut f0_fresh = false;
+    let f0_here = |integ: &mut Integrator, work: &mut Work, fresh: &mut bool| {
+        if !*fresh {
+            eval(sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
+            if !all_finite(&work.f0) {
+                return Err(nonfinite_here(integ.t));
+            }
+            *fresh = true;
+        }
+        Ok(())
+    };
+    if !mappable || integ.h <= 0.0 {
+        f0_here(integ, work, &mut f0_fresh)?;
     }
     if integ.h <= 0.0 {
         let opts = integ.options.clone();
@@ -437,8 +453,6 @@ fn radcor<S: OdeSystem + ?Sized>(
         );
     }
     let mut outputs = Outputs::new(times, integ.t, n);
-    // A constant J of an autonomous system: f = J x + c, and a step can be a step map.
-    let mappable = stamp.is_some() && n <= step_map::MAX_DIM && sys.is_autonomous();
     // f(t, 0) = c for the step map, evaluated when first wanted in this call: None until then,
     // then whether it is finite.
     let mut offsets: Option<bool> = None;
@@ -462,6 +476,10 @@ fn radcor<S: OdeSystem + ?Sized>(
             Why::Error => (SolverErrorKind::StepTooSmall, "to meet the tolerances"),
         };
         let quantise = stamp.is_some();
+        if t_end - integ.t <= rounding_floor(integ.t) {
+            // plan_step finishes with an Euler step from f0.
+            f0_here(integ, work, &mut f0_fresh)?;
+        }
         let (h, last, h_proposed) = match plan_step(
             integ,
             t_end,
@@ -476,6 +494,7 @@ fn radcor<S: OdeSystem + ?Sized>(
         };
         let t = integ.t;
         if *need_jac {
+            f0_here(integ, work, &mut f0_fresh)?;
             if !jacobian_at(integ, sys, work, lus, stamp, tol.rtol) {
                 return Err(SolverError::new(
                     SolverErrorKind::NonFinite,
@@ -524,6 +543,9 @@ fn radcor<S: OdeSystem + ?Sized>(
                 }
             }
             let lu = &*lu;
+            if let Err(e) = f0_here(integ, work, &mut f0_fresh) {
+                return Err(e);
+            }
             start_values(integ, work, h);
             let newton = match newton(integ, sys, work, lu, &tol, h) {
                 Ok(newton) => newton,
@@ -556,10 +578,12 @@ fn radcor<S: OdeSystem + ?Sized>(
                         *need_jac = newton.theta > THET;
                         return Ok(());
                     }
-                    eval(sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
-                    if !all_finite(&work.f0) {
-                        integ.h = hnew;
-                        return Err(nonfinite_here(integ.t));
+                    f0_fresh = false;
+                    if !mappable {
+                        if let Err(e) = f0_here(integ, work, &mut f0_fresh) {
+                            integ.h = hnew;
+                            return Err(e);
+                        }
                     }
                     jac_fresh = false;
                     let qt = hnew / h;
