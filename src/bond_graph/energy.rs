@@ -84,6 +84,23 @@ impl CompiledModel {
         self.storages.iter().map(|st| storage_energy(st, x)).sum()
     }
 
+    /// A constant K with |H(x)| ≤ K max_i |x_i|² for every x, when every storage is linear (a
+    /// one-port with a linear law, or a field); None when one is not. Shows the stored energy
+    /// finite at x without computing it: K max|x|² is finite.
+    pub fn stored_energy_bound(&self) -> Option<f64> {
+        self.storages
+            .iter()
+            .map(|st| match st {
+                Storage::One {
+                    law: Law::Linear(k),
+                    ..
+                } => Some(0.5 / k.abs()),
+                Storage::One { .. } => None,
+                Storage::Field { w, .. } => Some(0.5 * w.iter().map(|v| v.abs()).sum::<f64>()),
+            })
+            .sum()
+    }
+
     /// Stored energy per storage element, in creation order.
     pub fn stored_energies(&self, x: &[f64]) -> Vec<(String, f64)> {
         self.storages

@@ -172,10 +172,6 @@ impl<M: FmuModel> Instance<M> {
         self.state
     }
 
-    pub fn values(&self) -> &Values {
-        &self.values
-    }
-
     pub fn time(&self) -> f64 {
         self.time
     }
@@ -434,6 +430,7 @@ impl<M: FmuModel> Instance<M> {
         }
         for (slot, &vr) in out.iter_mut().zip(vrs) {
             if let Some(index) = M::index_of(vr) {
+                self.model.refresh(&mut self.values, Some(index));
                 *slot = convert(self.values.get(index));
             }
         }
@@ -740,6 +737,7 @@ impl<M: FmuModel> Instance<M> {
         if let Err(s) = self.bring_up_to_date(F) {
             return s;
         }
+        self.model.refresh(&mut self.values, None);
         let result = self.model.directional_derivative(
             &self.values,
             &unknowns,
@@ -893,6 +891,7 @@ impl<M: FmuModel> Instance<M> {
 
     /// `fmi2GetFMUstate`.
     pub fn save(&mut self) -> SavedState<M::State> {
+        self.model.refresh(&mut self.values, None);
         SavedState::new(Snapshot {
             guid: M::GUID.to_string(),
             state: self.state,
@@ -962,6 +961,8 @@ impl<M: FmuModel> Instance<M> {
         }
         let initialized = matches!(s.state, StepComplete | StepFailed | Terminated);
         let time = initialized.then_some(s.time);
+        // The current values complete, whether the model takes up the state or refuses it.
+        self.model.refresh(&mut self.values, None);
         if let Err(msg) = self
             .model
             .restore_state(&s.model, &s.values, &s.experiment, time)

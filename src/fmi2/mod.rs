@@ -141,7 +141,7 @@ pub trait FmuModel: Sized + Send {
     fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String>;
 
     /// Advances from `t_start` to exactly `t_end` with the inputs in `values` held constant, then
-    /// writes the outputs into `values`. On failure the model stays at the last time it reached,
+    /// writes the outputs into `values` (or leaves some to [`FmuModel::refresh`]). On failure the model stays at the last time it reached,
     /// with its outputs written for that time.
     fn do_step(
         &mut self,
@@ -150,6 +150,15 @@ pub trait FmuModel: Sized + Send {
         t_end: f64,
         log: &mut StepLog,
     ) -> Result<(), StepFailure>;
+
+    /// Brings values that [`FmuModel::do_step`] left to be computed when read up to date:
+    /// variable `index` before it is read, or every such value (`None`) before the values are
+    /// used as a whole (saved in an FMU state, or read by the model itself). Default: nothing
+    /// to do (`do_step` writes every value).
+    ///
+    /// Whatever `do_step` leaves must be shown finite when it returns fmi2OK: a value computed
+    /// here may not turn out non-finite.
+    fn refresh(&mut self, _values: &mut Values, _index: Option<usize>) {}
 
     /// The continuous states as `(state, derivative)` positions in [`FmuModel::variables`], in
     /// the order of `<ModelStructure><Derivatives>` (the order of `fmi2GetContinuousStates`).

@@ -36,6 +36,14 @@ impl SparseRows {
         SparseRows { row_start, entries }
     }
 
+    /// The largest Σ_j |m_ij| over the rows.
+    fn max_abs_row_sum(&self) -> f64 {
+        self.row_start
+            .windows(2)
+            .map(|r| self.entries[r[0]..r[1]].iter().map(|(_, a)| a.abs()).sum())
+            .fold(0.0, f64::max)
+    }
+
     /// `offset_i + (row i) x`.
     #[inline]
     pub(super) fn row_times(&self, i: usize, x: &[f64], offset: f64) -> f64 {
@@ -120,9 +128,45 @@ pub(super) struct Affine {
     pub(super) partial: bool,
     /// `f(0, u)` at the held inputs.
     pub(super) offset: Vec<f64>,
-    /// C and `y(0, u)` of the affine outputs (the other rows unused), if there are at most
-    /// [`MAX_AFFINE_OUTPUTS`] outputs.
-    pub(super) outputs: Option<(BlockRows, Vec<f64>)>,
+    /// The largest `|f_i(0, u)|` of the affine rows (+inf if one is not finite).
+    offset_max: f64,
+    /// The largest Σ_j |J_ij| of the affine rows.
+    jac_row_sum: f64,
+    /// The affine outputs, if there are at most [`MAX_AFFINE_OUTPUTS`] outputs.
+    pub(super) outputs: Option<AffineOutputs>,
+}
+
+/// `y = C x + y(0, u)` for the affine outputs (the other rows of C zero, their `y0` unused).
+#[derive(Clone, Debug)]
+pub(super) struct AffineOutputs {
+    /// C four rows at a time, for all outputs at once.
+    pub(super) blocks: BlockRows,
+    /// C row by row, for an output read on its own.
+    pub(super) rows: SparseRows,
+    /// `y(0, u)` at the held inputs.
+    pub(super) y0: Vec<f64>,
+    /// The largest `|y_k(0, u)|` of the affine outputs (+inf if one is not finite).
+    y0_max: f64,
+    /// The largest Σ_j |C_kj|.
+    row_sum: f64,
+}
+
+/// What the bounds of [`Affine::finite_within`] must stay under: far enough below the largest
+/// double that the rounding of a sum of up to a few hundred products cannot reach it.
+pub(super) const FINITE_BOUND: f64 = f64::MAX / 16.0;
+
+/// The largest magnitude among `v` at `keep`ing positions, +inf if one of them is not finite.
+pub(super) fn max_abs(v: &[f64], keep: impl Fn(usize) -> bool) -> f64 {
+    v.iter()
+        .enumerate()
+        .filter(|&(i, _)| keep(i))
+        .fold(0.0, |m, (_, &x)| {
+            if x.is_finite() {
+                m.max(x.abs())
+            } else {
+                f64::INFINITY
+            }
+        })
 }
 
 impl Affine {
@@ -134,14 +178,21 @@ impl Affine {
         inputs: &[f64],
     ) -> Self {
         let partial = !compiled.nonaffine_rows().is_empty();
+        let jac_rows = jac.nrows();
         let outputs = (compiled.n_outputs() <= MAX_AFFINE_OUTPUTS).then(|| {
             // The affine outputs' rows (the others, evaluated through the plan, zero).
             let mut c = compiled.linearize(rest, inputs).c;
             for &k in compiled.nonaffine_outputs() {
                 c.row_mut(k as usize).fill(0.0);
             }
-            let rows = c.nrows();
-            (BlockRows::from_dense(&c), vec![0.0; rows])
+            let rows = SparseRows::from_dense(&c, |_| true);
+            AffineOutputs {
+                blocks: BlockRows::from_dense(&c),
+                row_sum: rows.max_abs_row_sum(),
+                rows,
+                y0: vec![0.0; c.nrows()],
+                y0_max: 0.0,
+            }
         });
         let affine_row = |i: usize| {
             compiled
@@ -149,10 +200,13 @@ impl Affine {
                 .binary_search(&(i as u32))
                 .is_err()
         };
+        let jac = SparseRows::from_dense(jac, affine_row);
         let mut affine = Affine {
-            jac: SparseRows::from_dense(jac, affine_row),
+            jac_row_sum: jac.max_abs_row_sum(),
+            jac,
             partial,
-            offset: vec![0.0; jac.nrows()],
+            offset: vec![0.0; jac_rows],
+            offset_max: 0.0,
             outputs,
         };
         affine.set_inputs(compiled, inputs);
@@ -161,9 +215,40 @@ impl Affine {
 
     pub(super) fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
         compiled.affine_offsets(inputs, &mut self.offset);
-        if let Some((_, y0)) = &mut self.outputs {
-            compiled.affine_output_offsets(inputs, y0);
+        let rows = compiled.nonaffine_rows();
+        self.offset_max = max_abs(&self.offset, |i| rows.binary_search(&(i as u32)).is_err());
+        if let Some(o) = &mut self.outputs {
+            compiled.affine_output_offsets(inputs, &mut o.y0);
+            let outputs = compiled.nonaffine_outputs();
+            o.y0_max = max_abs(&o.y0, |k| outputs.binary_search(&(k as u32)).is_err());
         }
+    }
+
+    /// Are the affine rows of f and the affine outputs finite at every x with max|x_i| ≤
+    /// `x_max`, whatever the rounding? Shown from bounds, without computing them:
+    /// |J_i x + f_i(0, u)| ≤ Σ_j |J_ij| max|x| + max|f(0, u)|, likewise for the outputs, and both
+    /// stay far below the largest double. So an output left to be computed when it is read
+    /// cannot turn out infinite then. False if the bounds are too large (or `x_max` is not
+    /// finite): the caller computes and checks them.
+    pub(super) fn finite_within(&self, x_max: f64) -> bool {
+        let rows = self.jac_row_sum * x_max + self.offset_max;
+        let outputs = self
+            .outputs
+            .as_ref()
+            .map_or(0.0, |o| o.row_sum * x_max + o.y0_max);
+        rows < FINITE_BOUND && outputs < FINITE_BOUND
+    }
+
+    /// The affine output `k` at `x`: the value [`BlockRows::product`] gives (the same products
+    /// added in the same order; the blocks add exact zeros besides).
+    pub(super) fn output(&self, k: usize, x: &[f64]) -> Option<f64> {
+        let o = self.outputs.as_ref()?;
+        Some(o.rows.row_times(k, x, o.y0[k]))
+    }
+
+    /// The affine row `i` of f at `x`.
+    pub(super) fn derivative(&self, i: usize, x: &[f64]) -> f64 {
+        self.jac.row_times(i, x, self.offset[i])
     }
 
     pub(super) fn derivatives(

@@ -11,7 +11,7 @@ use crate::fragments::plate::{self, PlateModel};
 use crate::fragments::{self, controller, hub, loes, servo_valve, torsion_bar};
 use crate::solver::OdeSystem;
 
-use super::affine::{Affine, MAX_AFFINE_OUTPUTS};
+use super::affine::{max_abs, Affine, FINITE_BOUND, MAX_AFFINE_OUTPUTS};
 use super::parameters::{HydraulicsModel, Parameters};
 use super::variables::{idx, CONTINUOUS_STATES, VARIABLES};
 
@@ -160,6 +160,27 @@ pub struct Assembled {
     /// `dx/dt` and the outputs as sparse products for their affine rows (see [`Affine`]): all
     /// of them with a constant Jacobian, all but the servo valve's with the full valve.
     affine: Option<Affine>,
+    /// For each of the FMU's variables, how it is computed on its own when it is read after a
+    /// step ([`Assembled::write_at_point`]); empty when nothing is.
+    on_demand: Vec<OnDemand>,
+    /// K with |stored energy| ≤ K max|x|² when every storage is linear (the energy is then
+    /// left until read too).
+    energy_bound: Option<f64>,
+}
+
+/// How one of the FMU's variables is computed on its own, from the state, when it is read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum OnDemand {
+    /// Written at every communication point.
+    No,
+    /// The affine output `k` of the compiled model: `C_k x + y_k(0, u)`.
+    Output(u32),
+    /// The compiled state `i`.
+    State(u32),
+    /// The affine row `i` of f: `J_i x + f_i(0, u)`.
+    Derivative(u32),
+    /// The stored energy, all of whose storages are linear.
+    Energy,
 }
 
 impl Assembled {
@@ -174,12 +195,12 @@ impl Assembled {
                 position(n).ok_or_else(|| format!("the model's input '{n}' is not an FMU variable"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let output_index = compiled
+        let output_index: Vec<Option<usize>> = compiled
             .output_names()
             .iter()
             .map(|n| position(n))
             .collect();
-        let state_slot = compiled
+        let state_slot: Vec<Option<usize>> = compiled
             .state_names()
             .iter()
             .map(|n| {
@@ -221,9 +242,16 @@ impl Assembled {
             }
             _ => None,
         };
+        let energy_bound = compiled.stored_energy_bound();
+        let mut on_demand = on_demand(&compiled, affine.as_ref(), &output_index, &state_slot);
+        if energy_bound.is_some() && !on_demand.is_empty() {
+            on_demand[idx::ENERGY] = OnDemand::Energy;
+        }
         Ok(Assembled {
+            energy_bound,
             constant_jacobian,
             affine,
+            on_demand,
             inputs,
             rest,
             compiled,
@@ -326,18 +354,17 @@ impl Assembled {
         match &self.affine {
             Some(
                 affine @ Affine {
-                    outputs: Some((c, y0)),
+                    outputs: Some(outputs),
                     ..
                 },
             ) => {
                 // Linear outputs: y(0, u) + C x instead of a pass through the plan.
                 let mut y = [0.0; MAX_AFFINE_OUTPUTS];
-                let y = &mut y[..y0.len()];
-                c.product(x, y0, y);
+                let y = &mut y[..outputs.y0.len()];
+                outputs.blocks.product(x, &outputs.y0, y);
                 for (i, slot) in self.state_slot.iter().enumerate() {
                     if let Some(k) = *slot {
-                        let dx = affine.jac.row_times(i, x, affine.offset[i]);
-                        values.set_real(CONTINUOUS_STATES[k].1, dx);
+                        values.set_real(CONTINUOUS_STATES[k].1, affine.derivative(i, x));
                     }
                 }
                 if affine.partial {
@@ -383,6 +410,76 @@ impl Assembled {
             }
         }
         values.set_real(idx::ENERGY, self.compiled.stored_energy(x));
+    }
+
+    /// Writes what a communication point at state `x` needs at once and leaves the rest until it
+    /// is read ([`Assembled::write_on_demand`]): writes the outputs and derivatives that are not
+    /// affine (the servo valve's, from their part of the plan) and the stored energy if a
+    /// storage is nonlinear, and returns true, when the affine outputs and derivatives (and the
+    /// energy of linear storages) are shown to be finite at `x` (`Affine::finite_within`,
+    /// `CompiledModel::stored_energy_bound`), so that none of them can turn out infinite when
+    /// read. Otherwise
+    /// (or when the model has nothing to leave) writes nothing and returns false: the caller
+    /// writes everything with [`Assembled::write_outputs`].
+    ///
+    /// An importer reads a few of the 23 to 31 outputs, and the states and their derivatives
+    /// rarely in co-simulation: computing all of them at every point cost as much as the steps
+    /// of a linear configuration.
+    pub fn write_at_point(&self, x: &[f64], values: &mut Values) -> bool {
+        let Some(affine) = &self.affine else {
+            return false;
+        };
+        let x_max = max_abs(x, |_| true);
+        let energy_finite = self
+            .energy_bound
+            .is_none_or(|k| k * x_max * x_max < FINITE_BOUND);
+        if self.on_demand.is_empty() || !affine.finite_within(x_max) || !energy_finite {
+            return false;
+        }
+        if affine.partial {
+            let values = std::cell::RefCell::new(&mut *values);
+            self.compiled.for_each_nonaffine_output_and_derivative(
+                x,
+                &self.inputs,
+                |k, v| {
+                    if let Some(i) = self.output_index[k] {
+                        values.borrow_mut().set_real(i, v);
+                    }
+                },
+                |i, v| {
+                    if let Some(k) = self.state_slot[i] {
+                        values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
+                    }
+                },
+            );
+        }
+        if self.energy_bound.is_none() {
+            values.set_real(idx::ENERGY, self.compiled.stored_energy(x));
+        }
+        true
+    }
+
+    /// Is the FMU's variable `index` left by [`Assembled::write_at_point`] to be computed when
+    /// it is read?
+    pub fn on_demand(&self, index: usize) -> bool {
+        self.on_demand
+            .get(index)
+            .is_some_and(|&d| d != OnDemand::No)
+    }
+
+    /// Computes the FMU's variable `index` at state `x` into `values`, if it is one that
+    /// [`Assembled::write_at_point`] leaves: the value [`Assembled::write_outputs`] writes.
+    pub fn write_on_demand(&self, x: &[f64], index: usize, values: &mut Values) {
+        let v = match (self.on_demand.get(index), &self.affine) {
+            (Some(&OnDemand::Output(k)), Some(a)) => a.output(k as usize, x),
+            (Some(&OnDemand::State(i)), _) => Some(x[i as usize]),
+            (Some(&OnDemand::Derivative(i)), Some(a)) => Some(a.derivative(i as usize, x)),
+            (Some(&OnDemand::Energy), _) => Some(self.compiled.stored_energy(x)),
+            _ => None,
+        };
+        if let Some(v) = v {
+            values.set_real(index, v);
+        }
     }
 
     /// Exact directional derivatives at state `x` and inputs `u`: `dz = (d unknowns / d
@@ -441,6 +538,36 @@ impl Assembled {
         }
         Ok(())
     }
+}
+
+/// Which of the FMU's variables can be left until they are read (see [`OnDemand`]): with affine
+/// outputs, those outputs, the declared states and their affine derivatives; none otherwise.
+fn on_demand(
+    compiled: &CompiledModel,
+    affine: Option<&Affine>,
+    output_index: &[Option<usize>],
+    state_slot: &[Option<usize>],
+) -> Vec<OnDemand> {
+    if affine.is_none_or(|a| a.outputs.is_none()) {
+        return Vec::new();
+    }
+    let mut table = vec![OnDemand::No; VARIABLES.len()];
+    let nonaffine = |list: &[u32], i: usize| list.binary_search(&(i as u32)).is_ok();
+    for (k, target) in output_index.iter().enumerate() {
+        if let (Some(i), false) = (*target, nonaffine(compiled.nonaffine_outputs(), k)) {
+            table[i] = OnDemand::Output(k as u32);
+        }
+    }
+    for (i, slot) in state_slot.iter().enumerate() {
+        if let Some(k) = *slot {
+            let (state, derivative) = CONTINUOUS_STATES[k];
+            table[state] = OnDemand::State(i as u32);
+            if !nonaffine(compiled.nonaffine_rows(), i) {
+                table[derivative] = OnDemand::Derivative(i as u32);
+            }
+        }
+    }
+    table
 }
 
 /// FNV-1a hash of a matrix's bits: identifies a constant Jacobian for the solver's cache.

@@ -43,6 +43,19 @@ pub struct HydraulicSlewingPlate {
     /// Model Exchange: the compiled state vector gathered from the declared continuous states
     /// (allocated once, reused every evaluation).
     state: Vec<f64>,
+    /// Values were left to be computed when read since the last step (see
+    /// [`Assembled::write_at_point`]); `fresh[i] == step` once variable `i` has been.
+    on_demand: OnDemandValues,
+}
+
+/// Which of the values left by the last step ([`Assembled::write_at_point`]) have been computed:
+/// a counter of such steps, and for each variable the step it was last computed for (so that
+/// a step marks them all stale at once, without a pass over the table).
+#[derive(Default)]
+struct OnDemandValues {
+    pending: bool,
+    step: u64,
+    fresh: Vec<u64>,
 }
 
 /// The model's part of an FMU state.
@@ -119,11 +132,35 @@ impl HydraulicSlewingPlate {
     }
 
     /// Writes outputs and solver statistics for the integrator's current point.
-    fn write_outputs(&self, values: &mut Values) {
+    fn write_outputs(&mut self, values: &mut Values) {
+        self.on_demand.pending = false;
         let (Some(system), Some(integrator)) = (&self.system, &self.integrator) else {
             return;
         };
         system.write_outputs(integrator.x(), values);
+        Self::write_stats(integrator, values);
+    }
+
+    /// After a step: writes what the point needs at once and leaves the values
+    /// [`Assembled::write_at_point`] can leave until they are read ([`FmuModel::refresh`]), or
+    /// writes everything.
+    fn write_at_point(&mut self, values: &mut Values) {
+        let (Some(system), Some(integrator)) = (&self.system, &self.integrator) else {
+            return;
+        };
+        if system.write_at_point(integrator.x(), values) {
+            Self::write_stats(integrator, values);
+            let d = &mut self.on_demand;
+            d.pending = true;
+            d.step += 1;
+            d.fresh.resize(variables::VARIABLES.len(), 0);
+        } else {
+            self.write_outputs(values);
+        }
+    }
+
+    /// The solver's counters into their integer variables.
+    fn write_stats(integrator: &Integrator, values: &mut Values) {
         let stats = integrator.stats();
         let clamp = |n: u64| i32::try_from(n).unwrap_or(i32::MAX);
         values.set_integer(idx::SOLVER_STEPS, clamp(stats.accepted));
@@ -158,6 +195,7 @@ impl FmuModel for HydraulicSlewingPlate {
 
     fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String> {
         self.integrator = None;
+        self.on_demand.pending = false;
         self.try_initialize(values, experiment)
             .map_err(|message| with_suspects(message, values))
     }
@@ -210,7 +248,11 @@ impl FmuModel for HydraulicSlewingPlate {
             )
         });
         let reached = integrator.t();
-        self.write_outputs(values);
+        if result.is_ok() {
+            self.write_at_point(values);
+        } else {
+            self.write_outputs(values);
+        }
         if let Err(e) = result {
             return Err(StepFailure {
                 last_successful_time: reached,
@@ -235,6 +277,24 @@ impl FmuModel for HydraulicSlewingPlate {
             });
         }
         Ok(())
+    }
+
+    fn refresh(&mut self, values: &mut Values, index: Option<usize>) {
+        if !self.on_demand.pending {
+            return;
+        }
+        let Some(index) = index else {
+            self.write_outputs(values);
+            return;
+        };
+        let (Some(system), Some(integrator)) = (&self.system, &self.integrator) else {
+            return;
+        };
+        let d = &mut self.on_demand;
+        if d.fresh[index] != d.step && system.on_demand(index) {
+            system.write_on_demand(integrator.x(), index, values);
+            d.fresh[index] = d.step;
+        }
     }
 
     fn continuous_states() -> &'static [(usize, usize)] {
@@ -361,6 +421,8 @@ impl FmuModel for HydraulicSlewingPlate {
         }
         system.restore_inputs(&state.inputs);
         self.integrator = Some(integrator.clone());
+        // The saved values were brought up to date before they were saved.
+        self.on_demand.pending = false;
         Ok(())
     }
 }

@@ -132,8 +132,8 @@ pub(crate) fn front_factorisation<F>(
 ) -> bool {
     match kept.iter().position(|f| step_of(f) == h) {
         Some(i) => {
-            let f = kept.remove(i);
-            kept.insert(0, f);
+            // (Already in front at nearly every step: no move of the factorisation's struct.)
+            kept[..=i].rotate_right(1);
             true
         }
         None => match make(if kept.len() >= KEPT_FACTORISATIONS {
@@ -485,6 +485,8 @@ impl Integrator {
             self.counted = Counted::default();
         }
         self.options = options;
+        // Radau5's workspace holds its transformed tolerances.
+        self.cache.radau = None;
         self.kept_jac.clear();
         self.notify_discontinuity();
         Ok(())

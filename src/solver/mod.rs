@@ -97,6 +97,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 mod common;
+mod dense;
 mod integrator;
 pub mod jacobian;
 pub mod linalg;

@@ -213,6 +213,9 @@ pub(crate) struct Work {
     c0: Vec<f64>,
     /// The step map's result: Z3 (rows 0..n) and the error estimate's vector (n..2n).
     mapped: Vec<f64>,
+    /// [`transformed_tolerances`], with `atol` and `atol_for_fd`, once made (the options do
+    /// not change under a workspace: `set_options` drops it).
+    tolerances: Option<Tolerances>,
     atol: Vec<f64>,
     /// `atol` again, in the form the finite-difference Jacobian takes.
     atol_for_fd: Atol,
@@ -249,6 +252,7 @@ impl Workspace for Work {
             x1: v(),
             c0: v(),
             mapped: vec![0.0; 2 * n],
+            tolerances: None,
             atol: v(),
             atol_for_fd: Atol::Vector(v()),
             rr: DVector::zeros(n),
@@ -365,6 +369,7 @@ fn keep_jacobian<S: OdeSystem + ?Sized>(
 }
 
 /// The tolerances the step control works with (RADAU5's prologue and RADCOR's FNEWT).
+#[derive(Clone, Copy)]
 struct Tolerances {
     /// Transformed relative tolerance rtol' = 0.1 rtol^(2/3).
     rtol: f64,
@@ -378,6 +383,9 @@ struct Tolerances {
 /// scaled down with rtol'/rtol but never up (see the module docs for why this departs from
 /// RADAU5's atol' = rtol' atol/rtol).
 fn transformed_tolerances(integ: &Integrator, work: &mut Work) -> Tolerances {
+    if let Some(tol) = work.tolerances {
+        return tol;
+    }
     let rtol_user = integ.options.rtol;
     let rtol = 0.1 * rtol_user.powf(2.0 / 3.0);
     let atol_factor = (rtol / rtol_user).min(1.0);
@@ -388,7 +396,9 @@ fn transformed_tolerances(integ: &Integrator, work: &mut Work) -> Tolerances {
         v.copy_from_slice(&work.atol);
     }
     let fnewt = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
-    Tolerances { rtol, fnewt }
+    let tol = Tolerances { rtol, fnewt };
+    work.tolerances = Some(tol);
+    tol
 }
 
 /// Error weights sc_i = atol'_i + rtol' |x_i| of the weighted RMS norm (RADCOR's SCAL; Hairer &
@@ -494,7 +504,8 @@ fn radcor<S: OdeSystem + ?Sized>(
         };
         let t = integ.t;
         if *need_jac {
-            f0_here(integ, work, &mut f0_fresh)?;
+            // (f0 is fresh here unless the system is mappable, whose J is analytic and constant:
+            // jacobian_at then needs no f0 for finite differences.)
             if !jacobian_at(integ, sys, work, lus, stamp, tol.rtol) {
                 return Err(SolverError::new(
                     SolverErrorKind::NonFinite,

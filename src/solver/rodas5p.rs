@@ -36,9 +36,11 @@ use super::common::{
     all_finite, eval, initial_step, jacobian_here, plan_step, rms, scale_into, with_kept_memory,
     NextStep, Outputs, Workspace,
 };
+use super::dense::DenseInverse;
 use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
 use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache};
+use super::step_map;
 use super::{OdeSystem, SolverError, SolverErrorKind};
 
 /// Number of stages.
@@ -303,10 +305,24 @@ impl Workspace for Work {
     }
 }
 
-/// The LU of W = I/(h γ) - J for the step size `h`.
+/// The LU of W = I/(h γ) - J for the step size `h`, and for a constant J of a small system
+/// (n ≤ [`step_map::MAX_DIM`]) its explicit inverse, with which the step's eight solves are
+/// dense products ([`DenseInverse`]).
 pub(crate) struct Factor {
     h: f64,
     lu: Factorisation<f64>,
+    inverse: DenseInverse,
+}
+
+impl Factor {
+    /// Solves W x = rhs in place.
+    fn solve(&self, rhs: &mut [f64], scratch: &mut [f64]) {
+        if self.inverse.is_built() {
+            self.inverse.solve(rhs, scratch);
+        } else {
+            self.lu.solve(rhs, scratch);
+        }
+    }
 }
 
 /// Factorises W = I/(h γ) - J into `lu` (reusing its memory) with the partition `part` of J;
@@ -335,8 +351,17 @@ fn factor(
     h: f64,
     old: Option<Factor>,
 ) -> Option<Factor> {
-    let mut lu = old.map_or_else(|| Factorisation::new(Arc::clone(part)), |f| f.lu);
-    factor_into(&mut lu, part, jac, h).then_some(Factor { h, lu })
+    let (mut lu, mut inverse) = old.map_or_else(
+        || {
+            (
+                Factorisation::new(Arc::clone(part)),
+                DenseInverse::default(),
+            )
+        },
+        |f| (f.lu, f.inverse),
+    );
+    inverse.clear();
+    factor_into(&mut lu, part, jac, h).then_some(Factor { h, lu, inverse })
 }
 
 /// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
@@ -345,7 +370,7 @@ fn step<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     w: &mut Work,
-    lu: &Factorisation<f64>,
+    lu: &Factor,
     h: f64,
     autonomous: bool,
 ) -> Result<f64, Reject> {
@@ -587,7 +612,14 @@ fn advance_with<S: OdeSystem + ?Sized>(
                     lus,
                     h_lu,
                     |f| f.h,
-                    |old| factor(jac, pattern.partition(jac, stamp), h_lu, old),
+                    |old| {
+                        let mut f = factor(jac, pattern.partition(jac, stamp), h_lu, old)?;
+                        let n = jac.nrows();
+                        if n <= step_map::MAX_DIM {
+                            f.inverse.build(&f.lu, n, &mut w.scratch);
+                        }
+                        Some(f)
+                    },
                 );
                 (h_lu, ok)
             }
@@ -613,7 +645,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
             }
         };
         let result = match lus.first() {
-            Some(f) if ok => step(integ, sys, w, &f.lu, h, autonomous),
+            Some(f) if ok => step(integ, sys, w, f, h, autonomous),
             _ => Err(Reject::Singular),
         };
         match result {

@@ -102,18 +102,9 @@ impl StepMap {
         self.c.extend_from_slice(c);
     }
 
-    /// `y = L x + a` (`y` is `rows` long): a column at a time, so that the inner loop runs
-    /// over contiguous memory and vectorises; zero components of x are skipped.
+    /// `y = L x + a` (`y` is `rows` long), a column at a time ([`super::dense::product`]).
     pub fn apply(&self, x: &[f64], y: &mut [f64]) {
-        let y = &mut y[..self.rows];
-        y.copy_from_slice(&self.aff);
-        for (column, &xj) in self.lin.chunks_exact(self.rows).zip(x) {
-            if xj != 0.0 {
-                for (yi, &l) in y.iter_mut().zip(column) {
-                    *yi += l * xj;
-                }
-            }
-        }
+        super::dense::product(&self.lin, self.rows, Some(&self.aff), x, y);
     }
 }
 

@@ -205,11 +205,16 @@ impl Instance<'_> {
     }
     pub fn get_reals(&self, vrs: &[u32]) -> Result<Vec<f64>, String> {
         let mut out = vec![0.0; vrs.len()];
+        self.get_reals_into(vrs, &mut out)?;
+        Ok(out)
+    }
+    /// `fmi2GetReal` into `out` (as long as `vrs`), allocating nothing.
+    pub fn get_reals_into(&self, vrs: &[u32], out: &mut [f64]) -> Result<(), String> {
+        assert_eq!(vrs.len(), out.len(), "one value per reference");
         check(
             unsafe { (self.fmu.get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) },
             "fmi2GetReal",
-        )?;
-        Ok(out)
+        )
     }
     pub fn set_real(&self, vr: u32, v: f64) -> Result<(), String> {
         check(
