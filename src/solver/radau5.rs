@@ -554,9 +554,7 @@ fn radcor<S: OdeSystem + ?Sized>(
                 }
             }
             let lu = &*lu;
-            if let Err(e) = f0_here(integ, work, &mut f0_fresh) {
-                return Err(e);
-            }
+            f0_here(integ, work, &mut f0_fresh)?;
             start_values(integ, work, h);
             let newton = match newton(integ, sys, work, lu, &tol, h) {
                 Ok(newton) => newton,
