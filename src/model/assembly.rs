@@ -631,6 +631,72 @@ mod tests {
         (Assembled::new(&p).unwrap(), values)
     }
 
+    /// What a communication point leaves to be computed when read, computed then, is what
+    /// `write_outputs` writes, bit for bit (the LOES with the plate, all of whose outputs wait;
+    /// the full servo valve, whose own outputs and rows are written at once); and at a state
+    /// too large for the bounds to show the waiting values finite, nothing waits.
+    #[test]
+    fn values_computed_when_read_are_those_written_at_once() {
+        let configurations: [&[(&str, &str)]; 2] = [
+            &[
+                ("hydraulics.model", "1"),
+                ("controller.saturation", "false"),
+                ("hydraulics.motor_coupled", "true"),
+            ],
+            &[
+                ("hydraulics.model", "2"),
+                ("hydraulics.motor_coupled", "true"),
+            ],
+        ];
+        for (c, sets) in configurations.iter().enumerate() {
+            let (mut a, mut values) = assembled(sets);
+            values.set_real(idx::R, 0.3);
+            a.set_inputs(&values);
+            let x: Vec<f64> = a
+                .initial_state()
+                .iter()
+                .zip(a.nominal())
+                .enumerate()
+                .map(|(i, (r, s))| r + s * (0.37 * i as f64).sin())
+                .collect();
+            let mut eager = values.clone();
+            a.write_outputs(&x, &mut eager);
+            let mut lazy = values.clone();
+            assert!(a.write_at_point(&x, &mut lazy), "configuration {c}");
+            let waiting: Vec<usize> = (0..VARIABLES.len()).filter(|&i| a.on_demand(i)).collect();
+            // Every output of the LOES configuration waits; the valve's own do not.
+            let outputs = a.output_index.iter().flatten().count();
+            let waiting_outputs = a
+                .output_index
+                .iter()
+                .flatten()
+                .filter(|&&i| a.on_demand(i))
+                .count();
+            if c == 0 {
+                assert_eq!(waiting_outputs, outputs);
+            } else {
+                assert!(waiting_outputs > 0 && waiting_outputs < outputs);
+            }
+            assert!(a.on_demand(idx::ENERGY) == (c == 0), "configuration {c}");
+            for &i in &waiting {
+                a.write_on_demand(&x, i, &mut lazy);
+            }
+            for i in 0..VARIABLES.len() {
+                if let (crate::fmi2::Value::Real(e), crate::fmi2::Value::Real(l)) =
+                    (eager.get(i), lazy.get(i))
+                {
+                    assert!(
+                        e.to_bits() == l.to_bits() || (*e == 0.0 && *l == 0.0),
+                        "configuration {c}, {}: {l} read, {e} written",
+                        VARIABLES[i].name
+                    );
+                }
+            }
+            let huge: Vec<f64> = x.iter().map(|_| 1e300).collect();
+            assert!(!a.write_at_point(&huge, &mut lazy), "configuration {c}");
+        }
+    }
+
     /// The sparse product `J x + f(0, u)` is the plan's `f(x, u)` to rounding, at points far
     /// from rest and after the inputs change (held or restored), and so are the outputs
     /// `C x + y(0, u)`; with the full servo valve, the valve's rows and outputs come from the
