@@ -681,14 +681,14 @@ mod tests {
             for &i in &waiting {
                 a.write_on_demand(&x, i, &mut lazy);
             }
-            for i in 0..VARIABLES.len() {
+            for (i, variable) in VARIABLES.iter().enumerate() {
                 if let (crate::fmi2::Value::Real(e), crate::fmi2::Value::Real(l)) =
                     (eager.get(i), lazy.get(i))
                 {
                     assert!(
                         e.to_bits() == l.to_bits() || (*e == 0.0 && *l == 0.0),
                         "configuration {c}, {}: {l} read, {e} written",
-                        VARIABLES[i].name
+                        variable.name
                     );
                 }
             }

@@ -24,6 +24,15 @@
 //!
 //! Dense output (same source): with K_r = Σ_j H_rj U_j (r = 1, 2, 3) and θ = (t - t0)/h,
 //! y(θ) = (1-θ) y0 + θ (y1 + (1-θ) (K_1 + θ (K_2 + θ K_3))).
+//!
+//! # Solves
+//!
+//! Each stage solves with W. A varying J is factorised at every step with the structured LU of
+//! [`super::linalg`]. A constant J ([`OdeSystem::constant_jacobian`]) keeps its factorisations
+//! for the step sizes in use, and for a system of up to 128 states (`step_map::MAX_DIM`) each one
+//! comes with W⁻¹ made from it (n solves, once per factorisation): the eight solves of a step
+//! are then dense products (`dense::DenseInverse`), which on the LOES with the plate (blocks of one or
+//! two states and a border of five) cost a fraction of the structured solve's bookkeeping.
 
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]

@@ -26,10 +26,12 @@
 
 use nalgebra::DMatrix;
 
-/// Largest system for which a step map is built. The product with L costs 2 m n flops for m =
-/// 2n rows, against the structured solves' cost that grows about linearly with n for the
-/// plate's arrowhead matrices; with the LOES and the plate the map is the faster path up to
-/// about this size (measured: 36 and 78 states faster, 294 slower).
+/// Largest system for which a step map (and Rodas5P's explicit inverse) is built. A mapped step
+/// costs 2n² multiply-adds (the map's 2n rows), against the ordinary step's solves, whose cost
+/// grows about linearly with n for the plate's arrowhead matrices; at 128 states the product is
+/// 33 000 multiply-adds, about what the structured step costs there. Measured with the LOES and
+/// the plate: faster at 36 states (3 x 5 plate, Radau IIA 4x) and 78 (6 x 6, 2.8x); the 294 of a
+/// 12 x 12 plate are left to the structured solves.
 pub(crate) const MAX_DIM: usize = 128;
 
 /// `y = L x + a`, with L stored column by column (`rows` × `n`) and the offsets `c` of f the
