@@ -59,19 +59,10 @@ fn counters(f: &Fmu) -> Vec<i32> {
 
 /// Steps on from point `k` (r = 2 V) until the FMU state holds a kept Jacobian: the point
 /// reached, the state and its payload.
-fn until_kept(f: &Fmu, mut k: usize) -> (usize, Fmi2FmuState, serde_json::Value) {
-    loop {
-        let (s, saved) = f.get_state();
-        assert_eq!(s, Fmi2Status::Ok);
-        let p = fmu::payload(&f.serialize(saved));
-        if p.to_string().contains("\"kept_jac\"") {
-            return (k, saved, p);
-        }
-        f.free_state(saved);
-        assert!(k < 1000, "no Jacobian kept at any point up to 1000");
+fn until_kept(f: &Fmu, k: usize) -> (usize, Fmi2FmuState, serde_json::Value) {
+    fmu::until_state_holds(f, k, "kept_jac", 1000, |k| {
         run(f, k, k + 1, |_| 2.0);
-        k += 1;
-    }
+    })
 }
 
 #[test]

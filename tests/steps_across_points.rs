@@ -153,17 +153,8 @@ fn a_restored_kept_step_must_cover_the_fmu_time() {
 
 /// Steps on from point `k` (r = 1) until the FMU's time falls inside a step kept past it (the
 /// steps are a few points long here): the point reached, the FMU state there and its payload.
-fn until_kept(f: &Fmu, mut k: usize) -> (usize, Fmi2FmuState, serde_json::Value) {
-    loop {
-        let (s, saved) = f.get_state();
-        assert_eq!(s, Fmi2Status::Ok);
-        let p = fmu::payload(&f.serialize(saved));
-        if p.to_string().contains("\"ahead\"") {
-            return (k, saved, p);
-        }
-        f.free_state(saved);
-        assert!(k < 600, "no step kept past any point up to 600");
+fn until_kept(f: &Fmu, k: usize) -> (usize, Fmi2FmuState, serde_json::Value) {
+    fmu::until_state_holds(f, k, "ahead", 600, |k| {
         run(f, k, k + 1, |_| 1.0);
-        k += 1;
-    }
+    })
 }

@@ -386,23 +386,10 @@ impl Assembled {
                     }
                 }
             }
-            _ => {
-                let values = std::cell::RefCell::new(&mut *values);
-                self.compiled.for_each_output_and_derivative(
-                    x,
-                    &self.inputs,
-                    |k, v| {
-                        if let Some(i) = self.output_index[k] {
-                            values.borrow_mut().set_real(i, v);
-                        }
-                    },
-                    |i, v| {
-                        if let Some(k) = self.state_slot[i] {
-                            values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
-                        }
-                    },
-                );
-            }
+            _ => self.write_plan_values(values, |output, derivative| {
+                self.compiled
+                    .for_each_output_and_derivative(x, &self.inputs, output, derivative)
+            }),
         }
         for (slot, &xi) in self.state_slot.iter().zip(x) {
             if let Some(k) = slot {
@@ -412,15 +399,37 @@ impl Assembled {
         values.set_real(idx::ENERGY, self.compiled.stored_energy(x));
     }
 
+    /// Runs `pass`, a pass of the plan that reports compiled outputs `(k, y_k)` and rows of f
+    /// `(i, dx_i/dt)`, writing each into its place among the FMU's values (an output that is no
+    /// FMU variable, or the row of a state the XML does not declare, is dropped).
+    fn write_plan_values(
+        &self,
+        values: &mut Values,
+        pass: impl FnOnce(&mut dyn FnMut(usize, f64), &mut dyn FnMut(usize, f64)),
+    ) {
+        let values = std::cell::RefCell::new(values);
+        pass(
+            &mut |k, v| {
+                if let Some(i) = self.output_index[k] {
+                    values.borrow_mut().set_real(i, v);
+                }
+            },
+            &mut |i, v| {
+                if let Some(k) = self.state_slot[i] {
+                    values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
+                }
+            },
+        );
+    }
+
     /// Writes what a communication point at state `x` needs at once and leaves the rest until it
     /// is read ([`Assembled::write_on_demand`]): writes the outputs and derivatives that are not
     /// affine (the servo valve's, from their part of the plan) and the stored energy if a
     /// storage is nonlinear, and returns true, when the affine outputs and derivatives (and the
     /// energy of linear storages) are shown to be finite at `x` (`Affine::finite_within`,
     /// `CompiledModel::stored_energy_bound`), so that none of them can turn out infinite when
-    /// read. Otherwise
-    /// (or when the model has nothing to leave) writes nothing and returns false: the caller
-    /// writes everything with [`Assembled::write_outputs`].
+    /// read. Otherwise (or when the model has nothing to leave) writes nothing and returns
+    /// false: the caller writes everything with [`Assembled::write_outputs`].
     ///
     /// An importer reads a few of the 23 to 31 outputs, and the states and their derivatives
     /// rarely in co-simulation: computing all of them at every point cost as much as the steps
@@ -437,21 +446,14 @@ impl Assembled {
             return false;
         }
         if affine.partial {
-            let values = std::cell::RefCell::new(&mut *values);
-            self.compiled.for_each_nonaffine_output_and_derivative(
-                x,
-                &self.inputs,
-                |k, v| {
-                    if let Some(i) = self.output_index[k] {
-                        values.borrow_mut().set_real(i, v);
-                    }
-                },
-                |i, v| {
-                    if let Some(k) = self.state_slot[i] {
-                        values.borrow_mut().set_real(CONTINUOUS_STATES[k].1, v);
-                    }
-                },
-            );
+            self.write_plan_values(values, |output, derivative| {
+                self.compiled.for_each_nonaffine_output_and_derivative(
+                    x,
+                    &self.inputs,
+                    output,
+                    derivative,
+                )
+            });
         }
         if self.energy_bound.is_none() {
             values.set_real(idx::ENERGY, self.compiled.stored_energy(x));

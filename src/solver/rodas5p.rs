@@ -324,6 +324,14 @@ pub(crate) struct Factor {
 }
 
 impl Factor {
+    /// Refactorises for step size `h` in this factorisation's memory (its inverse, made from
+    /// the old factors, is dropped); false if W is singular.
+    fn refactor(&mut self, part: &Arc<Partition>, jac: &DMatrix<f64>, h: f64) -> bool {
+        self.h = h;
+        self.inverse.clear();
+        factor_into(&mut self.lu, part, jac, h)
+    }
+
     /// Solves W x = rhs in place.
     fn solve(&self, rhs: &mut [f64], scratch: &mut [f64]) {
         if self.inverse.is_built() {
@@ -360,17 +368,12 @@ fn factor(
     h: f64,
     old: Option<Factor>,
 ) -> Option<Factor> {
-    let (mut lu, mut inverse) = old.map_or_else(
-        || {
-            (
-                Factorisation::new(Arc::clone(part)),
-                DenseInverse::default(),
-            )
-        },
-        |f| (f.lu, f.inverse),
-    );
-    inverse.clear();
-    factor_into(&mut lu, part, jac, h).then_some(Factor { h, lu, inverse })
+    let mut f = old.unwrap_or_else(|| Factor {
+        h,
+        lu: Factorisation::new(Arc::clone(part)),
+        inverse: DenseInverse::default(),
+    });
+    f.refactor(part, jac, h).then_some(f)
 }
 
 /// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
@@ -681,10 +684,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 lus.truncate(1);
                 let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
                 let ok = match lus.first_mut() {
-                    Some(f) => {
-                        f.h = h;
-                        factor_into(&mut f.lu, part, &w.jac, h)
-                    }
+                    Some(f) => f.refactor(part, &w.jac, h),
                     None => {
                         lus.extend(factor(&w.jac, part, h, None));
                         !lus.is_empty()

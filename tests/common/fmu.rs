@@ -205,6 +205,34 @@ pub fn blob(payload: &serde_json::Value) -> Vec<u8> {
     b
 }
 
+/// Takes FMU states from point `k` on, calling `advance(k)` to step one point further each time,
+/// until a state's payload holds `key` (by the time point `limit`): the point reached, that state
+/// and its payload.
+pub fn until_state_holds(
+    f: &Fmu,
+    mut k: usize,
+    key: &str,
+    limit: usize,
+    mut advance: impl FnMut(usize),
+) -> (usize, Fmi2FmuState, serde_json::Value) {
+    let quoted = format!("\"{key}\"");
+    loop {
+        let (s, saved) = f.get_state();
+        assert_eq!(s, Fmi2Status::Ok);
+        let p = payload(&f.serialize(saved));
+        if p.to_string().contains(&quoted) {
+            return (k, saved, p);
+        }
+        f.free_state(saved);
+        assert!(
+            k < limit,
+            "no FMU state holds \"{key}\" at any point up to {limit}"
+        );
+        advance(k);
+        k += 1;
+    }
+}
+
 /// The first value under `key` anywhere in `v` (a state payload, say).
 pub fn find_key<'a>(v: &'a mut serde_json::Value, key: &str) -> Option<&'a mut serde_json::Value> {
     match v {
