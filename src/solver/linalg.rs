@@ -102,18 +102,65 @@ pub struct Partition {
     /// `links[link_starts[b]..link_starts[b + 1]]`.
     links: Vec<usize>,
     link_starts: Vec<usize>,
+    /// Where each block's data lie, precomputed for the solves (see [`BlockAt`]).
+    at: Vec<BlockAt>,
+}
+
+/// One block's place in the partition and in the factors: what a solve would otherwise
+/// recompute from `starts` and `link_starts` block by block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct BlockAt {
+    /// First position of the block in `perm`.
+    start: usize,
+    /// Its size k.
+    size: usize,
+    /// Offset of its k × k LU in the factors.
+    lu: usize,
+    /// Offset of its X_b and C_b (k × links numbers each).
+    x: usize,
+    /// Its border links: `links[links_from..links_to]`.
+    links_from: usize,
+    links_to: usize,
 }
 
 impl Partition {
-    /// One block holding every state in natural order, no border: a dense LU.
-    pub fn dense(n: usize) -> Partition {
+    /// The partition with these fields, and the offsets derived from them.
+    fn with(
+        n: usize,
+        perm: Vec<usize>,
+        starts: Vec<usize>,
+        links: Vec<usize>,
+        link_starts: Vec<usize>,
+    ) -> Partition {
+        let mut at = Vec::with_capacity(starts.len() - 1);
+        let (mut lu, mut x) = (0, 0);
+        for b in 0..starts.len() - 1 {
+            let (start, size) = (starts[b], starts[b + 1] - starts[b]);
+            let (links_from, links_to) = (link_starts[b], link_starts[b + 1]);
+            at.push(BlockAt {
+                start,
+                size,
+                lu,
+                x,
+                links_from,
+                links_to,
+            });
+            lu += size * size;
+            x += size * (links_to - links_from);
+        }
         Partition {
             n,
-            perm: (0..n).collect(),
-            starts: vec![0, n],
-            links: Vec::new(),
-            link_starts: vec![0, 0],
+            perm,
+            starts,
+            links,
+            link_starts,
+            at,
         }
+    }
+
+    /// One block holding every state in natural order, no border: a dense LU.
+    pub fn dense(n: usize) -> Partition {
+        Partition::with(n, (0..n).collect(), vec![0, n], Vec::new(), vec![0, 0])
     }
 
     /// The split of the states of an n × n matrix whose off-diagonal nonzeros are
@@ -204,13 +251,7 @@ impl Partition {
             link_starts.push(links.len());
         }
         perm.extend_from_slice(&border);
-        Partition {
-            n,
-            perm,
-            starts,
-            links,
-            link_starts,
-        }
+        Partition::with(n, perm, starts, links, link_starts)
     }
 
     /// The split for the nonzero pattern of a dense matrix.
@@ -237,6 +278,10 @@ impl Partition {
             .map(|w| w[1] - w[0])
             .max()
             .unwrap_or(0)
+    }
+    /// Number of block-border couplings (Σ over the blocks of the border states each touches).
+    pub fn links(&self) -> usize {
+        self.links.len()
     }
     /// Whether this is the dense partition (one block, no border).
     pub fn is_dense(&self) -> bool {
@@ -438,50 +483,101 @@ impl<T: Scalar> Factorisation<T> {
 
     /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
     /// overwritten).
+    ///
+    /// One pass over the blocks forward (each block's solve and its share of the border's
+    /// right-hand side), the border's solve, one pass back (each block's back substitution,
+    /// written straight to its states). Blocks of one and two states, all the plate's modes,
+    /// are written out; the operations and their order are those of the general block solve
+    /// and the block formulas, so the bits do not depend on the block size's path.
     pub fn solve(&self, rhs: &mut [T], scratch: &mut [T]) {
         let p = &*self.part;
-        let n = p.n;
         let nb = p.starts[p.blocks()];
-        let m = n - nb;
-        let s = &mut scratch[..n];
-        for (dst, &i) in s.iter_mut().zip(&p.perm) {
+        let (blocks, border) = scratch[..p.n].split_at_mut(nb);
+        for (dst, &i) in border.iter_mut().zip(&p.perm[nb..]) {
             *dst = rhs[i];
         }
-        let (blocks, border) = s.split_at_mut(nb);
         // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
-        let (mut lo, mut xo) = (0, 0);
-        for b in 0..p.blocks() {
-            let (st, k, links) = p.block(b);
-            let y = &mut blocks[st..st + k];
-            lu_solve(&self.lu[lo..lo + k * k], k, &self.piv[st..st + k], y);
-            for (li, &q) in links.iter().enumerate() {
-                let cr = &self.c[xo + li * k..xo + (li + 1) * k];
-                let mut acc = T::ZERO;
-                for i in 0..k {
-                    acc = acc + cr[i] * y[i];
+        for at in &p.at {
+            let (st, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
+            let lu = &self.lu[at.lu..at.lu + k * k];
+            let c = &self.c[at.x..at.x + k * links.len()];
+            let idx = &p.perm[st..st + k];
+            match (lu, idx, &mut blocks[st..st + k]) {
+                (&[inv_u00], &[i0], [y0]) => {
+                    let v = rhs[i0] * inv_u00;
+                    *y0 = v;
+                    for (&q, &c0) in links.iter().zip(c) {
+                        border[q] = border[q] - (T::ZERO + c0 * v);
+                    }
                 }
-                border[q] = border[q] - acc;
+                (&[inv_u00, l10, u01, inv_u11], &[i0, i1], [y0, y1]) => {
+                    let (v0, v1) = solve_2x2(
+                        inv_u00,
+                        l10,
+                        u01,
+                        inv_u11,
+                        self.piv[st] != 0,
+                        rhs[i0],
+                        rhs[i1],
+                    );
+                    (*y0, *y1) = (v0, v1);
+                    for (&q, cr) in links.iter().zip(c.chunks_exact(2)) {
+                        border[q] = border[q] - (T::ZERO + cr[0] * v0 + cr[1] * v1);
+                    }
+                }
+                (_, _, y) => {
+                    for (dst, &i) in y.iter_mut().zip(idx) {
+                        *dst = rhs[i];
+                    }
+                    lu_solve_loops(lu, k, &self.piv[st..st + k], y);
+                    for (&q, cr) in links.iter().zip(c.chunks_exact(k)) {
+                        let mut acc = T::ZERO;
+                        for i in 0..k {
+                            acc = acc + cr[i] * y[i];
+                        }
+                        border[q] = border[q] - acc;
+                    }
+                }
             }
-            lo += k * k;
-            xo += k * links.len();
         }
-        lu_solve(&self.schur, m, &self.schur_piv, border);
+        lu_solve(&self.schur, p.n - nb, &self.schur_piv, border);
         // x_b = y_b - X_b x_B.
-        let mut xo = 0;
-        for b in 0..p.blocks() {
-            let (st, k, links) = p.block(b);
-            let y = &mut blocks[st..st + k];
-            for (li, &q) in links.iter().enumerate() {
-                let v = border[q];
-                let xc = &self.x[xo + li * k..xo + (li + 1) * k];
-                for i in 0..k {
-                    y[i] = y[i] - xc[i] * v;
+        for at in &p.at {
+            let (st, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
+            let x = &self.x[at.x..at.x + k * links.len()];
+            let idx = &p.perm[st..st + k];
+            match (idx, &mut blocks[st..st + k]) {
+                (&[i0], &mut [mut y0]) => {
+                    for (&q, &x0) in links.iter().zip(x) {
+                        y0 = y0 - x0 * border[q];
+                    }
+                    rhs[i0] = y0;
+                }
+                (&[i0, i1], &mut [mut y0, mut y1]) => {
+                    for (&q, xc) in links.iter().zip(x.chunks_exact(2)) {
+                        let v = border[q];
+                        y0 = y0 - xc[0] * v;
+                        y1 = y1 - xc[1] * v;
+                    }
+                    (rhs[i0], rhs[i1]) = (y0, y1);
+                }
+                (_, y) => {
+                    for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
+                        let v = border[q];
+                        for i in 0..k {
+                            y[i] = y[i] - xc[i] * v;
+                        }
+                    }
+                    for (&yi, &i) in y.iter().zip(idx) {
+                        rhs[i] = yi;
+                    }
                 }
             }
-            xo += k * links.len();
         }
-        for (src, &i) in s.iter().zip(&p.perm) {
-            rhs[i] = *src;
+        for (&v, &i) in border.iter().zip(&p.perm[nb..]) {
+            rhs[i] = v;
         }
     }
 }
@@ -550,21 +646,33 @@ fn lu_solve<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
     match (k, a, piv, &mut *x) {
         (1, &[inv_u00], _, [x0]) => *x0 = *x0 * inv_u00,
         (2, &[inv_u00, l10, u01, inv_u11], &[p0, _], [x0, x1]) => {
-            if p0 != 0 {
-                std::mem::swap(x0, x1);
-            }
-            if *x0 != T::ZERO {
-                *x1 = *x1 - l10 * *x0;
-            }
-            let v = *x1 * inv_u11;
-            *x1 = v;
-            if v != T::ZERO {
-                *x0 = *x0 - u01 * v;
-            }
-            *x0 = *x0 * inv_u00;
+            (*x0, *x1) = solve_2x2(inv_u00, l10, u01, inv_u11, p0 != 0, *x0, *x1);
         }
         _ => lu_solve_loops(a, k, piv, x),
     }
+}
+
+/// [`lu_solve`] for k = 2, from the factors `[inv_u00, l10, u01, inv_u11]` (column-major), the
+/// interchange of the two rows if `swap`, and the right-hand side (r0, r1).
+#[inline(always)]
+fn solve_2x2<T: Scalar>(
+    inv_u00: T,
+    l10: T,
+    u01: T,
+    inv_u11: T,
+    swap: bool,
+    r0: T,
+    r1: T,
+) -> (T, T) {
+    let (mut x0, mut x1) = if swap { (r1, r0) } else { (r0, r1) };
+    if x0 != T::ZERO {
+        x1 = x1 - l10 * x0;
+    }
+    x1 = x1 * inv_u11;
+    if x1 != T::ZERO {
+        x0 = x0 - u01 * x1;
+    }
+    (x0 * inv_u00, x1)
 }
 
 /// [`lu_solve`] for any k.
@@ -726,6 +834,56 @@ mod tests {
 
     /// A random arrowhead matrix: `blocks` groups of `k` states, each group dense inside and
     /// coupled to a random subset of a `m`-state dense border; states shuffled.
+    /// The solve as it was written before [`Factorisation::solve`] was flattened: block by
+    /// block through [`Partition::block`] and [`lu_solve`], gathering into and scattering from
+    /// the elimination order. The reference for the flat solve's bits.
+    fn solve_blockwise<T: Scalar>(f: &Factorisation<T>, rhs: &mut [T], scratch: &mut [T]) {
+        let p = &*f.part;
+        let n = p.n;
+        let nb = p.starts[p.blocks()];
+        let m = n - nb;
+        let s = &mut scratch[..n];
+        for (dst, &i) in s.iter_mut().zip(&p.perm) {
+            *dst = rhs[i];
+        }
+        let (blocks, border) = s.split_at_mut(nb);
+        // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
+        let (mut lo, mut xo) = (0, 0);
+        for b in 0..p.blocks() {
+            let (st, k, links) = p.block(b);
+            let y = &mut blocks[st..st + k];
+            lu_solve(&f.lu[lo..lo + k * k], k, &f.piv[st..st + k], y);
+            for (li, &q) in links.iter().enumerate() {
+                let cr = &f.c[xo + li * k..xo + (li + 1) * k];
+                let mut acc = T::ZERO;
+                for i in 0..k {
+                    acc = acc + cr[i] * y[i];
+                }
+                border[q] = border[q] - acc;
+            }
+            lo += k * k;
+            xo += k * links.len();
+        }
+        lu_solve(&f.schur, m, &f.schur_piv, border);
+        // x_b = y_b - X_b x_B.
+        let mut xo = 0;
+        for b in 0..p.blocks() {
+            let (st, k, links) = p.block(b);
+            let y = &mut blocks[st..st + k];
+            for (li, &q) in links.iter().enumerate() {
+                let v = border[q];
+                let xc = &f.x[xo + li * k..xo + (li + 1) * k];
+                for i in 0..k {
+                    y[i] = y[i] - xc[i] * v;
+                }
+            }
+            xo += k * links.len();
+        }
+        for (src, &i) in s.iter().zip(&p.perm) {
+            rhs[i] = *src;
+        }
+    }
+
     fn arrowhead(rng: &mut Rng, blocks: usize, k: usize, m: usize) -> DMatrix<f64> {
         let n = blocks * k + m;
         let mut a = DMatrix::zeros(n, n);
@@ -792,6 +950,49 @@ mod tests {
             );
         }
         assert!(pivoted > 500, "both pivot orders are exercised: {pivoted}");
+    }
+
+    /// The flat solve gives the bits of the block-by-block one, for blocks of one, two and
+    /// three states, real and complex, with zeros in the right-hand side (which the written-out
+    /// blocks skip as the loops do).
+    #[test]
+    fn the_flat_solve_has_the_blockwise_bits() {
+        fn check<T: Scalar>(part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T, b: &[T]) {
+            let mut f = Factorisation::new(Arc::clone(part));
+            assert!(f.factor(part, entry));
+            let n = b.len();
+            let (mut flat, mut blockwise) = (b.to_vec(), b.to_vec());
+            let mut scratch = vec![T::ZERO; n];
+            f.solve(&mut flat, &mut scratch);
+            solve_blockwise(&f, &mut blockwise, &mut scratch);
+            assert_eq!(format!("{flat:?}"), format!("{blockwise:?}"));
+        }
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        for &(blocks, k, m) in &[(30, 2, 4), (60, 1, 3), (12, 3, 5)] {
+            let j = arrowhead(&mut rng, blocks, k, m);
+            let n = j.nrows();
+            let part = Arc::new(Partition::of_matrix(&j));
+            assert!(!part.is_dense());
+            let b: Vec<f64> = (0..n)
+                .map(|i| if i % 5 == 0 { 0.0 } else { rng.next() })
+                .collect();
+            check(
+                &part,
+                |i, jj| if i == jj { 3.0 } else { 0.0 } - j[(i, jj)],
+                &b,
+            );
+            let bc: Vec<Complex<f64>> = b.iter().map(|&v| Complex::new(v, 0.5 * v)).collect();
+            let c = Complex::new(2.0, 1.5);
+            let entry = |i: usize, jj: usize| {
+                let d = if i == jj {
+                    c
+                } else {
+                    <Complex<f64> as Scalar>::ZERO
+                };
+                d - Complex::new(j[(i, jj)], 0.0)
+            };
+            check(&part, entry, &bc);
+        }
     }
 
     fn residual<T: Scalar>(n: usize, entry: impl Fn(usize, usize) -> T, x: &[T], b: &[T]) -> f64 {
