@@ -31,7 +31,7 @@ impl Scalar for f64 {
     }
     #[inline]
     fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self {
-        (law.f)(x, m).0
+        (law.value)(x, m)
     }
 }
 

@@ -51,6 +51,10 @@ pub struct NonlinearLaw {
     /// Short description, shown in `Debug` output and DOT labels.
     pub label: String,
     pub(crate) f: Arc<LawFn>,
+    /// `phi` alone: the same closure compiled a second time with its value as the only result,
+    /// so that evaluating f (not its Jacobian) does not pay for the derivatives. Same
+    /// operations for the value, so the same bits as `f`'s first result.
+    pub(crate) value: Arc<dyn Fn(f64, f64) -> f64 + Send + Sync>,
     pub(crate) energy: Option<Arc<dyn Fn(f64) -> f64 + Send + Sync>>,
 }
 
@@ -60,12 +64,15 @@ impl NonlinearLaw {
     where
         F: Fn(f64) -> (f64, f64) + Send + Sync + 'static,
     {
+        let phi = Arc::new(phi);
+        let value = Arc::clone(&phi);
         NonlinearLaw {
             label: label.into(),
             f: Arc::new(move |x, _m| {
                 let (y, dy) = phi(x);
                 (y, dy, 0.0)
             }),
+            value: Arc::new(move |x, _m| value(x).0),
             energy: None,
         }
     }
@@ -75,9 +82,12 @@ impl NonlinearLaw {
     where
         F: Fn(f64, f64) -> (f64, f64, f64) + Send + Sync + 'static,
     {
+        let phi = Arc::new(phi);
+        let value = Arc::clone(&phi);
         NonlinearLaw {
             label: label.into(),
-            f: Arc::new(phi),
+            f: phi,
+            value: Arc::new(move |x, m| value(x, m).0),
             energy: None,
         }
     }
