@@ -530,7 +530,7 @@ impl<T: Scalar> Factorisation<T> {
                     for (dst, &i) in y.iter_mut().zip(idx) {
                         *dst = rhs[i];
                     }
-                    lu_solve_loops(lu, k, &self.piv[st..st + k], y);
+                    lu_solve(lu, k, &self.piv[st..st + k], y);
                     for (&q, cr) in links.iter().zip(c.chunks_exact(k)) {
                         let mut acc = T::ZERO;
                         for i in 0..k {
@@ -648,6 +648,13 @@ fn lu_solve<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
         (2, &[inv_u00, l10, u01, inv_u11], &[p0, _], [x0, x1]) => {
             (*x0, *x1) = solve_2x2(inv_u00, l10, u01, inv_u11, p0 != 0, *x0, *x1);
         }
+        // The servo valve's border and its three-state block: with k known, the loops unroll.
+        (3, ..) => lu_solve_loops(a, 3, piv, x),
+        (4, ..) => lu_solve_loops(a, 4, piv, x),
+        (5, ..) => lu_solve_loops(a, 5, piv, x),
+        (6, ..) => lu_solve_loops(a, 6, piv, x),
+        (7, ..) => lu_solve_loops(a, 7, piv, x),
+        (8, ..) => lu_solve_loops(a, 8, piv, x),
         _ => lu_solve_loops(a, k, piv, x),
     }
 }
@@ -675,8 +682,10 @@ fn solve_2x2<T: Scalar>(
     (x0 * inv_u00, x1)
 }
 
-/// [`lu_solve`] for any k.
+/// [`lu_solve`] for any k (inlined, so that a constant k unrolls the loops).
+#[inline(always)]
 fn lu_solve_loops<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
+    let (a, piv, x) = (&a[..k * k], &piv[..k], &mut x[..k]);
     for j in 0..k {
         if piv[j] != j {
             x.swap(j, piv[j]);
@@ -914,8 +923,9 @@ mod tests {
         DMatrix::from_fn(n, n, |i, j| a[(perm[i], perm[j])])
     }
 
-    /// The written-out solves for blocks of one and two states give the loops' bits, with and
-    /// without a row interchange, for real and complex systems, zeros included.
+    /// The written-out solves for blocks of one and two states, and the unrolled ones of three
+    /// to eight, give the loops' bits, with and without a row interchange, for real and complex
+    /// systems, zeros included.
     #[test]
     fn small_block_solves_match_the_loops_bit_for_bit() {
         fn check<T: Scalar + std::fmt::Debug>(a: &[T], k: usize, rhs: &[T]) {
@@ -950,6 +960,22 @@ mod tests {
             );
         }
         assert!(pivoted > 500, "both pivot orders are exercised: {pivoted}");
+        // The sizes whose loops are unrolled (3 to 8), and 9, which is not.
+        for k in 3..=9 {
+            for trial in 0..50 {
+                let a: Vec<f64> = (0..k * k).map(|_| rng.next()).collect();
+                let mut rhs: Vec<f64> = (0..k).map(|_| rng.next()).collect();
+                rhs[trial % k] = 0.0;
+                check(&a, k, &rhs);
+                let ac: Vec<Complex<f64>> = a
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &x)| Complex::new(x, a[(i * 7) % (k * k)]))
+                    .collect();
+                let rc: Vec<Complex<f64>> = rhs.iter().map(|&v| Complex::new(v, -v)).collect();
+                check(&ac, k, &rc);
+            }
+        }
     }
 
     /// The flat solve gives the bits of the block-by-block one, for blocks of one, two and
