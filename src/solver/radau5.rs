@@ -1138,14 +1138,18 @@ fn collocation_polynomial(
 ) {
     let n = x1.len();
     let (c1, c2) = nodes();
+    // CONTR5's divided differences, with the divisions by the constant node differences as
+    // multiplications by their reciprocals (five divisions per state per step otherwise).
     let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
+    let (r_c1m1, r_c2m1, r_c1mc2, r_c1, r_c2) =
+        (1.0 / c1m1, 1.0 / c2m1, 1.0 / c1mc2, 1.0 / c1, 1.0 / c2);
     let mut cont = std::mem::take(&mut integ.hist.cont);
     cont.resize(3 * n, 0.0);
     for i in 0..n {
-        let k1 = (z2[i] - z3[i]) / c2m1;
-        let ak = (z1[i] - z2[i]) / c1mc2;
-        let acont3 = (ak - z1[i] / c1) / c2;
-        let k2 = (ak - k1) / c1m1;
+        let k1 = (z2[i] - z3[i]) * r_c2m1;
+        let ak = (z1[i] - z2[i]) * r_c1mc2;
+        let acont3 = (ak - z1[i] * r_c1) * r_c2;
+        let k2 = (ak - k1) * r_c1m1;
         cont[i] = k1;
         cont[n + i] = k2;
         cont[2 * n + i] = k2 - acont3;
