@@ -102,8 +102,11 @@ pub struct Partition {
     /// `links[link_starts[b]..link_starts[b + 1]]`.
     links: Vec<usize>,
     link_starts: Vec<usize>,
-    /// Where each block's data lie, precomputed for the solves (see [`BlockAt`]).
-    at: Vec<BlockAt>,
+    /// Where each block's data lie, precomputed for the solves (see [`BlockAt`]): the blocks
+    /// coupled to the border, and apart the free ones (no link to the border), which a solve
+    /// finishes in one go (a plate mode that no force of the hub excites is one).
+    linked: Vec<BlockAt>,
+    free: Vec<BlockAt>,
 }
 
 /// One block's place in the partition and in the factors: what a solve would otherwise
@@ -132,19 +135,24 @@ impl Partition {
         links: Vec<usize>,
         link_starts: Vec<usize>,
     ) -> Partition {
-        let mut at = Vec::with_capacity(starts.len() - 1);
+        let (mut linked, mut free) = (Vec::new(), Vec::new());
         let (mut lu, mut x) = (0, 0);
         for b in 0..starts.len() - 1 {
             let (start, size) = (starts[b], starts[b + 1] - starts[b]);
             let (links_from, links_to) = (link_starts[b], link_starts[b + 1]);
-            at.push(BlockAt {
+            let at = BlockAt {
                 start,
                 size,
                 lu,
                 x,
                 links_from,
                 links_to,
-            });
+            };
+            if links_to > links_from {
+                linked.push(at);
+            } else {
+                free.push(at);
+            }
             lu += size * size;
             x += size * (links_to - links_from);
         }
@@ -154,7 +162,8 @@ impl Partition {
             starts,
             links,
             link_starts,
-            at,
+            linked,
+            free,
         }
     }
 
@@ -484,11 +493,12 @@ impl<T: Scalar> Factorisation<T> {
     /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
     /// overwritten).
     ///
-    /// One pass over the blocks forward (each block's solve and its share of the border's
-    /// right-hand side), the border's solve, one pass back (each block's back substitution,
-    /// written straight to its states). Blocks of one and two states, all the plate's modes,
-    /// are written out; the operations and their order are those of the general block solve
-    /// and the block formulas, so the bits do not depend on the block size's path.
+    /// One pass over the blocks coupled to the border forward (each block's solve and its share
+    /// of the border's right-hand side), the border's solve, one pass back (each block's back
+    /// substitution, written straight to its states), and one pass over the free blocks, whose
+    /// solve is final at once. Blocks of one and two states, all the plate's modes, are written
+    /// out; the operations and their order are those of the general block solve and the block
+    /// formulas, so the bits do not depend on the block size's path or on a block's being free.
     pub fn solve(&self, rhs: &mut [T], scratch: &mut [T]) {
         let p = &*self.part;
         let nb = p.starts[p.blocks()];
@@ -497,7 +507,7 @@ impl<T: Scalar> Factorisation<T> {
             *dst = rhs[i];
         }
         // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
-        for at in &p.at {
+        for at in &p.linked {
             let (st, k) = (at.start, at.size);
             let links = &p.links[at.links_from..at.links_to];
             let lu = &self.lu[at.lu..at.lu + k * k];
@@ -543,7 +553,7 @@ impl<T: Scalar> Factorisation<T> {
         }
         lu_solve(&self.schur, p.n - nb, &self.schur_piv, border);
         // x_b = y_b - X_b x_B.
-        for at in &p.at {
+        for at in &p.linked {
             let (st, k) = (at.start, at.size);
             let links = &p.links[at.links_from..at.links_to];
             let x = &self.x[at.x..at.x + k * links.len()];
@@ -578,6 +588,30 @@ impl<T: Scalar> Factorisation<T> {
         }
         for (&v, &i) in border.iter().zip(&p.perm[nb..]) {
             rhs[i] = v;
+        }
+        // x_b = A_b⁻¹ r_b for the blocks without a border link (the dense partition's one
+        // block among them).
+        for at in &p.free {
+            let (st, k) = (at.start, at.size);
+            let lu = &self.lu[at.lu..at.lu + k * k];
+            match (lu, &p.perm[st..st + k]) {
+                (&[inv_u00], &[i0]) => rhs[i0] = rhs[i0] * inv_u00,
+                (&[inv_u00, l10, u01, inv_u11], &[i0, i1]) => {
+                    let swap = self.piv[st] != 0;
+                    (rhs[i0], rhs[i1]) =
+                        solve_2x2(inv_u00, l10, u01, inv_u11, swap, rhs[i0], rhs[i1]);
+                }
+                (_, idx) => {
+                    let y = &mut blocks[st..st + k];
+                    for (dst, &i) in y.iter_mut().zip(idx) {
+                        *dst = rhs[i];
+                    }
+                    lu_solve(lu, k, &self.piv[st..st + k], y);
+                    for (&yi, &i) in y.iter().zip(idx) {
+                        rhs[i] = yi;
+                    }
+                }
+            }
         }
     }
 }
@@ -894,6 +928,17 @@ mod tests {
     }
 
     fn arrowhead(rng: &mut Rng, blocks: usize, k: usize, m: usize) -> DMatrix<f64> {
+        arrowhead_with_free(rng, blocks, k, m, 0)
+    }
+
+    /// [`arrowhead`] in which every `free`-th block (none for 0) has no link to the border.
+    fn arrowhead_with_free(
+        rng: &mut Rng,
+        blocks: usize,
+        k: usize,
+        m: usize,
+        free: usize,
+    ) -> DMatrix<f64> {
         let n = blocks * k + m;
         let mut a = DMatrix::zeros(n, n);
         for b in 0..blocks {
@@ -902,7 +947,7 @@ mod tests {
                     a[(b * k + i, b * k + j)] = rng.next();
                 }
                 for q in 0..m {
-                    if rng.next() > 0.3 {
+                    if rng.next() > 0.3 && (free == 0 || b % free != 0) {
                         a[(b * k + i, blocks * k + q)] = rng.next();
                         a[(blocks * k + q, b * k + i)] = rng.next();
                     }
@@ -979,8 +1024,8 @@ mod tests {
     }
 
     /// The flat solve gives the bits of the block-by-block one, for blocks of one, two and
-    /// three states, real and complex, with zeros in the right-hand side (which the written-out
-    /// blocks skip as the loops do).
+    /// three states, linked to the border and free, real and complex, with zeros in the
+    /// right-hand side (which the written-out blocks skip as the loops do).
     #[test]
     fn the_flat_solve_has_the_blockwise_bits() {
         fn check<T: Scalar>(part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T, b: &[T]) {
@@ -995,10 +1040,11 @@ mod tests {
         }
         let mut rng = Rng(0x2545_f491_4f6c_dd1d);
         for &(blocks, k, m) in &[(30, 2, 4), (60, 1, 3), (12, 3, 5)] {
-            let j = arrowhead(&mut rng, blocks, k, m);
+            let j = arrowhead_with_free(&mut rng, blocks, k, m, 3);
             let n = j.nrows();
             let part = Arc::new(Partition::of_matrix(&j));
             assert!(!part.is_dense());
+            assert!(!part.free.is_empty() && !part.linked.is_empty());
             let b: Vec<f64> = (0..n)
                 .map(|i| if i % 5 == 0 { 0.0 } else { rng.next() })
                 .collect();
