@@ -288,6 +288,10 @@ impl Partition {
             .max()
             .unwrap_or(0)
     }
+    /// Number of blocks without a link to the border.
+    pub fn free_blocks(&self) -> usize {
+        self.free.len()
+    }
     /// Number of block-border couplings (Σ over the blocks of the border states each touches).
     pub fn links(&self) -> usize {
         self.links.len()
