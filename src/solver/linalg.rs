@@ -107,6 +107,10 @@ pub struct Partition {
     /// finishes in one go (a plate mode that no force of the hub excites is one).
     linked: Vec<BlockAt>,
     free: Vec<BlockAt>,
+    /// Numbers of the blocks' LUs (Σ k²) and of their X_b (and C_b) (Σ k × links), which
+    /// [`BlockAt::lu`] and [`BlockAt::x`] lay out one block after the other.
+    lu_len: usize,
+    x_len: usize,
 }
 
 /// One block's place in the partition and in the factors: what a solve would otherwise
@@ -164,6 +168,8 @@ impl Partition {
             link_starts,
             linked,
             free,
+            lu_len: lu,
+            x_len: x,
         }
     }
 
@@ -288,20 +294,14 @@ impl Partition {
             .max()
             .unwrap_or(0)
     }
-    /// Number of blocks without a link to the border.
-    pub fn free_blocks(&self) -> usize {
-        self.free.len()
-    }
-    /// Number of block-border couplings (Σ over the blocks of the border states each touches).
-    pub fn links(&self) -> usize {
-        self.links.len()
-    }
     /// Whether this is the dense partition (one block, no border).
     pub fn is_dense(&self) -> bool {
         self.blocks() == 1 && self.border() == 0
     }
 
-    #[inline]
+    /// Block b's first position, size and border links (the tests' view; the factorisation and
+    /// the solves read [`BlockAt`]).
+    #[cfg(test)]
     fn block(&self, b: usize) -> (usize, usize, &[usize]) {
         let (s, e) = (self.starts[b], self.starts[b + 1]);
         (
@@ -434,15 +434,9 @@ impl<T: Scalar> Factorisation<T> {
         let nb = p.starts[p.blocks()];
         let m = n - nb;
         let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
-        let (mut lu_len, mut x_len) = (0, 0);
-        for b in 0..p.blocks() {
-            let (_, k, links) = p.block(b);
-            lu_len += k * k;
-            x_len += k * links.len();
-        }
-        resize(&mut self.lu, lu_len);
-        resize(&mut self.x, x_len);
-        resize(&mut self.c, x_len);
+        resize(&mut self.lu, p.lu_len);
+        resize(&mut self.x, p.x_len);
+        resize(&mut self.c, p.x_len);
         self.piv.resize(n, 0);
         resize(&mut self.schur, m * m);
         self.schur_piv.resize(m, 0);
@@ -452,11 +446,13 @@ impl<T: Scalar> Factorisation<T> {
                 self.schur[r + q * m] = entry(border[r], border[q]);
             }
         }
-        let (mut lo, mut xo) = (0, 0);
-        for b in 0..p.blocks() {
-            let (s, k, links) = p.block(b);
+        // The blocks at the offsets the solves read them from (the Schur complement takes the
+        // linked blocks' updates in block order; the free ones have none).
+        for at in p.linked.iter().chain(&p.free) {
+            let (s, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
             let idx = &p.perm[s..s + k];
-            let a = &mut self.lu[lo..lo + k * k];
+            let a = &mut self.lu[at.lu..at.lu + k * k];
             for cj in 0..k {
                 for r in 0..k {
                     a[r + cj * k] = entry(idx[r], idx[cj]);
@@ -466,8 +462,8 @@ impl<T: Scalar> Factorisation<T> {
                 return false;
             }
             let l = links.len();
-            let x = &mut self.x[xo..xo + k * l];
-            let c = &mut self.c[xo..xo + k * l];
+            let x = &mut self.x[at.x..at.x + k * l];
+            let c = &mut self.c[at.x..at.x + k * l];
             for (li, &q) in links.iter().enumerate() {
                 let col = &mut x[li * k..(li + 1) * k];
                 for r in 0..k {
@@ -488,8 +484,6 @@ impl<T: Scalar> Factorisation<T> {
                     self.schur[r + q * m] = self.schur[r + q * m] - acc;
                 }
             }
-            lo += k * k;
-            xo += k * l;
         }
         lu_in_place(&mut self.schur, m, &mut self.schur_piv, floor)
     }
@@ -879,8 +873,6 @@ mod tests {
         }
     }
 
-    /// A random arrowhead matrix: `blocks` groups of `k` states, each group dense inside and
-    /// coupled to a random subset of a `m`-state dense border; states shuffled.
     /// The solve as it was written before [`Factorisation::solve`] was flattened: block by
     /// block through [`Partition::block`] and [`lu_solve`], gathering into and scattering from
     /// the elimination order. The reference for the flat solve's bits.
@@ -931,6 +923,8 @@ mod tests {
         }
     }
 
+    /// A random arrowhead matrix: `blocks` groups of `k` states, each group dense inside and
+    /// coupled to a random subset of a `m`-state dense border; states shuffled.
     fn arrowhead(rng: &mut Rng, blocks: usize, k: usize, m: usize) -> DMatrix<f64> {
         arrowhead_with_free(rng, blocks, k, m, 0)
     }
