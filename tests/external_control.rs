@@ -44,7 +44,7 @@ const EXTERNAL: (&str, &str) = ("controller.external", "true");
 fn with_e_in_zero_the_motor_stays_at_rest_whatever_r() {
     for preset in [
         "loes-motor",
-        "loes-coupled",
+        "paper-fig9b",
         "servo-valve-motor",
         "complete",
         "complete-hub-locked",

@@ -8,12 +8,14 @@
 //!
 //! * [`loes`]: the low-order equivalent system of the hydraulic loop (Fig. 3, eq. 1).
 //! * [`controller`]: the analog position controller (potentiometer, error and power amplifiers).
+//! * [`reference`]: the command generator (a minimum-jerk move added to the reference `r`).
 //! * [`torsion_bar`]: the bar between the motor shaft and the hub.
 //! * [`hub`]: the hub inertia on its gas bearing.
 //! * [`plate`]: the flexible plate (assumed modes, eqs. 7-22): beam functions, the paper's and a
 //!   consistent formulation, natural frequencies, the plate fragment.
 //! * The full servo actuator of Fig. 2b: [`torque_motor`] (BG1), [`flapper_nozzle`] (BG2),
 //!   [`vane_motor`] (BG3), with the regularised [`orifice`] law, composed by [`servo_valve`].
+//! * [`validity`]: the monitors of the linear model's range (deflection, stresses, spin).
 
 pub mod controller;
 pub mod flapper_nozzle;
@@ -21,9 +23,11 @@ pub mod hub;
 pub mod loes;
 pub mod orifice;
 pub mod plate;
+pub mod reference;
 pub mod servo_valve;
 pub mod torque_motor;
 pub mod torsion_bar;
+pub mod validity;
 pub mod vane_motor;
 
 use crate::bond_graph::{BondGraph, SignalId};

@@ -8,7 +8,7 @@ use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmi2::Values;
 use crate::fragments::plate::modes::{natural_modes, NaturalMode};
 use crate::fragments::plate::{self, PlateModel};
-use crate::fragments::{self, controller, hub, loes, servo_valve, torsion_bar};
+use crate::fragments::{self, controller, hub, loes, reference, servo_valve, torsion_bar, validity};
 use crate::solver::OdeSystem;
 
 use super::affine::{max_abs, Affine, FINITE_BOUND, MAX_AFFINE_OUTPUTS};
@@ -66,8 +66,22 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
             )
         }
     };
-    let (y_pot, command) =
-        controller::add_drive(&mut g, "controller", &p.controller, r, e_in, theta);
+    // The command generator's move on top of r, unless an external controller drives the coil.
+    let loop_reference = if p.reference.is_on() && !p.controller.external {
+        reference::add_reference(&mut g, "reference", &p.reference, p.controller.k_pot, r)
+            .reference
+    } else {
+        r
+    };
+    g.add_output("controller.reference", loop_reference);
+    let (y_pot, command) = controller::add_drive(
+        &mut g,
+        "controller",
+        &p.controller,
+        loop_reference,
+        e_in,
+        theta,
+    );
     g.connect_signal_port(valve_command, command);
     g.add_output("controller.e_out", command);
     let bar = p.motor_coupled.then(|| {
@@ -106,6 +120,18 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     g.add_output("torsion_bar.torque", torque);
     g.add_output("w_tip", plate.w_tip);
     g.add_output("acc_tip", plate.acc_tip);
+    validity::add_monitors(
+        &mut g,
+        validity::Watched {
+            w_tip: plate.w_tip,
+            plate_stress: plate.stress,
+            bar_torque: torque,
+            omega_hub,
+        },
+        &p.limits,
+        p.plate.a,
+        validity::first_clamped_bending(p.plate.a, p.plate.rigidity(), p.plate.areal_mass()),
+    );
     for (k, &a) in plate.acc.iter().enumerate() {
         g.add_output(format!("acc[{}]", k + 1), a);
     }

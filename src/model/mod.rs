@@ -8,6 +8,7 @@
 //! - [`assembly`]: which fragments make up the model for a parameter set, and the resulting
 //!   [`OdeSystem`].
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
+//! - [`validity`]: the warnings of the validity monitors at the communication points.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
 mod affine;
@@ -15,6 +16,7 @@ pub mod assembly;
 pub mod frf;
 pub mod parameters;
 pub mod presets;
+pub mod validity;
 pub mod variables;
 
 use serde::{Deserialize, Serialize};
@@ -24,6 +26,7 @@ use crate::fmi2::variables::reals_of;
 use crate::fmi2::{
     Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
 };
+use crate::fragments::validity::Monitor;
 use crate::solver::{Integrator, OdeSystem};
 use assembly::Assembled;
 use parameters::Parameters;
@@ -46,6 +49,8 @@ pub struct HydraulicSlewingPlate {
     /// Values were left to be computed when read since the last step (see
     /// [`Assembled::write_at_point`]); `fresh[i] == step` once variable `i` has been.
     on_demand: OnDemandValues,
+    /// The validity monitors that have warned in this simulation.
+    validity: validity::ValidityWatch,
 }
 
 /// Which of the values left by the last step ([`Assembled::write_at_point`]) have been computed:
@@ -159,6 +164,29 @@ impl HydraulicSlewingPlate {
         }
     }
 
+    /// Logs a warning for each validity monitor out of range at the communication point `t`
+    /// for the first time in this simulation.
+    fn check_validity(&mut self, values: &mut Values, t: f64, log: &mut StepLog) {
+        // The outputs of the monitors yet to warn, brought up to date (no allocation: this runs
+        // at every communication point).
+        let mut any = false;
+        for m in Monitor::ALL {
+            if !self.validity.has_warned(m) {
+                self.refresh(values, Some(validity::index(m)));
+                any = true;
+            }
+        }
+        if !any {
+            return;
+        }
+        let Some(p) = &self.parameters else {
+            return;
+        };
+        self.validity.check(values, t, &p.limits, |message| {
+            log(LogCategory::StatusWarning, &|| message.clone())
+        });
+    }
+
     /// The solver's counters into their integer variables.
     fn write_stats(integrator: &Integrator, values: &mut Values) {
         let stats = integrator.stats();
@@ -196,6 +224,7 @@ impl FmuModel for HydraulicSlewingPlate {
     fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String> {
         self.integrator = None;
         self.on_demand.pending = false;
+        self.validity.reset();
         self.try_initialize(values, experiment)
             .map_err(|message| with_suspects(message, values))
     }
@@ -276,6 +305,7 @@ impl FmuModel for HydraulicSlewingPlate {
                 message,
             });
         }
+        self.check_validity(values, t_end, log);
         Ok(())
     }
 

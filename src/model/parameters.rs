@@ -7,7 +7,9 @@ use crate::fmi2::{Causality, Experiment, Kind};
 use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
 use crate::fragments::plate::{Formulation, PlateParameters, Root, MAX_FUNCTIONS};
+use crate::fragments::reference::MoveParameters;
 use crate::fragments::servo_valve::ServoValveParameters;
+use crate::fragments::validity::Limits;
 use crate::solver::{Atol, Method, SolverOptions};
 
 use super::assembly::Assembled;
@@ -31,6 +33,10 @@ pub struct Parameters {
     pub loes: LoesParameters,
     pub servo_valve: ServoValveParameters,
     pub controller: ControllerParameters,
+    /// The command generator's move (`reference.*`).
+    pub reference: MoveParameters,
+    /// The material limits of the validity monitors and the bar's diameter.
+    pub limits: Limits,
     /// The plate and hub (`plate.*`, `hub.I_H`).
     pub plate: PlateParameters,
     /// Torsion-bar stiffness \[N m/rad\] (`torsion_bar.k`).
@@ -96,6 +102,10 @@ const POSITIVE: &[usize] = &[
     idx::PLATE_B,
     idx::PLATE_H,
     idx::TORSION_BAR_K,
+    idx::TORSION_BAR_D,
+    idx::TORSION_BAR_TAU_Y,
+    idx::PLATE_SIGMA_Y,
+    idx::REFERENCE_DURATION,
 ];
 
 /// The model-specific check of a value being set (type and range are checked before).
@@ -239,6 +249,16 @@ impl Parameters {
                 saturation: values.boolean(idx::CONTROLLER_SATURATION),
                 external: values.boolean(idx::CONTROLLER_EXTERNAL),
             },
+            reference: MoveParameters {
+                angle: values.real(idx::REFERENCE_ANGLE),
+                t_start: values.real(idx::REFERENCE_T_START),
+                duration: values.real(idx::REFERENCE_DURATION),
+            },
+            limits: Limits {
+                plate_sigma_y: values.real(idx::PLATE_SIGMA_Y),
+                bar_d: values.real(idx::TORSION_BAR_D),
+                bar_tau_y: values.real(idx::TORSION_BAR_TAU_Y),
+            },
             plate,
             torsion_bar_k: values.real(idx::TORSION_BAR_K),
             torsion_bar_zeta: values.real(idx::TORSION_BAR_ZETA),
@@ -332,6 +352,7 @@ impl Parameters {
     /// from its default among those the quantity comes from.
     fn check_derived(&self, values: &Values) -> Result<(), String> {
         self.servo_valve.validate()?;
+        self.reference.validate()?;
         let pl = &self.plate;
         let sv = &self.servo_valve;
         let rigidity = pl.e * pl.h.powi(3) / (12.0 * (1.0 - pl.nu * pl.nu));

@@ -3,18 +3,24 @@
 //!
 //! A preset is a list of `NAME=VALUE` settings of FMU parameters, applied over the start values
 //! (a user's `--set` comes after it and wins). Every preset states the whole configuration
-//! (hydraulic model, coupling, root, amplifier limit, drive), so it means the same thing whatever
-//! the FMU's defaults are; the parameters it does not name (gains, plate, valve constants) keep
-//! their values. [`COMPLETE`] is the FMU's default.
+//! (hydraulic model, coupling, plate formulation, root, amplifier limit, drive, move), so it
+//! means the same thing whatever the FMU's defaults are; the parameters it does not name (gains,
+//! plate, valve constants) keep their values. [`COMPLETE`] is the FMU's default.
 //!
 //! | preset | paper | what |
 //! | --- | --- | --- |
-//! | `complete` | Fig. 8 | full servo valve driving hub and plate through the torsion bar, hub free |
+//! | `complete` | Fig. 8 | full servo valve driving hub and plate (consistent formulation) through the torsion bar, hub free, the 30 deg move |
 //! | `complete-hub-locked` | Fig. 8, Fig. 10 | the same with the hub locked (the motor twists the bar) |
 //! | `servo-valve-motor` | Fig. 2b | full servo valve on the motor alone: the setup of the `G_est` fit |
 //! | `loes-motor` | eq. 1, eq. 2 | the LOES on the motor alone, linear amplifier: the identification |
-//! | `loes-coupled` | Fig. 9b | the LOES driving hub and plate, linear amplifier |
-//! | `hub-locked` | Fig. 10 | plate clamped at the root, shaken by F1/F2; the LOES motor alone |
+//! | `paper-eq16` | eq. 16 | the paper's plate formulation on its hub: eq. 16's frequencies |
+//! | `paper-fig9b` | Fig. 9b, Table 1 | the LOES driving hub and the paper's plate, linear amplifier |
+//! | `paper-fig10` | Fig. 10 | the paper's plate clamped at the root, shaken by F1/F2; the LOES motor alone |
+//!
+//! The time-domain presets of the complete system use the consistent plate formulation and the
+//! command generator's move; the presets that reproduce a result of the paper use the paper's
+//! formulation (which is what reproduces eq. 16 and Table 1) and switch the generator off, so
+//! that `r` alone drives them as in the paper.
 
 use crate::fmi2::Values;
 
@@ -36,84 +42,116 @@ pub struct Preset {
 /// The FMU's default: the paper's complete system.
 pub const COMPLETE: &str = "complete";
 
+/// The default move of the command generator, 30 degrees in radians (`reference.angle`).
+const MOVE_30_DEG: &str = "0.5235987755982988";
+
 /// Every preset, the default first.
 pub const PRESETS: &[Preset] = &[
     Preset {
         name: COMPLETE,
         paper: "Fig. 8",
-        description: "full servo valve driving the hub and plate through the torsion bar, hub \
-                      free, amplifier limit on (the FMU's defaults)",
+        description: "full servo valve driving the hub and plate (consistent formulation) through \
+                      the torsion bar, hub free, amplifier limit on, a 30 deg minimum-jerk move \
+                      over 2 s (the FMU's defaults)",
         settings: &[
             ("hydraulics.model", "2"),
             ("hydraulics.motor_coupled", "true"),
+            ("plate.formulation", "2"),
             ("plate.root", "1"),
             ("controller.saturation", "true"),
             ("controller.external", "false"),
+            ("reference.angle", MOVE_30_DEG),
         ],
     },
     Preset {
         name: "complete-hub-locked",
         paper: "Fig. 8, Fig. 10",
         description: "the complete system with the hub locked: the motor twists the torsion bar \
-                      against a clamped plate root",
+                      against a clamped plate root (consistent formulation, the 30 deg move)",
         settings: &[
             ("hydraulics.model", "2"),
             ("hydraulics.motor_coupled", "true"),
+            ("plate.formulation", "2"),
             ("plate.root", "2"),
             ("controller.saturation", "true"),
             ("controller.external", "false"),
+            ("reference.angle", MOVE_30_DEG),
         ],
     },
     Preset {
         name: "servo-valve-motor",
         paper: "Fig. 2b",
-        description: "full servo valve on the motor alone (the setup of the G_est fit); the plate \
-                      is driven by F1 and F2 only",
+        description: "full servo valve on the motor alone (the setup of the G_est fit), no move: \
+                      r drives it; the plate is driven by F1 and F2 only",
         settings: &[
             ("hydraulics.model", "2"),
             ("hydraulics.motor_coupled", "false"),
+            ("plate.formulation", "2"),
             ("plate.root", "1"),
             ("controller.saturation", "true"),
             ("controller.external", "false"),
+            ("reference.angle", "0"),
         ],
     },
     Preset {
         name: "loes-motor",
         paper: "eq. 1, eq. 2",
-        description: "the LOES on the motor alone with the linear amplifier of eq. 1: the paper's \
-                      identification setup (G_est)",
+        description: "the LOES on the motor alone with the linear amplifier of eq. 1, no move: \
+                      the paper's identification setup (G_est)",
         settings: &[
             ("hydraulics.model", "1"),
             ("hydraulics.motor_coupled", "false"),
+            ("plate.formulation", "1"),
             ("plate.root", "1"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("reference.angle", "0"),
         ],
     },
     Preset {
-        name: "loes-coupled",
-        paper: "Fig. 9b",
-        description: "the LOES driving the hub and plate through the torsion bar, linear \
-                      amplifier (the FRF from r to the tip acceleration)",
+        name: "paper-eq16",
+        paper: "eq. 16",
+        description: "the paper's plate formulation (eqs. 18-21) on its hub: the natural \
+                      frequencies of eq. 16 (hsp modes); the LOES motor runs alone, no move",
+        settings: &[
+            ("hydraulics.model", "1"),
+            ("hydraulics.motor_coupled", "false"),
+            ("plate.formulation", "1"),
+            ("plate.root", "1"),
+            ("controller.saturation", "false"),
+            ("controller.external", "false"),
+            ("reference.angle", "0"),
+        ],
+    },
+    Preset {
+        name: "paper-fig9b",
+        paper: "Fig. 9b, Table 1",
+        description: "the LOES driving the hub and the paper's plate formulation through the \
+                      torsion bar, linear amplifier, no move (the FRF from r to the tip \
+                      acceleration, Table 1)",
         settings: &[
             ("hydraulics.model", "1"),
             ("hydraulics.motor_coupled", "true"),
+            ("plate.formulation", "1"),
             ("plate.root", "1"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("reference.angle", "0"),
         ],
     },
     Preset {
-        name: "hub-locked",
+        name: "paper-fig10",
         paper: "Fig. 10",
-        description: "plate clamped at the root (hub locked) and shaken by F1, F2; the LOES motor \
-                      runs alone",
+        description: "the paper's plate formulation clamped at the root (hub locked) and shaken \
+                      by F1, F2; the LOES motor runs alone, no move",
         settings: &[
             ("hydraulics.model", "1"),
             ("hydraulics.motor_coupled", "false"),
+            ("plate.formulation", "1"),
             ("plate.root", "2"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("reference.angle", "0"),
         ],
     },
 ];

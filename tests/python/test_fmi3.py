@@ -64,7 +64,7 @@ def test_model_description_arrays_and_token(fmu_path, fmu3_path):
 
 @pytest.mark.parametrize("name, stop, start", [
     ("complete", 1.0, {"r": 2.0}),
-    ("loes-coupled", 1.0, {"r": 1.0, "F1": 0.5}),
+    ("paper-fig9b", 1.0, {"r": 1.0, "F1": 0.5}),
 ])
 def test_fmi3_cs_agrees_with_fmi2_cs(fmu_path, fmu3_path, name, stop, start):
     """The same binary behind both interfaces: the results agree to 1e-9 (in fact to the bit)."""

@@ -33,7 +33,7 @@ def test_plate_variables_validate(fmu_path, md):
 def test_coupled_step_in_r_with_the_plate(fmu_path):
     r = np.array([(0.0, 1.0), (1.0, 1.0)], dtype=[("time", float), ("r", float)])
     res = simulate_fmu(fmu_path, stop_time=1.0, output_interval=1e-3, input=r, output=OUTPUTS,
-                       start_values=preset("loes-coupled"))
+                       start_values=preset("paper-fig9b"))
     for n in OUTPUTS:
         assert np.all(np.isfinite(res[n])), n
     # the plate moves: the hub turns, the bar carries torque, the tip vibrates
@@ -57,7 +57,7 @@ def test_calculated_frequencies_reproduce_eq16(fmu_path):
 def test_forcing_f1_on_the_locked_plate(fmu_path):
     f1 = np.array([(0.0, 1.0), (1.0, 1.0)], dtype=[("time", float), ("F1", float)])
     res = simulate_fmu(fmu_path, stop_time=0.5, output_interval=1e-3, input=f1, output=OUTPUTS,
-                       start_values=preset("hub-locked", **{"plate.formulation": 2}))
+                       start_values=preset("paper-fig10", **{"plate.formulation": 2}))
     assert np.all(res["theta_hub"] == 0.0)
     assert np.max(np.abs(res["w_tip"])) > 1e-4
     for n in OUTPUTS:

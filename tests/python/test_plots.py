@@ -39,7 +39,7 @@ def test_no_plot_writes_only_the_csv(fmu_path, tmp_path):
 def test_frf_plot_is_a_bode_plot_with_peaks_and_table_1(tmp_path):
     stem = tmp_path / "bode"
     # The LOES driving hub and plate (Fig. 9b): the three bending peaks of Table 1.
-    out = hsp("frf", "--input", "r", "--output", "w_tip", "--preset", "loes-coupled",
+    out = hsp("frf", "--input", "r", "--output", "w_tip", "--preset", "paper-fig9b",
               "--plot", str(stem) + ".png")
     png, svg = stem.with_suffix(".png"), stem.with_suffix(".svg")
     assert png.exists() and svg.exists(), out

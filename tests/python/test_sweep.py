@@ -20,7 +20,7 @@ sweep = importlib.util.module_from_spec(spec)
 sys.modules["sweep"] = sweep
 spec.loader.exec_module(sweep)
 
-# The LOES driving the hub and plate (preset loes-coupled, the paper's Fig. 9b setup), over 0.3 s:
+# The LOES driving the hub and plate (preset paper-fig9b, the paper's Fig. 9b setup), over 0.3 s:
 # enough for the metrics to depend on the parameters, short enough for a test.
 OPTIONS = {"inputs": {"r": "1.0"}, "stop": 0.3, "step": 1e-3, "tolerance": None}
 GOOD = sweep.grid_points([("torsion_bar.k", ["1000", "2500", "5000"]),
@@ -33,7 +33,7 @@ def as_text(value):
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
-FIXED = {k: as_text(v) for k, v in preset("loes-coupled").items()}
+FIXED = {k: as_text(v) for k, v in preset("paper-fig9b").items()}
 POINTS = [dict(FIXED, **p) for p in GOOD + BAD]
 COMPARED = [m for m in sweep.METRICS if m != "wall_s"]
 

@@ -51,7 +51,25 @@ unsafe extern "C" fn logger(
         }
     };
     let message = s(format).replace("%%", "%");
+    if status == Fmi2Status::Warning {
+        // Kept for the summary of the run (the validity monitors' warnings, say).
+        if let Ok(mut w) = WARNINGS.lock() {
+            w.push(message);
+            return;
+        }
+    }
     eprintln!("[{}] {:?} {}: {}", s(name), status, s(category), message);
+}
+
+/// The warnings the FMU logged, in order.
+static WARNINGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+/// Takes the warnings the FMU has logged so far.
+pub fn take_warnings() -> Vec<String> {
+    WARNINGS
+        .lock()
+        .map(|mut w| std::mem::take(&mut *w))
+        .unwrap_or_default()
 }
 
 /// An unpacked FMU with its library loaded.

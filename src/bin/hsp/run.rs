@@ -1,16 +1,19 @@
 //! `hsp run`: the main job. Builds the FMU, loads it through its C ABI, applies a preset (the
-//! complete system by default) and the `--set` values, steps the reference `r` (or, with
-//! `controller.external`, the coil drive `e_in`) at t = 0, runs the experiment, prints a summary
-//! of the slewing manoeuvre and writes every recorded output at every communication point to CSV.
+//! complete system by default) and the `--set` values, runs the experiment (by default the FMU's
+//! own slewing move, from its command generator; with `--profile step` a step of the reference
+//! `r` at t = 0, or, with `controller.external`, of the coil drive `e_in`), prints a summary of
+//! the manoeuvre with the validity monitors' warnings and writes every recorded output at every
+//! communication point to CSV.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use hydraulic_slewing_plate::fmi2::Experiment;
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
 use hydraulic_slewing_plate::fragments::plate::Root;
+use hydraulic_slewing_plate::fragments::validity::{SPIN_LIMIT, TIP_RATIO_LIMIT};
 use hydraulic_slewing_plate::model::parameters::{HydraulicsModel, Parameters};
 use hydraulic_slewing_plate::model::presets::{self, COMPLETE};
 use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
@@ -30,16 +33,22 @@ pub struct RunArgs {
     /// Parameter set to start from (`hsp presets` lists them); --set values apply after it
     #[arg(long, default_value = COMPLETE)]
     preset: String,
-    /// Size of the reference step r, V (2 V = 30 deg of motor angle with the default k_pot)
-    #[arg(long, default_value_t = 2.0)]
-    r: f64,
+    /// The command: `move`, the FMU's command generator (a minimum-jerk move of reference.angle
+    /// over reference.duration, 30 deg over 2 s by default); `step`, the generator off and a step
+    /// of r at t = 0 (the paper's experiments)
+    #[arg(long, value_enum, default_value_t = Profile::Move)]
+    profile: Profile,
+    /// Size of the step of the reference r at t = 0, V (default: 0 with --profile move, 2 V = 30
+    /// deg of motor angle with --profile step)
+    #[arg(long)]
+    r: Option<f64>,
     /// Size of the step of the external coil drive e_in, V (used with controller.external=true)
     #[arg(long, default_value_t = 0.0)]
     e_in: f64,
-    /// Stop time, s (the default lets the hub of the complete system settle: its slowest mode,
-    /// 1.3 Hz, decays with a time constant of about 32 s)
-    #[arg(long, default_value_t = 150.0)]
-    stop: f64,
+    /// Stop time, s (default: 6 s with --profile move, which lets the hub settle after the move;
+    /// 150 s with --profile step, whose ring-down of the plate on the hub lasts minutes)
+    #[arg(long)]
+    stop: Option<f64>,
     /// Communication step, s
     #[arg(long, default_value_t = 5e-3)]
     step: f64,
@@ -56,9 +65,37 @@ pub struct RunArgs {
     plot: super::plot::PlotArgs,
 }
 
+/// The command of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Profile {
+    /// The FMU's command generator (`reference.*`).
+    Move,
+    /// A step of `r` at t = 0, the generator off.
+    Step,
+}
+
+impl RunArgs {
+    /// The step of `r` at t = 0 \[V\].
+    pub fn r(&self) -> f64 {
+        self.r.unwrap_or(match self.profile {
+            Profile::Move => 0.0,
+            Profile::Step => 2.0,
+        })
+    }
+
+    /// The stop time \[s\].
+    pub fn stop(&self) -> f64 {
+        self.stop.unwrap_or(match self.profile {
+            Profile::Move => 6.0,
+            Profile::Step => 150.0,
+        })
+    }
+}
+
 /// Outputs recorded for every configuration.
 const RECORDED: &[&str] = &[
     "r",
+    "controller.reference",
     "e_in",
     "controller.e_out",
     "y_pot",
@@ -72,6 +109,10 @@ const RECORDED: &[&str] = &[
     "p_load",
     "q_valve",
     "energy",
+    "plate.stress",
+    "plate.w_tip_ratio",
+    "torsion_bar.stress",
+    "hub.omega_ratio",
 ];
 
 /// Outputs recorded with the full servo valve only (they are 0 with the LOES).
@@ -90,6 +131,9 @@ fn settings(args: &RunArgs) -> Result<Vec<String>, String> {
         .iter()
         .map(|(n, v)| format!("{n}={v}"))
         .collect();
+    if args.profile == Profile::Step {
+        all.push("reference.angle=0".into());
+    }
     all.extend(args.set.iter().cloned());
     Ok(all)
 }
@@ -102,18 +146,21 @@ pub struct RunInfo {
     pub stats: Vec<i32>,
     /// Wall-clock time of the stepping loop \[s\].
     pub seconds: f64,
+    /// The warnings the FMU logged (the validity monitors').
+    pub warnings: Vec<String>,
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
-    if !(args.stop > 0.0 && args.step > 0.0 && args.step <= args.stop) {
+    let stop = args.stop();
+    if !(stop > 0.0 && args.step > 0.0 && args.step <= stop) {
         return Err(format!(
-            "--stop ({}) and --step ({}) must be positive with step <= stop",
-            args.stop, args.step
+            "--stop ({stop}) and --step ({}) must be positive with step <= stop",
+            args.step
         ));
     }
     let settings = settings(args)?;
     // The typed parameters the run will use (the FMU checks them again when it initialises).
-    let values = super::values_with(Some(&args.preset), &args.set)?;
+    let values = super::values_with(None, &settings)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let fmu_path = if args.no_build {
         PathBuf::from(&args.fmu)
@@ -128,6 +175,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         parameters,
         stats,
         seconds,
+        warnings: super::loader::take_warnings(),
     };
     print!(
         "{}",
@@ -146,11 +194,12 @@ fn simulate(
 ) -> Result<(Results, Vec<i32>, f64), String> {
     let fmu = Fmu::load(fmu_path)?;
     let inst = fmu.instantiate("hsp-run")?;
-    inst.setup(args.tolerance, 0.0, args.stop)?;
+    let stop = args.stop();
+    inst.setup(args.tolerance, 0.0, stop)?;
     for s in settings {
         inst.set_from_text(s)?;
     }
-    inst.set_real(vr::R, args.r)?;
+    inst.set_real(vr::R, args.r())?;
     inst.set_real(vr::E_IN, args.e_in)?;
     inst.enter_initialization()?;
     inst.exit_initialization()?;
@@ -170,7 +219,7 @@ fn simulate(
         })
         .collect::<Result<Vec<u32>, String>>()?;
     let mut results = Results::new(names.iter().map(|n| n.to_string()).collect());
-    let n = (args.stop / args.step).round() as usize;
+    let n = (stop / args.step).round() as usize;
     results.push(0.0, inst.get_reals(&vrs)?);
     let wall = Instant::now();
     let mut progress = super::progress::Progress::new("hsp run");
@@ -178,13 +227,13 @@ fn simulate(
         // Communication points computed from the index, not summed, so the grid does not drift.
         let t = i as f64 * args.step;
         let t_next = if i + 1 == n {
-            args.stop
+            stop
         } else {
             (i + 1) as f64 * args.step
         };
         inst.do_step(t, t_next - t)?;
         results.push(t_next, inst.get_reals(&vrs)?);
-        progress.update(t_next / args.stop);
+        progress.update(t_next / stop);
     }
     drop(progress);
     let seconds = wall.elapsed().as_secs_f64();
@@ -233,7 +282,7 @@ fn time_where(t: &[f64], y: &[f64], pred: impl Fn(f64) -> bool) -> f64 {
         .zip(&y[1..])
         .filter(|(_, v)| pred(**v))
         .map(|(w, _)| w[1] - w[0])
-        .sum()
+        .fold(0.0, |a, b| a + b)
 }
 
 fn max_abs(y: &[f64]) -> f64 {
@@ -267,11 +316,12 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     let theta_motor = col("theta_motor");
     let theta_hub = col("theta_hub");
     let last = |y: &[f64]| y.last().copied().unwrap_or(0.0);
+    let stop = args.stop();
     if p.controller.external {
         writeln!(
             s,
-            "  drive   external: step of e_in = {} V, {} s in steps of {} s",
-            args.e_in, args.stop, args.step
+            "  drive   external: step of e_in = {} V, {stop} s in steps of {} s",
+            args.e_in, args.step
         )
         .unwrap();
         writeln!(
@@ -291,22 +341,41 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
             .unwrap();
         }
     } else {
-        let target = args.r / p.controller.k_pot;
+        let r = args.r();
+        let mv = &p.reference;
+        let target = r / p.controller.k_pot + if mv.is_on() { mv.angle } else { 0.0 };
+        let command = match (mv.is_on(), r != 0.0) {
+            (true, step) => format!(
+                "minimum-jerk move of {:.2} deg over {} s from t = {} s{} (motor target {:.2} deg)",
+                mv.angle.to_degrees(),
+                mv.duration,
+                mv.t_start,
+                if step {
+                    format!(", on a step of r = {r} V")
+                } else {
+                    String::new()
+                },
+                target.to_degrees()
+            ),
+            (false, _) => format!(
+                "step of r = {r} V (motor target {:.2} deg)",
+                target.to_degrees()
+            ),
+        };
         writeln!(
             s,
-            "  command step of r = {} V (motor target {:.2} deg), {} s in steps of {} s",
-            args.r,
-            target.to_degrees(),
-            args.stop,
+            "  command {command}, {stop} s in steps of {} s",
             args.step
         )
         .unwrap();
+        let move_end = mv.is_on().then(|| mv.t_end());
         let line = |name: &str, y: &[f64]| {
             let f = step_figures(t, y, target, 0.02);
             let settling = f
                 .settling
-                .map_or(format!("not settled within {} s", args.stop), |ts| {
-                    format!("{ts:.3} s")
+                .map_or(format!("not settled within {stop} s"), |ts| match move_end {
+                    Some(end) => format!("{ts:.3} s (the move ends at {end} s)"),
+                    None => format!("{ts:.3} s"),
                 });
             format!(
                 "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling (2 %) {settling}\n",
@@ -381,6 +450,23 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         )
         .unwrap();
     }
+    writeln!(
+        s,
+        "  validity peak w_tip/a {:.3} (limit {TIP_RATIO_LIMIT}), plate stress {:.1} MPa and bar shear {:.1} MPa ({:.2} and {:.2} of yield), (omega_hub/omega_1)^2 {:.3} (limit {SPIN_LIMIT})",
+        max_abs(&col("plate.w_tip_ratio")),
+        max_abs(&col("plate.stress")) * 1e-6,
+        max_abs(&col("torsion_bar.stress")) * 1e-6,
+        max_abs(&col("plate.stress")) / p.limits.plate_sigma_y,
+        max_abs(&col("torsion_bar.stress")) / p.limits.bar_tau_y,
+        max_abs(&col("hub.omega_ratio")).powi(2)
+    )
+    .unwrap();
+    if info.warnings.is_empty() {
+        writeln!(s, "          no warning: the run stays within the linear model's range").unwrap();
+    }
+    for w in &info.warnings {
+        writeln!(s, "  WARNING {w}").unwrap();
+    }
     let st = &info.stats;
     writeln!(
         s,
@@ -392,7 +478,7 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         s,
         "  time    {:.3} s wall, {:.1} x real time",
         info.seconds,
-        args.stop / info.seconds.max(1e-9)
+        stop / info.seconds.max(1e-9)
     )
     .unwrap();
     writeln!(s, "  results {csv}").unwrap();

@@ -160,6 +160,9 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         embed(p.x2, modal(shape(p.x2, p.y2))),
     ];
     let tip = embed(0.0, modal(shape(a, b / 2.0)));
+    // The clamped root bends most: the stress on its centre line.
+    let stress_point = (0.0, 0.5 * b);
+    let stress = embed(0.0, modal(super::stress_row(p, &phis, &psis, stress_point)));
     PlateModel {
         hub,
         labels,
@@ -169,6 +172,8 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         torque,
         forces,
         tip,
+        stress,
+        stress_point,
         accelerometers,
         nominal: super::PlateNominal::of(p),
     }

@@ -210,6 +210,14 @@ pub struct PlateModel {
     /// `w_tip` per unit coordinate: the deflection at `x = a`, `y = b/2` relative to the hub
     /// frame (eq. 22).
     pub tip: DVector<f64>,
+    /// The bending stress at the plate's surface at [`PlateModel::stress_point`] per unit
+    /// coordinate, `sigma_x = E h (w_xx + nu w_yy) / (2 (1 - nu^2))` \[Pa\] (see
+    /// [`stress_row`]).
+    pub stress: DVector<f64>,
+    /// Where `stress` is taken, `(x, y)` \[m\]: on the centre line at the clamped root, or, for
+    /// pinned-free shapes (whose curvature vanishes at the root), at the section where the first
+    /// shape bends most.
+    pub stress_point: (f64, f64),
     /// Displacement of each accelerometer point per unit coordinate, including the rigid
     /// rotation `x theta` (what an accelerometer on the slewing plate measures).
     pub accelerometers: Vec<DVector<f64>>,
@@ -273,6 +281,40 @@ impl PlateModel {
     }
 }
 
+/// The bending stress at the surface of the plate at `(x, y)` per unit amplitude of each
+/// beam-function product `phi_n(x/a) psi_m(y/b)`, in the order `j = N (m - 1) + n`: Kirchhoff's
+/// `sigma_x = E h (w_xx + nu w_yy) / (2 (1 - nu^2))` \[Pa per m of amplitude\], the largest
+/// normal stress through the thickness (at the face the deflection points away from; the other
+/// face carries its opposite).
+pub fn stress_row(
+    p: &PlateParameters,
+    phis: &[beam_functions::BeamFunction],
+    psis: &[beam_functions::BeamFunction],
+    (x, y): (f64, f64),
+) -> DVector<f64> {
+    let scale = p.e * p.h / (2.0 * (1.0 - p.nu * p.nu));
+    let (xi, eta) = (x / p.a, y / p.b);
+    DVector::from_fn(phis.len() * psis.len(), |j, _| {
+        let (phi, psi) = (&phis[j % phis.len()], &psis[j / phis.len()]);
+        let w_xx = phi.derivative(2, xi) / (p.a * p.a) * psi.value(eta);
+        let w_yy = phi.value(xi) * psi.derivative(2, eta) / (p.b * p.b);
+        scale * (w_xx + p.nu * w_yy)
+    })
+}
+
+/// The section `x / a` where the beam function `phi` has its largest curvature `|phi''|`
+/// (on a grid of 2000 intervals: a monitoring point, not a root to converge).
+pub fn most_bent_section(phi: &beam_functions::BeamFunction) -> f64 {
+    (0..=2000)
+        .map(|i| i as f64 / 2000.0)
+        .max_by(|&a, &b| {
+            phi.derivative(2, a)
+                .abs()
+                .total_cmp(&phi.derivative(2, b).abs())
+        })
+        .unwrap_or(0.0)
+}
+
 /// Handles into the plate fragment.
 #[derive(Clone, Debug)]
 pub struct PlatePorts {
@@ -282,6 +324,8 @@ pub struct PlatePorts {
     pub w_tip: SignalId,
     /// `acc_tip` \[m/s^2\], the second derivative of `w_tip`.
     pub acc_tip: SignalId,
+    /// The bending stress at [`PlateModel::stress_point`] \[Pa\] (`<prefix>.stress`).
+    pub stress: SignalId,
     /// The accelerometers \[m/s^2\].
     pub acc: Vec<SignalId>,
 }
@@ -433,10 +477,16 @@ pub fn add_plate(
         .map(|j| (model.tip[first + j], qs[j]))
         .collect();
     let w_tip = combination(g, format!("{prefix}.w_tip"), terms);
+    let terms = (0..np)
+        .filter(|&j| model.stress[first + j] != 0.0)
+        .map(|j| (model.stress[first + j], qs[j]))
+        .collect();
+    let stress = combination(g, format!("{prefix}.stress"), terms);
     PlatePorts {
         junctions: coord[first..].to_vec(),
         w_tip,
         acc_tip,
+        stress,
         acc,
     }
 }

@@ -51,6 +51,15 @@ pub fn build(p: &PlateParameters) -> PlateModel {
     let mut accelerometers = vec![DVector::zeros(n); points.len()];
     let mut labels = Vec::new();
     let mut damping = Vec::new();
+    // Pinned-free shapes do not bend at the root: the stress is taken where the first one bends
+    // most (x = 0.30 a); clamped-free shapes bend most at the root.
+    let stress_point = match p.root {
+        Root::Hub => (super::most_bent_section(&phis[0]) * a, 0.5 * b),
+        Root::Locked => (0.0, 0.5 * b),
+    };
+    let stress_row = super::stress_row(p, &phis, &psis, stress_point);
+    let mut stress = DVector::zeros(n);
+    stress.rows_mut(first, p.n * p.m).copy_from(&stress_row);
     if hub {
         mass[(0, 0)] = p.hub_total_inertia();
         torque[0] = 1.0;
@@ -100,6 +109,8 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         torque,
         forces,
         tip,
+        stress,
+        stress_point,
         accelerometers,
         nominal: super::PlateNominal::of(p),
     }

@@ -1,0 +1,197 @@
+//! The command generator of the position loop: a smooth slewing move added to the reference `r`.
+//!
+//! The paper drives its loop with steps of `r` (the identification of eq. 2). What an engineer
+//! commands on a slewing rig is a smooth move: a step asks the amplifier for many times its rail
+//! and throws the plate far beyond the range of linear plate theory, while a move of a few
+//! seconds keeps the loop linear and the plate's deflection small (docs/model-notes.md,
+//! item 22). The generator makes the move the FMU's default, so that an importer that only
+//! presses "simulate" sees a real manoeuvre.
+//!
+//! **Minimum-jerk profile** (Flash and Hogan, 1985): the motor-angle command
+//!
+//! `theta_ref(t) = theta_f (10 s^3 - 15 s^4 + 6 s^5)`, `s = (t - t_0) / T` clamped to `[0, 1]`,
+//!
+//! the quintic with zero speed and acceleration at both ends; it is what minimises the integral
+//! of the squared jerk over the move. In volts for the loop, `r_move = k_POT theta_ref`, added to
+//! the input `r` (so that an importer can still add steps or its own signal on top).
+//! Peak speed `1.875 theta_f / T` at mid-move, peak acceleration `5.774 theta_f / T^2`.
+//!
+//! **Time** enters through a clock, an integrator `<prefix>.clock` of the constant 1 (a state,
+//! seconds since the start of the simulation): the state equations stay autonomous, so the
+//! integrators' exact Jacobian, the FMU state and Model Exchange need nothing new. The move's
+//! `t_0` counts from the start of the simulation.
+//!
+//! Bond graph (signals only): constant 1 -> integrator `<prefix>.clock` -> function
+//! `<prefix>.move` (volts) -> sum with `r` `<prefix>.r` (the loop's reference).
+
+use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId};
+
+/// The move (SI units).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MoveParameters {
+    /// Motor-angle amplitude `theta_f` \[rad\] (`reference.angle`); 0 turns the generator off.
+    pub angle: f64,
+    /// Start of the move `t_0` \[s\] after the start of the simulation (`reference.t_start`).
+    pub t_start: f64,
+    /// Duration `T` \[s\] (`reference.duration`).
+    pub duration: f64,
+}
+
+impl Default for MoveParameters {
+    /// 30 degrees of motor angle over 2 s, starting 0.5 s into the run (the FMU's default
+    /// experiment; docs/model-notes.md, item 22).
+    fn default() -> Self {
+        MoveParameters {
+            angle: 30f64.to_radians(),
+            t_start: 0.5,
+            duration: 2.0,
+        }
+    }
+}
+
+impl MoveParameters {
+    /// Whether the generator adds anything.
+    pub fn is_on(&self) -> bool {
+        self.angle != 0.0
+    }
+
+    /// The time the move ends \[s\].
+    pub fn t_end(&self) -> f64 {
+        self.t_start + self.duration
+    }
+
+    /// Checks the values; the error names the FMU variable.
+    pub fn validate(&self) -> Result<(), String> {
+        if !self.angle.is_finite() {
+            return Err(format!(
+                "reference.angle: must be finite, got {}",
+                self.angle
+            ));
+        }
+        if !(self.t_start >= 0.0 && self.t_start.is_finite()) {
+            return Err(format!(
+                "reference.t_start: must be a non-negative time, got {} s",
+                self.t_start
+            ));
+        }
+        if !(self.duration > 0.0 && self.duration.is_finite()) {
+            return Err(format!(
+                "reference.duration: must be positive, got {} s",
+                self.duration
+            ));
+        }
+        Ok(())
+    }
+
+    /// `(theta_ref, d theta_ref / dt)` at time `t` since the start of the simulation \[rad,
+    /// rad/s\].
+    pub fn profile(&self, t: f64) -> (f64, f64) {
+        minimum_jerk(self.angle, self.t_start, self.duration, t)
+    }
+}
+
+/// The minimum-jerk move of amplitude `amplitude` from `t0` over `duration` at time `t`: the
+/// value and its time derivative.
+pub fn minimum_jerk(amplitude: f64, t0: f64, duration: f64, t: f64) -> (f64, f64) {
+    let s = (t - t0) / duration;
+    if s <= 0.0 {
+        (0.0, 0.0)
+    } else if s >= 1.0 {
+        (amplitude, 0.0)
+    } else {
+        let s2 = s * s;
+        let value = amplitude * s2 * s * (10.0 + s * (-15.0 + 6.0 * s));
+        let slope = amplitude * 30.0 * s2 * (1.0 - s) * (1.0 - s) / duration;
+        (value, slope)
+    }
+}
+
+/// Handles into the generator.
+#[derive(Clone, Copy, Debug)]
+pub struct ReferencePorts {
+    /// Seconds since the start of the simulation (state `<prefix>.clock`).
+    pub clock: SignalId,
+    /// The loop's reference, `r` plus the move \[V\] (`<prefix>.r`).
+    pub reference: SignalId,
+}
+
+/// Adds the generator: the loop's reference is `r + k_pot theta_ref(clock)`.
+pub fn add_reference(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &MoveParameters,
+    k_pot: f64,
+    r: SignalId,
+) -> ReferencePorts {
+    let one = g.add_constant(format!("{prefix}.rate"), 1.0);
+    let clock = g.add_integrator(format!("{prefix}.clock"), one);
+    g.set_integrator_nominal(clock, p.duration);
+    let m = p.clone();
+    let volts = g.add_function(
+        format!("{prefix}.move"),
+        NonlinearLaw::new(
+            format!(
+                "minimum-jerk move of {:.4} V over {} s from t = {} s",
+                k_pot * m.angle,
+                m.duration,
+                m.t_start
+            ),
+            move |t| {
+                let (v, dv) = m.profile(t);
+                (k_pot * v, k_pot * dv)
+            },
+        ),
+        clock,
+    );
+    let reference = g.add_sum(format!("{prefix}.r"), &[(1.0, r), (1.0, volts)]);
+    ReferencePorts { clock, reference }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quintic's boundary conditions (value, speed and acceleration at both ends), its
+    /// symmetry about mid-move and the textbook peak speed `1.875 theta_f / T`.
+    #[test]
+    fn minimum_jerk_meets_its_boundary_conditions() {
+        let (a, t0, d) = (0.7, 0.5, 2.0);
+        let at = |t| minimum_jerk(a, t0, d, t);
+        assert_eq!(at(0.0), (0.0, 0.0));
+        assert_eq!(at(t0), (0.0, 0.0));
+        assert_eq!(at(t0 + d), (a, 0.0));
+        assert_eq!(at(10.0), (a, 0.0));
+        let (mid, speed) = at(t0 + d / 2.0);
+        assert!((mid - a / 2.0).abs() < 1e-15);
+        assert!((speed - 1.875 * a / d).abs() < 1e-14);
+        // Acceleration (central difference of the exact speed) vanishes at both ends.
+        let h = 1e-6;
+        for t in [t0 + h, t0 + d - h] {
+            let acc = (at(t + h).1 - at(t - h).1) / (2.0 * h);
+            assert!(acc.abs() < 1e-4, "acceleration {acc} at {t}");
+        }
+        // The speed is the derivative of the value.
+        for k in 1..20 {
+            let t = t0 + d * k as f64 / 20.0;
+            let fd = (at(t + h).0 - at(t - h).0) / (2.0 * h);
+            assert!((fd - at(t).1).abs() < 1e-8, "at {t}: {fd} vs {}", at(t).1);
+            // Odd symmetry about mid-move.
+            let mirror = at(2.0 * t0 + d - t).0;
+            assert!((at(t).0 + mirror - a).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let bad = MoveParameters {
+            duration: 0.0,
+            ..MoveParameters::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("reference.duration"));
+        let bad = MoveParameters {
+            t_start: -1.0,
+            ..MoveParameters::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("reference.t_start"));
+    }
+}

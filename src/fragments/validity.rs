@@ -1,0 +1,203 @@
+//! Validity monitors: where the linear model stops describing the rig.
+//!
+//! The plate is a linear Kirchhoff plate in small deflections on a hub that turns slowly compared
+//! with its bending; the torsion bar and the plate are elastic. A hard manoeuvre leaves that range
+//! long before anything in the equations says so (docs/model-notes.md, item 23). Four outputs
+//! watch it, each a linear function of the state (so they cost nothing to integrate and keep the
+//! model's affine structure):
+//!
+//! | output | quantity | the model stops holding when |
+//! | --- | --- | --- |
+//! | `plate.w_tip_ratio` | `w_tip / a` | above [`TIP_RATIO_LIMIT`] = 0.1: an elastica departs from linear bending by about 1 % there, 4 % at 0.21 and 33 % at 0.81 |
+//! | `plate.stress` | bending stress at the plate's most bent section | above [`YIELD_FRACTION`] of `plate.sigma_y`: a clamped root concentrates stress by about 2, so yield is near |
+//! | `torsion_bar.stress` | shear stress `16 T / (pi d^3)` at the bar's surface | above [`YIELD_FRACTION`] of `torsion_bar.tau_y` |
+//! | `hub.omega_ratio` | hub speed over the plate's first clamped bending frequency | its square above [`SPIN_LIMIT`] = 0.1: the spin-softening terms the linear model omits grow as `(Omega / omega_1)^2` |
+//!
+//! The FMU checks the monitors at every communication point and logs one warning per quantity
+//! (the first time it goes out of range), naming the quantity, its value and the time.
+//!
+//! Material limits (parameters): aluminium 6061-T6, yield 276 MPa (ASM Aerospace Specification
+//! Metals, MIL-HDBK-5), the plate of the paper; the bar in AISI 4140 quenched and tempered,
+//! tensile yield 655 MPa, shear yield by von Mises `0.577 x 655` = 378 MPa.
+
+use crate::bond_graph::{BondGraph, SignalId};
+
+/// `|w_tip / a|` above which linear plate theory is not trusted.
+pub const TIP_RATIO_LIMIT: f64 = 0.1;
+/// Fraction of a yield stress above which the monitors warn.
+pub const YIELD_FRACTION: f64 = 0.5;
+/// `(Omega / omega_1)^2` above which the omitted spin terms matter.
+pub const SPIN_LIMIT: f64 = 0.1;
+
+/// The material limits and the bar's diameter (SI).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Limits {
+    /// Yield strength of the plate \[Pa\] (`plate.sigma_y`, 6061-T6: 276 MPa).
+    pub plate_sigma_y: f64,
+    /// Diameter of the torsion bar \[m\] (`torsion_bar.d`).
+    pub bar_d: f64,
+    /// Shear yield strength of the torsion bar \[Pa\] (`torsion_bar.tau_y`).
+    pub bar_tau_y: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            plate_sigma_y: 276e6,
+            bar_d: 0.02,
+            bar_tau_y: 378e6,
+        }
+    }
+}
+
+impl Limits {
+    /// The shear stress at the surface of the bar per unit torque, `16 / (pi d^3)` \[Pa/(N m)\].
+    pub fn bar_stress_per_torque(&self) -> f64 {
+        16.0 / (std::f64::consts::PI * self.bar_d.powi(3))
+    }
+}
+
+/// One monitored quantity.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Monitor {
+    TipRatio,
+    PlateStress,
+    BarStress,
+    SpinRatio,
+}
+
+impl Monitor {
+    pub const ALL: [Monitor; 4] = [
+        Monitor::TipRatio,
+        Monitor::PlateStress,
+        Monitor::BarStress,
+        Monitor::SpinRatio,
+    ];
+
+    /// The FMU output that carries it.
+    pub fn variable(self) -> &'static str {
+        match self {
+            Monitor::TipRatio => "plate.w_tip_ratio",
+            Monitor::PlateStress => "plate.stress",
+            Monitor::BarStress => "torsion_bar.stress",
+            Monitor::SpinRatio => "hub.omega_ratio",
+        }
+    }
+
+    /// The largest magnitude of the output within the model's range.
+    pub fn limit(self, limits: &Limits) -> f64 {
+        match self {
+            Monitor::TipRatio => TIP_RATIO_LIMIT,
+            Monitor::PlateStress => YIELD_FRACTION * limits.plate_sigma_y,
+            Monitor::BarStress => YIELD_FRACTION * limits.bar_tau_y,
+            Monitor::SpinRatio => SPIN_LIMIT.sqrt(),
+        }
+    }
+
+    /// Whether the output's value is out of range.
+    pub fn exceeded(self, value: f64, limits: &Limits) -> bool {
+        value.abs() > self.limit(limits)
+    }
+
+    /// The warning for a value out of range at time `t`.
+    pub fn message(self, value: f64, t: f64, limits: &Limits) -> String {
+        let quantity = match self {
+            Monitor::TipRatio => format!(
+                "the plate's tip deflection w_tip/a = {value:.3} exceeds {TIP_RATIO_LIMIT} \
+                 (large deflection: linear plate theory no longer holds)"
+            ),
+            Monitor::PlateStress => format!(
+                "the plate's bending stress {:.1} MPa exceeds {YIELD_FRACTION} of its yield \
+                 strength plate.sigma_y = {:.0} MPa",
+                value * 1e-6,
+                limits.plate_sigma_y * 1e-6
+            ),
+            Monitor::BarStress => format!(
+                "the torsion bar's shear stress {:.1} MPa exceeds {YIELD_FRACTION} of its shear \
+                 yield strength torsion_bar.tau_y = {:.0} MPa",
+                value * 1e-6,
+                limits.bar_tau_y * 1e-6
+            ),
+            Monitor::SpinRatio => format!(
+                "the hub spins fast against the plate's bending: (omega_hub/omega_1)^2 = {:.3} \
+                 exceeds {SPIN_LIMIT} (the spin-softening terms the linear model omits)",
+                value * value
+            ),
+        };
+        format!(
+            "validity: {} = {value:.4e} at t = {t:.4} s: {quantity}; the results are outside \
+             the model's range",
+            self.variable()
+        )
+    }
+}
+
+/// The first bending frequency of the plate clamped at the root, `omega_1 = 1.8751^2 /
+/// a^2 sqrt(D / (rho h))` \[rad/s\] (the clamped-free beam with the plate's rigidity: 1.12 Hz for
+/// the paper's plate), the scale of `hub.omega_ratio`.
+pub fn first_clamped_bending(a: f64, rigidity: f64, areal_mass: f64) -> f64 {
+    const BETA_1: f64 = 1.875_104_068_711_961;
+    BETA_1 * BETA_1 / (a * a) * (rigidity / areal_mass).sqrt()
+}
+
+/// The signals the monitors read.
+#[derive(Clone, Copy, Debug)]
+pub struct Watched {
+    /// `w_tip` \[m\].
+    pub w_tip: SignalId,
+    /// The plate's bending stress \[Pa\].
+    pub plate_stress: SignalId,
+    /// The torsion bar's torque \[N m\].
+    pub bar_torque: SignalId,
+    /// The hub speed \[rad/s\].
+    pub omega_hub: SignalId,
+}
+
+/// Adds the four monitor outputs under the names of [`Monitor::variable`]; `a` is the plate's
+/// length and `omega_1` its first clamped bending frequency \[rad/s\].
+pub fn add_monitors(g: &mut BondGraph, s: Watched, limits: &Limits, a: f64, omega_1: f64) {
+    let ratio = g.add_gain("validity.w_tip_ratio", 1.0 / a, s.w_tip);
+    g.add_output(Monitor::TipRatio.variable(), ratio);
+    g.add_output(Monitor::PlateStress.variable(), s.plate_stress);
+    let tau = g.add_gain(
+        "validity.bar_stress",
+        limits.bar_stress_per_torque(),
+        s.bar_torque,
+    );
+    g.add_output(Monitor::BarStress.variable(), tau);
+    let spin = g.add_gain("validity.omega_ratio", 1.0 / omega_1, s.omega_hub);
+    g.add_output(Monitor::SpinRatio.variable(), spin);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_clamped_bending_of_the_papers_plate() {
+        // 6061-T6 plate of the paper: D = E h^3 / (12 (1 - nu^2)), 1.1207 Hz (the paper
+        // formulation's locked (1,1) mode, which is this beam's).
+        let (e, h, nu, rho, a): (f64, f64, f64, f64, f64) = (6.89e10, 2.65e-3, 0.3, 2795.0, 1.41);
+        let d = e * h.powi(3) / (12.0 * (1.0 - nu * nu));
+        let f = first_clamped_bending(a, d, rho * h) / (2.0 * std::f64::consts::PI);
+        assert!((f - 1.1207).abs() < 5e-4, "{f}");
+    }
+
+    #[test]
+    fn bar_stress_of_a_20_mm_bar() {
+        // 100 N m on 20 mm: 16 * 100 / (pi 8e-6) = 63.66 MPa.
+        let tau = 100.0 * Limits::default().bar_stress_per_torque();
+        assert!((tau - 63.662e6).abs() < 1e3, "{tau}");
+    }
+
+    #[test]
+    fn messages_name_the_quantity_value_and_time() {
+        let l = Limits::default();
+        for m in Monitor::ALL {
+            let v = 1.5 * m.limit(&l);
+            assert!(m.exceeded(v, &l) && m.exceeded(-v, &l) && !m.exceeded(0.5 * v, &l));
+            let text = m.message(v, 1.25, &l);
+            assert!(text.contains(m.variable()) && text.contains("t = 1.25"), "{text}");
+        }
+    }
+}
