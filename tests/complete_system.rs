@@ -3,9 +3,10 @@
 //! reference leaves it and the FMU says so; the default plant has one hub angle and its slowest
 //! coupled pair is converged in the number of beam functions.
 
-mod common;
+#[path = "common/fmu.rs"]
+mod fmu;
 
-use common::fmu::Fmu;
+use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
 use hydraulic_slewing_plate::fmi2::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;

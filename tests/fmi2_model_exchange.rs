@@ -647,7 +647,7 @@ fn derivatives_after_terminate_follow_the_last_states() {
         let mut x = states(f).1;
         let hub = CONTINUOUS_STATES
             .iter()
-            .position(|&(x, _)| VARIABLES[x].name == "x.hub.I.p")
+            .position(|&(x, _)| VARIABLES[x].name == "x.torsion_bar.k.q")
             .unwrap();
         x[hub] = 1e-3;
         assert_eq!(set_states(f, &x), Fmi2Status::Ok);

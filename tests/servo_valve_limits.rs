@@ -12,6 +12,11 @@ fn coupled_parameters(sets: &[(&str, &str)]) -> Parameters {
     let mut values = Values::from_start(&VARIABLES);
     set_by_name(&mut values, "hydraulics.model", "2").unwrap();
     set_by_name(&mut values, "hydraulics.motor_coupled", "true").unwrap();
+    // The paper formulation driven by r alone, as when these limits were set: no command
+    // generator, no air drag.
+    set_by_name(&mut values, "plate.formulation", "1").unwrap();
+    set_by_name(&mut values, "reference.angle", "0").unwrap();
+    set_by_name(&mut values, "plate.Cd", "0").unwrap();
     for (n, v) in sets {
         set_by_name(&mut values, n, v).unwrap();
     }

@@ -670,6 +670,8 @@ mod tests {
                 ("hydraulics.model", "1"),
                 ("controller.saturation", "false"),
                 ("hydraulics.motor_coupled", "true"),
+                ("reference.angle", "0"),
+                ("plate.Cd", "0"),
             ],
             &[
                 ("hydraulics.model", "2"),

@@ -194,6 +194,8 @@ impl Parameters {
             nu: values.real(idx::PLATE_NU),
             zeta: values.real(idx::PLATE_ZETA),
             i_h: values.real(idx::HUB_I_H),
+            cd: values.real(idx::PLATE_CD),
+            rho_air: values.real(idx::PLATE_RHO_AIR),
             x1: values.real(idx::PLATE_X1),
             y1: values.real(idx::PLATE_Y1),
             x2: values.real(idx::PLATE_X2),

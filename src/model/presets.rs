@@ -3,7 +3,7 @@
 //!
 //! A preset is a list of `NAME=VALUE` settings of FMU parameters, applied over the start values
 //! (a user's `--set` comes after it and wins). Every preset states the whole configuration
-//! (hydraulic model, coupling, plate formulation, root, amplifier limit, drive, move), so it
+//! (hydraulic model, coupling, plate formulation, root, amplifier limit, drive, move, drag), so it
 //! means the same thing whatever the FMU's defaults are; the parameters it does not name (gains,
 //! plate, valve constants) keep their values. [`COMPLETE`] is the FMU's default.
 //!
@@ -19,8 +19,8 @@
 //!
 //! The time-domain presets of the complete system use the consistent plate formulation and the
 //! command generator's move; the presets that reproduce a result of the paper use the paper's
-//! formulation (which is what reproduces eq. 16 and Table 1) and switch the generator off, so
-//! that `r` alone drives them as in the paper.
+//! formulation (which is what reproduces eq. 16 and Table 1) and switch the generator and the
+//! air drag off, so that `r` alone drives them as in the paper.
 
 use crate::fmi2::Values;
 
@@ -61,6 +61,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "true"),
             ("controller.external", "false"),
             ("reference.angle", MOVE_30_DEG),
+            ("plate.Cd", "1.2"),
         ],
     },
     Preset {
@@ -76,6 +77,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "true"),
             ("controller.external", "false"),
             ("reference.angle", MOVE_30_DEG),
+            ("plate.Cd", "1.2"),
         ],
     },
     Preset {
@@ -91,6 +93,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "true"),
             ("controller.external", "false"),
             ("reference.angle", "0"),
+            ("plate.Cd", "0"),
         ],
     },
     Preset {
@@ -106,6 +109,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "false"),
             ("controller.external", "false"),
             ("reference.angle", "0"),
+            ("plate.Cd", "0"),
         ],
     },
     Preset {
@@ -121,6 +125,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "false"),
             ("controller.external", "false"),
             ("reference.angle", "0"),
+            ("plate.Cd", "0"),
         ],
     },
     Preset {
@@ -137,6 +142,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "false"),
             ("controller.external", "false"),
             ("reference.angle", "0"),
+            ("plate.Cd", "0"),
         ],
     },
     Preset {
@@ -152,6 +158,7 @@ pub const PRESETS: &[Preset] = &[
             ("controller.saturation", "false"),
             ("controller.external", "false"),
             ("reference.angle", "0"),
+            ("plate.Cd", "0"),
         ],
     },
 ];

@@ -215,7 +215,7 @@ pub fn time_histories(
 
 /// How `hsp run`'s CSV columns are shown: column, panel, scale from SI, legend.
 const CHANNELS: &[(&str, usize, f64, &str)] = &[
-    ("r", 0, 1.0, "reference r"),
+    ("controller.reference", 0, 1.0, "reference (r + move)"),
     ("y_pot", 0, 1.0, "potentiometer y_pot"),
     ("e_in", 0, 1.0, "coil drive e_in"),
     ("theta_motor", 1, 180.0 / std::f64::consts::PI, "motor"),

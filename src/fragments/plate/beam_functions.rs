@@ -214,34 +214,37 @@ pub fn moment_integral(f: &BeamFunction, power: i32) -> f64 {
 const PANELS: usize = 16;
 const NODES: usize = 20;
 
-/// Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
+/// The `NODES`-point Gauss-Legendre rule of the integrals, computed once.
 fn gauss_legendre() -> &'static [(f64, f64)] {
     static GL: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
-    GL.get_or_init(|| {
-        let n = NODES;
-        let mut out = Vec::with_capacity(n);
-        for i in 0..n {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let kf = k as f64;
-                    let p2 = ((2.0 * kf - 1.0) * x * p1 - (kf - 1.0) * p0) / kf;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
+    GL.get_or_init(|| gauss_legendre_rule(NODES))
+}
+
+/// The `n`-point Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre
+/// recurrence): exact for polynomials of degree up to `2 n - 1`.
+pub fn gauss_legendre_rule(n: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 0.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, x);
+            for k in 2..=n {
+                let kf = k as f64;
+                let p2 = ((2.0 * kf - 1.0) * x * p1 - (kf - 1.0) * p0) / kf;
+                p0 = p1;
+                p1 = p2;
             }
-            out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
+            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+            let dx = p1 / dp;
+            x -= dx;
+            if dx.abs() < 1e-16 {
+                break;
+            }
         }
-        out
-    })
+        out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
+    }
+    out
 }
 
 /// `int_0^1 f(xi) dxi` by composite Gauss-Legendre quadrature.

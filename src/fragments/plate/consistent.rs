@@ -75,8 +75,9 @@ pub fn ritz_matrices(p: &PlateParameters) -> (DMatrix<f64>, DMatrix<f64>) {
     (m, k)
 }
 
-/// Builds the consistent formulation.
-pub fn build(p: &PlateParameters) -> PlateModel {
+/// Builds the consistent formulation, with the map from a point `(x, y)` to its displacement
+/// per unit coordinate (the hub's rotation `x theta` included).
+pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f64>) {
     let phis = BeamFunction::family(BeamKind::ClampedFree, p.n);
     let psis = BeamFunction::family(BeamKind::FreeFree, p.m);
     let (a, b, mu) = (p.a, p.b, p.areal_mass());
@@ -163,7 +164,21 @@ pub fn build(p: &PlateParameters) -> PlateModel {
     // The clamped root bends most: the stress on its centre line.
     let stress_point = (0.0, 0.5 * b);
     let stress = embed(0.0, modal(super::stress_row(p, &phis, &psis, stress_point)));
-    PlateModel {
+    let point = {
+        let (phis, psis, phi_mat, (a, b, nn)) = (phis.clone(), psis.clone(), phi_mat.clone(), (a, b, p.n));
+        move |x: f64, y: f64| {
+            let shape = DVector::from_fn(nm, |j, _| {
+                phis[j % nn].value(x / a) * psis[j / nn].value(y / b)
+            });
+            let mut v = DVector::zeros(n);
+            if hub {
+                v[0] = x;
+            }
+            v.rows_mut(first, nm).copy_from(&(phi_mat.transpose() * shape));
+            v
+        }
+    };
+    let model = PlateModel {
         hub,
         labels,
         mass,
@@ -175,6 +190,8 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         stress,
         stress_point,
         accelerometers,
+        drag: Vec::new(),
         nominal: super::PlateNominal::of(p),
-    }
+    };
+    (model, point)
 }

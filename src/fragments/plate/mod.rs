@@ -9,6 +9,8 @@
 //! * [`paper`]: eqs. 18-21 of the paper with the errata of docs/model-notes.md (items 1-6) fixed.
 //! * [`consistent`]: the Lagrangian of hub and plate (eq. 4 and eq. 5 in full).
 //!
+//! [`drag`] adds the air drag of the plate swept broadside (not in the paper).
+//!
 //! [`modes`] solves eq. 14 (natural frequencies) with a symmetric generalised eigen-solver;
 //! [`add_plate`] turns a [`PlateModel`] into bond-graph fragments (modal I, C, R per coordinate,
 //! or an I-field where the mass matrix couples the hub and the plate; TFs from the root-torque
@@ -20,12 +22,13 @@
 
 pub mod beam_functions;
 pub mod consistent;
+pub mod drag;
 pub mod modes;
 pub mod paper;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, BondId, ElementId, Law, NonlinearLaw, SignalId};
 
 use super::hub::HubPorts;
 
@@ -83,6 +86,10 @@ pub struct PlateParameters {
     pub zeta: f64,
     /// Hub inertia `I_H` \[kg m^2\] (paper: 3.5).
     pub i_h: f64,
+    /// Drag coefficient of the plate face-on to the air \[-\] (`plate.Cd`; 0: no drag).
+    pub cd: f64,
+    /// Density of the air \[kg/m^3\] (`plate.rho_air`).
+    pub rho_air: f64,
     /// Shaker force points `(x1, y1)`, `(x2, y2)` \[m\].
     pub x1: f64,
     pub y1: f64,
@@ -105,6 +112,8 @@ impl Default for PlateParameters {
             nu: 0.3,
             zeta: 0.01,
             i_h: 3.5,
+            cd: 1.2,
+            rho_air: 1.2,
             x1: 1.3,
             y1: 0.1,
             x2: 0.7,
@@ -168,6 +177,11 @@ impl PlateParameters {
                 self.zeta
             ));
         }
+        for (name, v) in [("plate.Cd", self.cd), ("plate.rho_air", self.rho_air)] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!("{name}: must be non-negative, got {v}"));
+            }
+        }
         if !(self.i_h >= 0.0 && self.i_h.is_finite()) {
             return Err(format!("hub.I_H: must be non-negative, got {}", self.i_h));
         }
@@ -221,6 +235,8 @@ pub struct PlateModel {
     /// Displacement of each accelerometer point per unit coordinate, including the rigid
     /// rotation `x theta` (what an accelerometer on the slewing plate measures).
     pub accelerometers: Vec<DVector<f64>>,
+    /// The quadrature points of the air drag (none without drag).
+    pub drag: Vec<drag::DragPoint>,
     /// Typical magnitudes of the plate's states, scaling the integrator's absolute tolerance.
     pub nominal: PlateNominal,
 }
@@ -254,8 +270,16 @@ impl PlateModel {
     pub fn new(p: &PlateParameters) -> Result<Self, String> {
         p.validate()?;
         Ok(match p.formulation {
-            Formulation::Paper => paper::build(p),
-            Formulation::Consistent => consistent::build(p),
+            Formulation::Paper => {
+                let (mut model, map) = paper::build(p);
+                model.drag = drag::drag_points(p, &model, map);
+                model
+            }
+            Formulation::Consistent => {
+                let (mut model, map) = consistent::build(p);
+                model.drag = drag::drag_points(p, &model, map);
+                model
+            }
         })
     }
 
@@ -436,6 +460,30 @@ pub fn add_plate(
                 let tf = g.add_tf(format!("{prefix}.F{}_tf[{}]", k + 1, i), s[i]);
                 g.bond(node, tf);
                 g.bond(tf, c);
+            }
+        }
+    }
+    // air drag: per quadrature point a 0-junction whose flow is the point's velocity, and the
+    // quadratic R
+    for (k, d) in model.drag.iter().enumerate() {
+        let node = g.add_zero(format!("{prefix}.drag[{}].point", k + 1));
+        let c = d.coefficient;
+        let r = g.add_r(
+            format!("{prefix}.drag[{}]", k + 1),
+            Law::Nonlinear(NonlinearLaw::new(
+                format!("air drag {c:.3e} |v| v"),
+                move |f| drag::law(c, f),
+            )),
+        );
+        g.bond(node, r);
+        for (i, &cj) in coord.iter().enumerate() {
+            if d.velocity[i] != 0.0 {
+                let tf = g.add_tf(
+                    format!("{prefix}.drag[{}]_tf[{i}]", k + 1),
+                    d.velocity[i],
+                );
+                g.bond(node, tf);
+                g.bond(tf, cj);
             }
         }
     }

@@ -30,8 +30,9 @@ use nalgebra::{DMatrix, DVector};
 use super::beam_functions::{moment_integral, product_integral, BeamFunction, BeamKind};
 use super::{PlateModel, PlateParameters, Root};
 
-/// Builds the paper formulation.
-pub fn build(p: &PlateParameters) -> PlateModel {
+/// Builds the paper formulation, with the map from a point `(x, y)` to its displacement per
+/// unit coordinate (the hub's rotation `x theta` included).
+pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f64>) {
     let xkind = match p.root {
         Root::Hub => BeamKind::PinnedFree,
         Root::Locked => BeamKind::ClampedFree,
@@ -100,7 +101,22 @@ pub fn build(p: &PlateParameters) -> PlateModel {
             }
         }
     }
-    PlateModel {
+    let point = {
+        let (phis, psis, (a, b)) = (phis.clone(), psis.clone(), (p.a, p.b));
+        move |x: f64, y: f64| {
+            let mut s = DVector::zeros(n);
+            if hub {
+                s[0] = x;
+            }
+            for (mi, psi) in psis.iter().enumerate() {
+                for (ni, phi) in phis.iter().enumerate() {
+                    s[first + phis.len() * mi + ni] = phi.value(x / a) * psi.value(y / b);
+                }
+            }
+            s
+        }
+    };
+    let model = PlateModel {
         hub,
         labels,
         mass,
@@ -112,6 +128,8 @@ pub fn build(p: &PlateParameters) -> PlateModel {
         stress,
         stress_point,
         accelerometers,
+        drag: Vec::new(),
         nominal: super::PlateNominal::of(p),
-    }
+    };
+    (model, point)
 }

@@ -14,7 +14,8 @@ use super::ServoValveParameters;
 /// The equilibrium need not be isolated: where the Jacobian is singular (the open loop's free
 /// rotor angle; with the hub locked, the rotor angle and the bar twist, which integrate the
 /// same speed) each Newton step is the least-norm one (SVD), which leaves the free directions
-/// at their guess, 0.
+/// at their guess, 0. A state whose rate depends on no state (the command generator's clock)
+/// has no rest value: it stays at its guess too.
 pub fn rest_state(
     model: &CompiledModel,
     u: &[f64],
@@ -39,6 +40,12 @@ pub fn rest_state(
     for _ in 0..50 {
         model.derivatives(&x, u, &mut f);
         model.jacobian(&x, u, &mut jac);
+        // A state whose rate depends on no state (a clock) has no rest: it stays at its guess.
+        for (i, fi) in f.iter_mut().enumerate() {
+            if jac.row(i).iter().all(|&v| v == 0.0) {
+                *fi = 0.0;
+            }
+        }
         // Solve in scaled variables x = S z: (S^-1 J S) dz = -S^-1 f, a matrix of rates (1/s).
         let js = DMatrix::from_fn(n, n, |i, j| jac[(i, j)] * scale[j] / scale[i]);
         let rhs = DVector::from_iterator(n, (0..n).map(|i| -f[i] / scale[i]));
