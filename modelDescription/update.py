@@ -16,7 +16,8 @@ have keeps its value with derivative 0.
 Dependencies: an output depends directly on an input only where FEEDTHROUGH says so: the plate's
 accelerations on the shaker forces (Newton's law: a force changes the acceleration at once), and
 the LOES valve flow and the drive voltage controller.e_out on the reference r and on the external
-drive e_in (the analog controller and the amplifier are static). Every other output is a
+drive e_in (the analog controller and the amplifier are static), and the loop's reference
+controller.reference on r (r plus the command generator's move). Every other output is a
 function of the state alone, y_pot and theta among them, so feeding y_pot back to r makes no
 algebraic loop. tests/model_description.rs checks this table against the compiled model in every
 configuration. Initially the outputs depend on the parameters and the same inputs (the simulation
@@ -77,6 +78,7 @@ def derivative_variables(structure, position):
 FEEDTHROUGH = {
     r"acc\[\d+\]|acc_tip": ["F1", "F2"],
     r"q_valve|controller\.e_out": ["r", "e_in"],
+    r"controller\.reference": ["r"],
 }
 
 

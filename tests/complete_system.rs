@@ -127,7 +127,10 @@ fn the_default_move_settles_inside_the_models_range() {
         .zip(r.col("x.torsion_bar.k.q"))
         .zip(hub)
         .fold(0.0f64, |m, ((a, q), h)| m.max((a - q - h).abs()));
-    assert!(far_end_gap < 1e-9, "bar end and hub differ by {far_end_gap} rad");
+    assert!(
+        far_end_gap < 1e-9,
+        "bar end and hub differ by {far_end_gap} rad"
+    );
 }
 
 /// The paper's 2 V step of the reference, the generator off: the plate leaves linear theory, and
@@ -137,7 +140,12 @@ fn the_2_volt_step_warns_that_it_leaves_the_models_range() {
     let r = run(&[("reference.angle", 0.0), ("r", 2.0)], 3.0, RECORDED);
     println!("{:#?}", r.warnings);
     assert!(r.peak("plate.w_tip_ratio") > 0.1);
-    let named = |m: Monitor| r.warnings.iter().filter(|w| w.contains(m.variable())).count();
+    let named = |m: Monitor| {
+        r.warnings
+            .iter()
+            .filter(|w| w.contains(m.variable()))
+            .count()
+    };
     assert_eq!(named(Monitor::TipRatio), 1, "{:?}", r.warnings);
     assert_eq!(named(Monitor::PlateStress), 1, "{:?}", r.warnings);
     assert!(r.warnings.iter().all(|w| w.contains(" t = ")));

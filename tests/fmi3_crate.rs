@@ -27,6 +27,7 @@ use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};
 use fmi::traits::FmiImport;
 use hydraulic_slewing_plate::fmi2::ffi::{Fmi2CallbackFunctions, Fmi2Status, FMI2_CO_SIMULATION};
+use hydraulic_slewing_plate::fmi2::Kind;
 use hydraulic_slewing_plate::fmi2_exports as f2;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
@@ -126,17 +127,25 @@ fn value_reference(name: &str) -> u32 {
         .value_reference
 }
 
-/// The settings of a preset as (value reference, Boolean or Int32 value).
-fn preset_settings(name: &str) -> Vec<(u32, Result<bool, i32>)> {
+/// A preset's value, typed as its variable.
+enum Setting {
+    Boolean(bool),
+    Int32(i32),
+    Float64(f64),
+}
+
+/// The settings of a preset as (value reference, value).
+fn preset_settings(name: &str) -> Vec<(u32, Setting)> {
     presets::preset(name)
         .unwrap()
         .settings
         .iter()
         .map(|(n, v)| {
-            let value = match *v {
-                "true" => Ok(true),
-                "false" => Ok(false),
-                v => Err(v.parse().unwrap()),
+            let var = VARIABLES.iter().find(|x| x.name == *n).unwrap();
+            let value = match var.kind {
+                Kind::Boolean { .. } => Setting::Boolean(*v == "true"),
+                Kind::Integer { .. } => Setting::Int32(v.parse().unwrap()),
+                _ => Setting::Float64(v.parse().unwrap()),
             };
             (value_reference(n), value)
         })
@@ -155,8 +164,9 @@ fn run_fmi3(import: &Fmi3Import, preset: &str, r: f64, steps: usize) -> Trace {
         .expect("fmi3InstantiateCoSimulation");
     for (vr, value) in preset_settings(preset) {
         match value {
-            Ok(b) => inst.set_boolean(&[vr], &[b]),
-            Err(i) => inst.set_int32(&[vr], &[i]),
+            Setting::Boolean(b) => inst.set_boolean(&[vr], &[b]),
+            Setting::Int32(i) => inst.set_int32(&[vr], &[i]),
+            Setting::Float64(x) => inst.set_float64(&[vr], &[x]),
         }
         .unwrap_or_else(|e| panic!("setting vr {vr}: {e:?}"));
     }

@@ -16,6 +16,7 @@ use std::process::Command;
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::traits::{FmiImport, FmiStatus};
+use hydraulic_slewing_plate::fmi2::Kind;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
 use nalgebra::Complex;
@@ -196,14 +197,12 @@ fn fmi_crate_imports_steps_and_restores_the_fmu() {
         .expect("fmi2SetupExperiment");
     // The analytic step response below is eq. 1's: the LOES on the motor alone, linear amplifier.
     for (name, value) in presets::preset("loes-motor").unwrap().settings {
-        let vr = VARIABLES
-            .iter()
-            .find(|v| v.name == *name)
-            .unwrap()
-            .value_reference;
-        match *value {
-            "true" | "false" => inst.set_boolean(&[vr], &[i32::from(*value == "true")]),
-            v => inst.set_integer(&[vr], &[v.parse().unwrap()]),
+        let var = VARIABLES.iter().find(|v| v.name == *name).unwrap();
+        let vr = var.value_reference;
+        match var.kind {
+            Kind::Boolean { .. } => inst.set_boolean(&[vr], &[i32::from(*value == "true")]),
+            Kind::Integer { .. } => inst.set_integer(&[vr], &[value.parse().unwrap()]),
+            _ => inst.set_real(&[vr], &[value.parse().unwrap()]),
         }
         .unwrap_or_else(|e| panic!("setting {name}: {e:?}"));
     }

@@ -57,7 +57,9 @@ fn free_decay_loses_the_drags_work() {
     let names = m.state_names();
     let at = |name: &str| names.iter().position(|n| n == name).unwrap();
     let modes = p.plate.n * p.plate.m;
-    let momentum: Vec<usize> = (1..=modes).map(|j| at(&format!("plate.I[{j}].p"))).collect();
+    let momentum: Vec<usize> = (1..=modes)
+        .map(|j| at(&format!("plate.I[{j}].p")))
+        .collect();
     let modal_mass = p.plate.areal_mass() * p.plate.a * p.plate.b;
     // The first bending mode deflected by 0.1 m of modal amplitude (a tip deflection of 0.2 m,
     // w/a 0.14: far for the plate, but what makes drag matter), released at rest.
@@ -102,7 +104,10 @@ fn free_decay_loses_the_drags_work() {
     assert!(lost > 0.05 * e0, "{lost} of {e0}");
     // Energy balance of the model: what its drag resistors dissipated is what the plate lost, to
     // the integrator's and the time quadrature's accuracy.
-    assert!((lost - model_work).abs() < 1e-4 * lost, "{lost} vs {model_work}");
+    assert!(
+        (lost - model_work).abs() < 1e-4 * lost,
+        "{lost} vs {model_work}"
+    );
     // Against the independent quadrature of 1/2 rho C_d |v|^3 over the plate: the model's
     // 6 x 3 Gauss rule on the modes it keeps, against a midpoint rule whose own error is about
     // 1e-5 here.

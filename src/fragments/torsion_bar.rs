@@ -39,6 +39,8 @@ pub struct TorsionBarPorts {
     pub node: ElementId,
     /// The bar compliance.
     pub c: ElementId,
+    /// The twist junction (common flow: motor speed less the speed of what the bar drives).
+    pub twist: ElementId,
     /// Bond node -> twist junction (effort: bar torque, spring and dashpot).
     pub torque_bond: BondId,
     /// The bar torque \[N m\] (`<prefix>.torque`).
@@ -69,6 +71,7 @@ pub fn add_torsion_bar(
     TorsionBarPorts {
         node,
         c: spring,
+        twist,
         torque_bond,
         torque,
     }

@@ -197,7 +197,10 @@ mod tests {
             let v = 1.5 * m.limit(&l);
             assert!(m.exceeded(v, &l) && m.exceeded(-v, &l) && !m.exceeded(0.5 * v, &l));
             let text = m.message(v, 1.25, &l);
-            assert!(text.contains(m.variable()) && text.contains("t = 1.25"), "{text}");
+            assert!(
+                text.contains(m.variable()) && text.contains("t = 1.25"),
+                "{text}"
+            );
         }
     }
 }

@@ -7,8 +7,10 @@ use nalgebra::DMatrix;
 use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmi2::Values;
 use crate::fragments::plate::modes::{natural_modes, NaturalMode};
-use crate::fragments::plate::{self, PlateModel};
-use crate::fragments::{self, controller, hub, loes, reference, servo_valve, torsion_bar, validity};
+use crate::fragments::plate::{self, Formulation, PlateModel};
+use crate::fragments::{
+    self, controller, hub, loes, reference, servo_valve, torsion_bar, validity,
+};
 use crate::solver::OdeSystem;
 
 use super::affine::{max_abs, Affine, FINITE_BOUND, MAX_AFFINE_OUTPUTS};
@@ -31,7 +33,15 @@ pub const STATE_PREFIX: &str = "x.";
 /// and the plate is driven by F1 and F2 only (hub free on its gas bearing, or locked).
 pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     p.controller.validate()?;
-    let model = PlateModel::new(&p.plate)?;
+    let mut model = PlateModel::new(&p.plate)?;
+    // The consistent structure on its hub is damped on its own modes (bar included, motor
+    // clamped), in place of the R per clamped-plate mode and the bar's dashpot.
+    let modal_damping = model.hub && p.plate.formulation == Formulation::Consistent;
+    if modal_damping {
+        let bar = p.motor_coupled.then_some(p.torsion_bar_k);
+        model.dashpots = plate::damping::modal_dashpots(&model, bar, p.plate.zeta)?;
+        model.damping.iter_mut().for_each(|c| *c = 0.0);
+    }
     let mut g = BondGraph::new("hydraulic_slewing_plate");
     let r = g.add_input("r");
     let f1 = g.add_input("F1");
@@ -68,8 +78,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     };
     // The command generator's move on top of r, unless an external controller drives the coil.
     let loop_reference = if p.reference.is_on() && !p.controller.external {
-        reference::add_reference(&mut g, "reference", &p.reference, p.controller.k_pot, r)
-            .reference
+        reference::add_reference(&mut g, "reference", &p.reference, p.controller.k_pot, r).reference
     } else {
         r
     };
@@ -85,11 +94,15 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     g.connect_signal_port(valve_command, command);
     g.add_output("controller.e_out", command);
     let bar = p.motor_coupled.then(|| {
-        let c = torsion_bar::damping_coefficient(
-            p.torsion_bar_k,
-            p.torsion_bar_zeta,
-            p.plate.hub_total_inertia(),
-        );
+        let c = if modal_damping {
+            0.0
+        } else {
+            torsion_bar::damping_coefficient(
+                p.torsion_bar_k,
+                p.torsion_bar_zeta,
+                p.plate.hub_total_inertia(),
+            )
+        };
         torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, c, rotor)
     });
     let hub = model
@@ -101,6 +114,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
         &model,
         hub.as_ref(),
         bar.map(|b| b.node),
+        bar.map(|b| b.twist),
         [f1, f2],
     );
     fragments::add_loop_outputs(&mut g, y_pot, theta, omega, p_load, q_valve);

@@ -38,7 +38,13 @@ impl ValidityWatch {
 
     /// Checks the monitors' outputs in `values` at time `t`; `warn` gets the message of each
     /// monitor out of range for the first time.
-    pub fn check(&mut self, values: &Values, t: f64, limits: &Limits, mut warn: impl FnMut(String)) {
+    pub fn check(
+        &mut self,
+        values: &Values,
+        t: f64,
+        limits: &Limits,
+        mut warn: impl FnMut(String),
+    ) {
         for (k, m) in Monitor::ALL.into_iter().enumerate() {
             if self.warned[k] {
                 continue;

@@ -371,12 +371,14 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         let move_end = mv.is_on().then(|| mv.t_end());
         let line = |name: &str, y: &[f64]| {
             let f = step_figures(t, y, target, 0.02);
-            let settling = f
-                .settling
-                .map_or(format!("not settled within {stop} s"), |ts| match move_end {
-                    Some(end) => format!("{ts:.3} s (the move ends at {end} s)"),
-                    None => format!("{ts:.3} s"),
-                });
+            let settling =
+                f.settling.map_or(
+                    format!("not settled within {stop} s"),
+                    |ts| match move_end {
+                        Some(end) => format!("{ts:.3} s (the move ends at {end} s)"),
+                        None => format!("{ts:.3} s"),
+                    },
+                );
             format!(
                 "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling (2 %) {settling}\n",
                 last(y).to_degrees(),
@@ -462,7 +464,11 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     )
     .unwrap();
     if info.warnings.is_empty() {
-        writeln!(s, "          no warning: the run stays within the linear model's range").unwrap();
+        writeln!(
+            s,
+            "          no warning: the run stays within the linear model's range"
+        )
+        .unwrap();
     }
     for w in &info.warnings {
         writeln!(s, "  WARNING {w}").unwrap();

@@ -165,7 +165,8 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
     let stress_point = (0.0, 0.5 * b);
     let stress = embed(0.0, modal(super::stress_row(p, &phis, &psis, stress_point)));
     let point = {
-        let (phis, psis, phi_mat, (a, b, nn)) = (phis.clone(), psis.clone(), phi_mat.clone(), (a, b, p.n));
+        let (phis, psis, phi_mat, (a, b, nn)) =
+            (phis.clone(), psis.clone(), phi_mat.clone(), (a, b, p.n));
         move |x: f64, y: f64| {
             let shape = DVector::from_fn(nm, |j, _| {
                 phis[j % nn].value(x / a) * psis[j / nn].value(y / b)
@@ -174,7 +175,8 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
             if hub {
                 v[0] = x;
             }
-            v.rows_mut(first, nm).copy_from(&(phi_mat.transpose() * shape));
+            v.rows_mut(first, nm)
+                .copy_from(&(phi_mat.transpose() * shape));
             v
         }
     };
@@ -191,6 +193,7 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
         stress_point,
         accelerometers,
         drag: Vec::new(),
+        dashpots: Vec::new(),
         nominal: super::PlateNominal::of(p),
     };
     (model, point)

@@ -22,6 +22,7 @@
 
 pub mod beam_functions;
 pub mod consistent;
+pub mod damping;
 pub mod drag;
 pub mod modes;
 pub mod paper;
@@ -237,6 +238,9 @@ pub struct PlateModel {
     pub accelerometers: Vec<DVector<f64>>,
     /// The quadrature points of the air drag (none without drag).
     pub drag: Vec<drag::DragPoint>,
+    /// The modal dashpots of the structure's damping ([`damping`]), in place of the R per
+    /// coordinate (`damping` is then all zero); set by the assembly, which knows the bar.
+    pub dashpots: Vec<damping::ModalDashpot>,
     /// Typical magnitudes of the plate's states, scaling the integrator's absolute tolerance.
     pub nominal: PlateNominal,
 }
@@ -371,12 +375,15 @@ fn combination(g: &mut BondGraph, name: String, terms: Vec<(f64, SignalId)>) -> 
 ///   it is bonded to the hub junction and, through TFs of modulus `torque[j]`, to each plate
 ///   coordinate that the torque drives directly (the paper formulation).
 /// * `forces`: the shaker force signals F1, F2 (MSe into 0-junctions, TFs to the coordinates).
+/// * `twist`: the torsion bar's twist junction (flow: motor speed less hub speed), through which
+///   the modal dashpots see the hub's rate relative to the motor; `None` without the bar.
 pub fn add_plate(
     g: &mut BondGraph,
     prefix: &str,
     model: &PlateModel,
     hub: Option<&HubPorts>,
     root: Option<ElementId>,
+    twist: Option<ElementId>,
     forces: [SignalId; 2],
 ) -> PlatePorts {
     assert_eq!(model.hub, hub.is_some(), "hub fragment and model disagree");
@@ -463,6 +470,25 @@ pub fn add_plate(
             }
         }
     }
+    // structural damping on the structure's modes: per mode a 0-junction whose flow is the modal
+    // rate, and a linear R
+    for (i, d) in model.dashpots.iter().enumerate() {
+        let node = g.add_zero(format!("{prefix}.damping[{}].mode", i + 1));
+        let r = g.add_r(format!("{prefix}.damping[{}]", i + 1), d.resistance);
+        g.bond(node, r);
+        for (j, &cj) in coord.iter().enumerate() {
+            let (junction, modulus) = match twist {
+                // The hub's rate relative to the motor: minus the twist rate.
+                Some(t) if j == 0 && model.hub => (t, -d.velocity[0]),
+                _ => (cj, d.velocity[j]),
+            };
+            if modulus != 0.0 {
+                let tf = g.add_tf(format!("{prefix}.damping[{}]_tf[{j}]", i + 1), modulus);
+                g.bond(node, tf);
+                g.bond(tf, junction);
+            }
+        }
+    }
     // air drag: per quadrature point a 0-junction whose flow is the point's velocity, and the
     // quadratic R
     for (k, d) in model.drag.iter().enumerate() {
@@ -478,10 +504,7 @@ pub fn add_plate(
         g.bond(node, r);
         for (i, &cj) in coord.iter().enumerate() {
             if d.velocity[i] != 0.0 {
-                let tf = g.add_tf(
-                    format!("{prefix}.drag[{}]_tf[{i}]", k + 1),
-                    d.velocity[i],
-                );
+                let tf = g.add_tf(format!("{prefix}.drag[{}]_tf[{i}]", k + 1), d.velocity[i]);
                 g.bond(node, tf);
                 g.bond(tf, cj);
             }

@@ -129,6 +129,7 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
         stress_point,
         accelerometers,
         drag: Vec::new(),
+        dashpots: Vec::new(),
         nominal: super::PlateNominal::of(p),
     };
     (model, point)
