@@ -234,8 +234,9 @@ fn run_fmi2(preset: &str, r: f64, steps: usize) -> Trace {
         assert!(!c.is_null());
         for (vr, value) in preset_settings(preset) {
             let s = match value {
-                Ok(b) => f2::fmi2SetBoolean(c, &vr, 1, &i32::from(b)),
-                Err(i) => f2::fmi2SetInteger(c, &vr, 1, &i),
+                Setting::Boolean(b) => f2::fmi2SetBoolean(c, &vr, 1, &i32::from(b)),
+                Setting::Int32(i) => f2::fmi2SetInteger(c, &vr, 1, &i),
+                Setting::Float64(x) => f2::fmi2SetReal(c, &vr, 1, &x),
             };
             assert_eq!(s, Fmi2Status::Ok);
         }

@@ -68,6 +68,9 @@ const CONFIGS: &[Config] = &[
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "hydraulics.motor_coupled=false",
         ],
         linear: true,
@@ -78,6 +81,9 @@ const CONFIGS: &[Config] = &[
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "hydraulics.motor_coupled=true",
         ],
         linear: true,
@@ -88,6 +94,9 @@ const CONFIGS: &[Config] = &[
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "hydraulics.motor_coupled=true",
             "solver.dense_output=false",
         ],
@@ -96,7 +105,13 @@ const CONFIGS: &[Config] = &[
     },
     Config {
         name: "servo valve uncoupled",
-        sets: &["hydraulics.model=2", "hydraulics.motor_coupled=false"],
+        sets: &[
+            "hydraulics.model=2",
+            "hydraulics.motor_coupled=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
+        ],
         linear: false,
         scipy: false,
     },
@@ -107,10 +122,35 @@ const CONFIGS: &[Config] = &[
         scipy: false,
     },
     Config {
+        name: "servo valve coupled, no drag",
+        sets: &[
+            "hydraulics.model=2",
+            "hydraulics.motor_coupled=true",
+            "plate.Cd=0",
+        ],
+        linear: false,
+        scipy: false,
+    },
+    Config {
+        name: "servo valve coupled, paper plate, no move, no drag",
+        sets: &[
+            "hydraulics.model=2",
+            "hydraulics.motor_coupled=true",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
+        ],
+        linear: false,
+        scipy: false,
+    },
+    Config {
         name: "servo valve coupled, steps ending on every point",
         sets: &[
             "hydraulics.model=2",
             "hydraulics.motor_coupled=true",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "solver.dense_output=false",
         ],
         linear: false,
@@ -121,6 +161,9 @@ const CONFIGS: &[Config] = &[
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "hydraulics.motor_coupled=true",
             "plate.N=6",
             "plate.M=6",
@@ -133,6 +176,9 @@ const CONFIGS: &[Config] = &[
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "hydraulics.motor_coupled=true",
             "plate.N=12",
             "plate.M=12",
@@ -145,12 +191,30 @@ const CONFIGS: &[Config] = &[
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
+            "plate.formulation=1",
+            "reference.angle=0",
+            "plate.Cd=0",
             "hydraulics.motor_coupled=true",
             "plate.N=20",
             "plate.M=20",
         ],
         linear: true,
         scipy: true,
+    },
+    Config {
+        name: "LOES coupled 20x20, consistent plate with drag",
+        sets: &[
+            "hydraulics.model=1",
+            "controller.saturation=false",
+            "hydraulics.motor_coupled=true",
+            "plate.formulation=2",
+            "reference.angle=0",
+            "plate.Cd=1.2",
+            "plate.N=20",
+            "plate.M=20",
+        ],
+        linear: false,
+        scipy: false,
     },
 ];
 

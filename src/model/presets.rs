@@ -22,9 +22,10 @@
 //! formulation (which is what reproduces eq. 16 and Table 1) and switch the generator and the
 //! air drag off, so that `r` alone drives them as in the paper.
 
-use crate::fmi2::Values;
+use crate::fmi2::{Kind, Values};
 
 use super::parameters::set_by_name;
+use super::variables::VARIABLES;
 
 /// A named parameter set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -180,13 +181,15 @@ pub fn apply(values: &mut Values, name: &str) -> Result<(), String> {
 }
 
 /// The presets as JSON: `[{"name", "paper", "description", "settings": {NAME: value}}]` with
-/// values typed as the FMU variables are (number or boolean), for importers such as the Python
-/// tests.
+/// values typed as the FMU variables are (a boolean, an integer, or a number with a decimal
+/// point for a Real), for importers such as the Python tests.
 pub fn presets_json() -> serde_json::Value {
-    let typed = |v: &str| -> serde_json::Value {
-        match v {
-            "true" => true.into(),
-            "false" => false.into(),
+    let typed = |name: &str, v: &str| -> serde_json::Value {
+        let kind = VARIABLES.iter().find(|x| x.name == name).map(|x| x.kind);
+        match (kind, v) {
+            (_, "true") => true.into(),
+            (_, "false") => false.into(),
+            (Some(Kind::Real { .. }), _) => v.parse::<f64>().map_or_else(|_| v.into(), Into::into),
             _ => v
                 .parse::<i64>()
                 .map(Into::into)
@@ -200,7 +203,7 @@ pub fn presets_json() -> serde_json::Value {
             let settings: serde_json::Map<String, serde_json::Value> = p
                 .settings
                 .iter()
-                .map(|(n, v)| (n.to_string(), typed(v)))
+                .map(|(n, v)| (n.to_string(), typed(n, v)))
                 .collect();
             serde_json::json!({
                 "name": p.name,
@@ -217,7 +220,6 @@ mod tests {
     use super::*;
     use crate::fmi2::Experiment;
     use crate::model::parameters::{HydraulicsModel, Parameters};
-    use crate::model::variables::VARIABLES;
 
     #[test]
     fn every_preset_applies_and_names_are_unique() {
@@ -262,5 +264,7 @@ mod tests {
         assert_eq!(j[0]["name"], COMPLETE);
         assert_eq!(j[0]["settings"]["hydraulics.model"], 2);
         assert_eq!(j[0]["settings"]["hydraulics.motor_coupled"], true);
+        // A Real is a float even where the text is an integer.
+        assert!(j[1 + 2]["settings"]["plate.Cd"].is_f64());
     }
 }

@@ -31,7 +31,8 @@ def test_two_instances_agree_with_fmpy(fmu_path, vr):
     execution.real_initial_value(b, vr["controller.A1"], 1.0)
     for s in (a, b):
         for name, value in LOES.items():
-            setter = {bool: execution.boolean_initial_value, int: execution.integer_initial_value}[type(value)]
+            setter = {bool: execution.boolean_initial_value, int: execution.integer_initial_value,
+                      float: execution.real_initial_value}[type(value)]
             setter(s, vr[name], value)
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)

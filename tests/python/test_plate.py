@@ -45,6 +45,7 @@ def test_coupled_step_in_r_with_the_plate(fmu_path):
 
 def test_calculated_frequencies_reproduce_eq16(fmu_path):
     res = simulate_fmu(fmu_path, stop_time=0.01, output_interval=1e-3,
+                       start_values=preset("paper-eq16"),
                        output=[f"plate.f[{k}]" for k in range(1, 21)])
     f = [res[f"plate.f[{k}]"][-1] for k in range(1, 21)]
     # eq. 16 (paper formulation, 3 x 5, pinned-free with the hub); 15 modes, then zeros

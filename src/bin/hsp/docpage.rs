@@ -109,7 +109,7 @@ pub fn copy_figures(fmu: &Path, dir: &Path) -> Result<Vec<std::path::PathBuf>, S
 
 /// Settings of the bond-graph figure: the FMU's start values with a two-mode plate, so that the
 /// picture stays readable (each further plate mode adds the same pattern).
-pub const BOND_GRAPH_FIGURE: &[(&str, &str)] = &[("plate.N", "2"), ("plate.M", "1")];
+pub const BOND_GRAPH_FIGURE: &[(&str, &str)] = &[("plate.N", "2"), ("plate.M", "1"), ("plate.Cd", "0")];
 
 /// The model's bond graph at the FMU's start values (and [`BOND_GRAPH_FIGURE`]), its power part
 /// laid out and drawn as SVG by `layout-rs`.
@@ -603,7 +603,7 @@ fn page(md: &ModelDescription, platforms: &[String], summary: &str, bode_caption
         let settings: Vec<String> = p
             .settings
             .iter()
-            .map(|(k, v)| format!("<code>{k} = {v}</code>"))
+            .map(|(k, v)| format!("<code>{k} = {}</code>", short_text(v)))
             .collect();
         writeln!(
             presets,
