@@ -109,7 +109,8 @@ pub fn copy_figures(fmu: &Path, dir: &Path) -> Result<Vec<std::path::PathBuf>, S
 
 /// Settings of the bond-graph figure: the FMU's start values with a two-mode plate, so that the
 /// picture stays readable (each further plate mode adds the same pattern).
-pub const BOND_GRAPH_FIGURE: &[(&str, &str)] = &[("plate.N", "2"), ("plate.M", "1"), ("plate.Cd", "0")];
+pub const BOND_GRAPH_FIGURE: &[(&str, &str)] =
+    &[("plate.N", "2"), ("plate.M", "1"), ("plate.Cd", "0")];
 
 /// The model's bond graph at the FMU's start values (and [`BOND_GRAPH_FIGURE`]), its power part
 /// laid out and drawn as SVG by `layout-rs`.
