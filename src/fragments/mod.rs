@@ -8,7 +8,7 @@
 //!
 //! * [`loes`]: the low-order equivalent system of the hydraulic loop (Fig. 3, eq. 1).
 //! * [`controller`]: the analog position controller (potentiometer, error and power amplifiers).
-//! * [`reference`]: the command generator (a minimum-jerk move added to the reference `r`).
+//! * [`reference`](mod@reference): the command generator (a minimum-jerk move added to the reference `r`).
 //! * [`torsion_bar`]: the bar between the motor shaft and the hub.
 //! * [`hub`]: the hub inertia on its gas bearing.
 //! * [`plate`]: the flexible plate (assumed modes, eqs. 7-22): beam functions, the paper's and a
