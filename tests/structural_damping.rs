@@ -24,7 +24,10 @@ fn clamped_structure(zeta: f64, bar_k: f64) -> Vec<Complex<f64>> {
     };
     let mut model = PlateModel::new(&p).unwrap();
     model.dashpots = modal_dashpots(&model, Some(bar_k), zeta).unwrap();
-    model.damping.iter_mut().for_each(|c| *c = 0.0);
+    for j in hydraulic_slewing_plate::fragments::plate::damping::damped_coordinates(&model) {
+        let first = model.first_plate();
+        model.damping[j - first] = 0.0;
+    }
     let mut g = BondGraph::new("clamped structure");
     let held = g.add_sf("motor.held", 0.0);
     let motor = g.add_one("motor");

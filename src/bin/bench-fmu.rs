@@ -202,12 +202,12 @@ const CONFIGS: &[Config] = &[
         scipy: true,
     },
     Config {
-        name: "LOES coupled 20x20, consistent plate with drag",
+        name: "LOES coupled 20x20 with drag",
         sets: &[
             "hydraulics.model=1",
             "controller.saturation=false",
             "hydraulics.motor_coupled=true",
-            "plate.formulation=2",
+            "plate.formulation=1",
             "reference.angle=0",
             "plate.Cd=1.2",
             "plate.N=20",

@@ -40,7 +40,11 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     if modal_damping {
         let bar = p.motor_coupled.then_some(p.torsion_bar_k);
         model.dashpots = plate::damping::modal_dashpots(&model, bar, p.plate.zeta)?;
-        model.damping.iter_mut().for_each(|c| *c = 0.0);
+        // The coordinates the dashpots span lose their own R (`damping` is per plate coordinate).
+        for j in plate::damping::damped_coordinates(&model) {
+            let first = model.first_plate();
+            model.damping[j - first] = 0.0;
+        }
     }
     let mut g = BondGraph::new("hydraulic_slewing_plate");
     let r = g.add_input("r");

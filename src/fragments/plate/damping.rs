@@ -26,7 +26,7 @@
 //! through the bar's twist junction, whose flow is `theta_motor' - theta'`) and a linear R of
 //! `2 zeta omega_i`. It dissipates `2 zeta omega_i (modal rate)^2 >= 0`.
 
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 use super::modes::generalized_eigen;
 use super::PlateModel;
@@ -43,9 +43,26 @@ pub struct ModalDashpot {
     pub omega: f64,
 }
 
+/// Most plate coordinates (those of lowest frequency) the modal dashpots span: all of the
+/// default 3 x 5 plate's. Each dashpot couples every coordinate it spans, so a large plate would
+/// turn the Jacobian dense; its stiffer clamped-plate modes, which the hub barely moves, keep
+/// their own R (`2 zeta sqrt(k m)`, exact for them with the hub locked).
+pub const DAMPED_MODES: usize = 15;
+
+/// The plate coordinates the modal dashpots span: the [`DAMPED_MODES`] of lowest frequency.
+pub fn damped_coordinates(model: &PlateModel) -> Vec<usize> {
+    let first = model.first_plate();
+    let mut plate: Vec<usize> = (first..model.dim()).collect();
+    let omega2 = |j: usize| model.stiffness[(j, j)] / model.mass[(j, j)];
+    plate.sort_by(|&i, &j| omega2(i).total_cmp(&omega2(j)).then(i.cmp(&j)));
+    plate.truncate(DAMPED_MODES);
+    plate.sort_unstable();
+    plate
+}
+
 /// The modal dashpots of the structure of `model` (which must have its hub): every elastic mode
-/// of `(M, K + bar)`, with the bar's stiffness `bar_k` on the hub coordinate when the motor drives
-/// it (clamped motor), damped with `zeta`.
+/// of `(M, K + bar)` over the hub and the [`damped_coordinates`], with the bar's stiffness
+/// `bar_k` on the hub coordinate when the motor drives it (clamped motor), damped with `zeta`.
 pub fn modal_dashpots(
     model: &PlateModel,
     bar_k: Option<f64>,
@@ -55,11 +72,16 @@ pub fn modal_dashpots(
     if zeta == 0.0 {
         return Ok(Vec::new());
     }
-    let mut k = model.stiffness.clone();
+    let coords: Vec<usize> = std::iter::once(0)
+        .chain(damped_coordinates(model))
+        .collect();
+    let n = coords.len();
+    let sub = |m: &DMatrix<f64>| DMatrix::from_fn(n, n, |i, j| m[(coords[i], coords[j])]);
+    let (mass, mut k) = (sub(&model.mass), sub(&model.stiffness));
     if let Some(kb) = bar_k {
         k[(0, 0)] += kb;
     }
-    let (vals, vecs) = generalized_eigen(&k, &model.mass)?;
+    let (vals, vecs) = generalized_eigen(&k, &mass)?;
     let scale = vals.iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let mut out = Vec::new();
     for (i, &w2) in vals.iter().enumerate() {
@@ -67,7 +89,11 @@ pub fn modal_dashpots(
             continue; // the free structure's rigid rotation
         }
         let omega = w2.sqrt();
-        let velocity = &model.mass * vecs.column(i);
+        let spanned = &mass * vecs.column(i);
+        let mut velocity = DVector::zeros(model.dim());
+        for (&c, &v) in coords.iter().zip(spanned.iter()) {
+            velocity[c] = v;
+        }
         out.push(ModalDashpot {
             velocity,
             resistance: 2.0 * zeta * omega,
