@@ -238,8 +238,9 @@ pub struct PlateModel {
     pub accelerometers: Vec<DVector<f64>>,
     /// The quadrature points of the air drag (none without drag).
     pub drag: Vec<drag::DragPoint>,
-    /// The modal dashpots of the structure's damping ([`damping`]), in place of the R per
-    /// coordinate (`damping` is then all zero); set by the assembly, which knows the bar.
+    /// The modal dashpots of the structure's damping ([`damping`]), in place of the R of the
+    /// coordinates they span (`damping` is zero for those); set by the assembly, which knows the
+    /// bar.
     pub dashpots: Vec<damping::ModalDashpot>,
     /// Typical magnitudes of the plate's states, scaling the integrator's absolute tolerance.
     pub nominal: PlateNominal,
