@@ -240,7 +240,7 @@ pub(crate) fn assign(g: &BondGraph) -> Result<Causality, BondGraphError> {
         let e = ElementId(i);
         match el.kind {
             ElementKind::I(_) | ElementKind::IField(_) => s.storage(e, true)?,
-            ElementKind::C(_) | ElementKind::CField(_) => s.storage(e, false)?,
+            ElementKind::C(_) | ElementKind::CField(..) => s.storage(e, false)?,
             _ => {}
         }
     }

@@ -46,7 +46,7 @@ impl BondGraph {
                 ElementKind::Se(v) | ElementKind::Sf(v) => fmt_value(v, self),
                 ElementKind::I(l) | ElementKind::C(l) | ElementKind::R(l, _) => fmt_law(l),
                 ElementKind::Tf(v) | ElementKind::Gy(v) => fmt_value(v, self),
-                ElementKind::IField(m) | ElementKind::CField(m) => {
+                ElementKind::IField(m) | ElementKind::CField(m, _) => {
                     format!("{}x{}", m.nrows(), m.ncols())
                 }
                 ElementKind::Zero | ElementKind::One => String::new(),

@@ -191,9 +191,11 @@ pub enum ElementKind {
     /// Multiport I-field with symmetric positive-definite mass (inertance) matrix `M`:
     /// `f = M^-1 p`, `dp/dt = e`. Ports in bond order.
     IField(DMatrix<f64>),
-    /// Multiport C-field with symmetric positive-semidefinite stiffness matrix `K`:
-    /// `e = K q`, `dq/dt = f`. Ports in bond order.
-    CField(DMatrix<f64>),
+    /// Multiport C-field with symmetric positive-semidefinite stiffness matrix `K` and an
+    /// optional nonlinear law `phi_i` on each port's own state: `e = K q + phi(q)` (`phi_i(q_i)`
+    /// in row i, 0 where a port has none), `dq/dt = f`; energy `q' K q / 2 + sum_i E_i(q_i)`.
+    /// Ports in bond order; the law vector is empty or one entry per port.
+    CField(DMatrix<f64>, Vec<Option<NonlinearLaw>>),
 }
 
 impl ElementKind {
@@ -215,7 +217,7 @@ impl ElementKind {
             ElementKind::Zero => "0",
             ElementKind::One => "1",
             ElementKind::IField(_) => "IF",
-            ElementKind::CField(_) => "CF",
+            ElementKind::CField(..) => "CF",
         }
     }
 }

@@ -56,7 +56,7 @@ impl BondGraph {
     pub fn set_nominal(&mut self, element: ElementId, nominal: &[f64]) {
         let states = match &self.elements[element.0].kind {
             ElementKind::I(_) | ElementKind::C(_) => 1,
-            ElementKind::IField(m) | ElementKind::CField(m) => m.nrows(),
+            ElementKind::IField(m) | ElementKind::CField(m, _) => m.nrows(),
             _ => 0,
         };
         assert!(
@@ -98,7 +98,7 @@ impl BondGraph {
         for owner in &self.state_order {
             let n = match owner {
                 StateOwner::Element(e) => match &self.elements[e.0].kind {
-                    ElementKind::IField(m) | ElementKind::CField(m) => m.nrows(),
+                    ElementKind::IField(m) | ElementKind::CField(m, _) => m.nrows(),
                     _ => 1,
                 },
                 StateOwner::Integrator(_) => 1,
@@ -181,7 +181,10 @@ impl BondGraph {
     fn push(&mut self, name: impl Into<String>, kind: ElementKind) -> ElementId {
         let stateful = matches!(
             kind,
-            ElementKind::I(_) | ElementKind::C(_) | ElementKind::IField(_) | ElementKind::CField(_)
+            ElementKind::I(_)
+                | ElementKind::C(_)
+                | ElementKind::IField(_)
+                | ElementKind::CField(..)
         );
         self.elements.push(Element {
             name: name.into(),
@@ -285,7 +288,22 @@ impl BondGraph {
     /// port per bond, in bond creation order): `e = K q`, states `<name>.q[1]` .. `<name>.q[n]`,
     /// energy `q' K q / 2`.
     pub fn add_c_field(&mut self, name: impl Into<String>, stiffness: DMatrix<f64>) -> ElementId {
-        self.push(name, ElementKind::CField(stiffness))
+        self.push(name, ElementKind::CField(stiffness, Vec::new()))
+    }
+
+    /// A C-field as [`Self::add_c_field`] with a nonlinear law `phi_i(q_i)` added to the
+    /// effort of each port that has one (one entry per port, `None` for a linear port):
+    /// `e = K q + phi(q)`, energy `q' K q / 2 + sum_i E_i(q_i)` with `E_i` the law's energy
+    /// function ([`NonlinearLaw::with_energy`]) or its quadrature. For a contact spring on a
+    /// coordinate the field already holds (a spool's end stops on the spool's spring): a
+    /// one-port C on the same junction would add a second state integrating the same flow.
+    pub fn add_c_field_with_port_laws(
+        &mut self,
+        name: impl Into<String>,
+        stiffness: DMatrix<f64>,
+        port_laws: Vec<Option<NonlinearLaw>>,
+    ) -> ElementId {
+        self.push(name, ElementKind::CField(stiffness, port_laws))
     }
 
     /// Sets or replaces the modulating signal of a source, TF or GY (making it `MSe`, `MSf`,

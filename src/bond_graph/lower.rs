@@ -85,7 +85,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 match &el.kind {
                     ElementKind::I(_) => state_names.push(format!("{}.p", el.name)),
                     ElementKind::C(_) => state_names.push(format!("{}.q", el.name)),
-                    ElementKind::IField(m) | ElementKind::CField(m) => {
+                    ElementKind::IField(m) | ElementKind::CField(m, _) => {
                         let v = if matches!(el.kind, ElementKind::IField(_)) {
                             "p"
                         } else {
@@ -338,8 +338,12 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 }
                 b.eq(sum_k, Expr::Lin(terms), name);
             }
-            ElementKind::IField(mm) | ElementKind::CField(mm) => {
+            ElementKind::IField(mm) | ElementKind::CField(mm, _) => {
                 let is_i = matches!(el.kind, ElementKind::IField(_));
+                let port_laws: &[Option<NonlinearLaw>] = match &el.kind {
+                    ElementKind::CField(_, laws) => laws,
+                    _ => &[],
+                };
                 let st0 = elem_state[i].unwrap();
                 let w = if is_i {
                     mm.clone().cholesky().expect("validated").inverse()
@@ -347,14 +351,34 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                     mm.clone()
                 };
                 let states: Vec<usize> = (0..ports.len()).map(|k| st0 + k).collect();
+                let mut law_storages = Vec::new();
                 for (r, &(bd, sg)) in ports.iter().enumerate() {
                     let ko = if is_i { sg } else { 1.0 };
-                    let terms = states
+                    let mut terms: Vec<(f64, usize)> = states
                         .iter()
                         .enumerate()
                         .filter(|(c, _)| w[(r, *c)] != 0.0)
                         .map(|(c, &s)| (ko * w[(r, c)], s))
                         .collect();
+                    // A port's own nonlinear law: phi_r(q_r) in a slot of its own, added to the
+                    // row, and its energy a one-port storage on the same state.
+                    if let Some(Some(law)) = port_laws.get(r) {
+                        let slot = b.slot();
+                        let expr = Expr::Law {
+                            law: b.law(law),
+                            arg: states[r],
+                            ki: 1.0,
+                            ko: 1.0,
+                            modulator: None,
+                        };
+                        b.eq(slot, expr, name);
+                        terms.push((1.0, slot));
+                        law_storages.push(Storage::One {
+                            name: format!("{name}.law[{}]", r + 1),
+                            state: states[r],
+                            law: Law::Nonlinear(law.clone()),
+                        });
+                    }
                     let (out, d) = if is_i {
                         (b.f(bd), Expr::Lin(vec![(1.0, b.e(bd))]))
                     } else {
@@ -368,6 +392,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                     states,
                     w,
                 });
+                storages.append(&mut law_storages);
             }
         }
     }

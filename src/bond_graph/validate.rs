@@ -194,10 +194,16 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
                     return Err(param(name, "mass matrix must be positive definite".into()));
                 }
             }
-            ElementKind::CField(k) => {
+            ElementKind::CField(k, laws) => {
                 symmetric(name, "stiffness matrix", k, ports.len())?;
                 if ports.is_empty() {
                     return Err(structure(name, "field has no bonds"));
+                }
+                if !laws.is_empty() && laws.len() != ports.len() {
+                    return Err(structure(
+                        name,
+                        format!("{} port laws for {} ports", laws.len(), ports.len()),
+                    ));
                 }
                 let ev = k.clone().symmetric_eigenvalues();
                 let tol = 1e-12 * k.amax();
@@ -217,7 +223,7 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
     let storage_ports = |e: ElementId| -> Option<usize> {
         match &g.elements.get(e.0)?.kind {
             ElementKind::I(_) | ElementKind::C(_) => Some(1),
-            ElementKind::IField(_) | ElementKind::CField(_) => Some(g.ports(e).len()),
+            ElementKind::IField(_) | ElementKind::CField(..) => Some(g.ports(e).len()),
             _ => None,
         }
     };

@@ -24,9 +24,11 @@
 //!   `A_s (p_a - p_b)`, and the spool displaces `A_s v_v` out of chamber B into chamber A's end.
 //! * The spool (`<prefix>.spool`, 1-junction, velocity `v_v`): mass `m_v`, viscous friction `b_v`,
 //!   centring spring `k_v`; the spring is part of the spring field (below), whose second state is
-//!   the spool position `x_v`. The end stops at `+-x_v_max` (`<prefix>.spool_stop`, a smooth
-//!   contact force modulated by `x_v`, [`super::servo_valve::limits::spool_stop`]) keep the spool
-//!   within its stroke.
+//!   the spool position `x_v`. The end stops at `+-x_v_max` keep the spool within its stroke: a
+//!   smooth contact spring, stored energy, as the field's nonlinear law on its spool port
+//!   ([`super::servo_valve::limits::spool_stop_spring`]), and a contact damping
+//!   (`<prefix>.spool_stop`, an R modulated by `x_v`,
+//!   [`super::servo_valve::limits::spool_stop_damping`]).
 //!
 //! **Feedback spring.** A spool driven only by `k_v` (as in the paper's BG2) must be very stiff
 //! for a usable null, and then the pilot flow cannot move it faster than a few hundred rad/s
@@ -42,7 +44,7 @@
 //! be dependent (`q_w = q_f + q_v`, a zero eigenvalue and a singular Jacobian at rest). They form
 //! one 2-port C-field ([`add_spring_field`]) with states `(x_f, x_v)` and stiffness
 //! `K = [[k_f + k_w, k_w], [k_w, k_v + k_w]]`, energy
-//! `k_f x_f^2 / 2 + k_v x_v^2 / 2 + k_w (x_f + x_v)^2 / 2`.
+//! `k_f x_f^2 / 2 + k_v x_v^2 / 2 + k_w (x_f + x_v)^2 / 2`, plus the stop spring's energy on `x_v`.
 //!
 //! Sign conventions: `x_f > 0` raises `p_a`, `p_a > p_b` drives `x_v > 0`; chamber volumes flow
 //! in positive.
@@ -52,7 +54,7 @@ use nalgebra::DMatrix;
 use crate::bond_graph::{BondGraph, BondId, ElementId, Law, SignalId};
 
 use super::orifice::{fixed_orifice, variable_orifice, OrificeFluid};
-use super::servo_valve::limits::{spool_stop, stop_stiffness};
+use super::servo_valve::limits::{spool_stop_damping, spool_stop_spring};
 use super::servo_valve::{limits, ServoValveParameters};
 
 /// Handles into the flapper-nozzle fragment.
@@ -154,11 +156,7 @@ pub fn add_flapper_nozzle(
     let x_v = g.add_signal_port(format!("{prefix}.x_v"));
     let stop = g.add_r_modulated(
         format!("{prefix}.spool_stop"),
-        spool_stop(
-            p.x_v_max,
-            stop_stiffness(a_s, p.p_supply - p.p_tank, p.x_v_max),
-            p.m_v,
-        ),
+        spool_stop_damping(p.x_v_max, p.stop_stiffness(), p.m_v),
         x_v,
     );
     g.bond(spool, stop);
@@ -190,7 +188,9 @@ pub fn add_spring_field(
     x_v: SignalId,
 ) -> ElementId {
     let k = DMatrix::from_row_slice(2, 2, &[p.k_f + p.k_w, p.k_w, p.k_w, p.k_v + p.k_w]);
-    let field = g.add_c_field(format!("{prefix}.springs"), k);
+    let stop = spool_stop_spring(p.x_v_max, p.stop_stiffness());
+    let field =
+        g.add_c_field_with_port_laws(format!("{prefix}.springs"), k, vec![None, Some(stop)]);
     // The flapper's null gap, the spool's stroke.
     g.set_nominal(field, &[p.x_f0, p.x_v_max]);
     g.bond(flapper, field);

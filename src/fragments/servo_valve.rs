@@ -48,7 +48,7 @@ pub mod parameters;
 pub mod rest;
 
 pub use g_est::{compare_with_g_est, g_est, log_frequencies, open_loop_linearization, GEstPoint};
-pub use parameters::ServoValveParameters;
+pub use parameters::{CoilDrive, ServoValveParameters};
 pub use rest::rest_state;
 
 use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};

@@ -8,8 +8,10 @@
 //!               R_bob    I L_bob                      I m_f    R b_f    C 1/k_f
 //! ```
 //!
-//! * `MSe` `<prefix>.amplifier`: the power amplifier voltage `e_in` \[V\] (the controller's
-//!   command signal);
+//! * `MSe` `<prefix>.amplifier`: the coil voltage `u_coil` \[V\]. With the voltage drive (the
+//!   paper's power operational amplifier, [`CoilDrive::Voltage`]) it is the controller's command
+//!   `e_in`; with a current-feedback amplifier ([`CoilDrive::Current`]) it is
+//!   `K_i (G_i e_in - i)` within the compliance voltage `+-U_c` ([`add_current_amplifier`]);
 //! * 1-junction `<prefix>.coil`: coil current `i` \[A\]; `R_bob` \[ohm\] in series with `L_bob`
 //!   \[H\] (state `<prefix>.L_bob.p` = flux linkage `L_bob i` \[Wb\]);
 //! * GY `<prefix>.k_phi` \[N/A = V s/m\]: force on the flapper `F = k_phi i`, back-EMF
@@ -31,9 +33,10 @@
 //! Sign conventions: a positive amplifier voltage drives a positive current, a positive force and
 //! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, BondId, ElementId, NonlinearLaw, SignalId};
 
-use super::servo_valve::ServoValveParameters;
+use super::controller::AmplifierLimit;
+use super::servo_valve::{CoilDrive, ServoValveParameters};
 
 /// Coil current at which the flux state is stated nominal \[A\]: 10 V over the default 80 ohm.
 const NOMINAL_CURRENT: f64 = 0.125;
@@ -63,7 +66,8 @@ pub fn add_torque_motor(
     p: &ServoValveParameters,
 ) -> TorqueMotorPorts {
     let command = g.add_signal_port(format!("{prefix}.e_in"));
-    let amp = g.add_se(format!("{prefix}.amplifier"), command);
+    let coil_voltage = g.add_signal_port(format!("{prefix}.u_coil"));
+    let amp = g.add_se(format!("{prefix}.amplifier"), coil_voltage);
     let coil = g.add_one(format!("{prefix}.coil"));
     let r_bob = g.add_r(format!("{prefix}.R_bob"), p.r_bob);
     let l_bob = g.add_i(format!("{prefix}.L_bob"), p.l_bob);
@@ -84,6 +88,11 @@ pub fn add_torque_motor(
     g.bond(flapper, b_f);
 
     let current = g.add_flow_sensor(format!("{prefix}.i_coil"), coil_bond);
+    let voltage = match p.drive {
+        CoilDrive::Voltage => command,
+        CoilDrive::Current => add_current_amplifier(g, prefix, p, command, current),
+    };
+    g.connect_signal_port(coil_voltage, voltage);
     let x_f = g.add_signal_port(format!("{prefix}.x_f"));
     TorqueMotorPorts {
         flapper,
@@ -93,4 +102,36 @@ pub fn add_torque_motor(
         x_f,
         coil_bond,
     }
+}
+
+/// The current-feedback amplifier (`drive` = current): the coil voltage
+/// `u = lim(K_i (G_i e_in - i))`, signals `<prefix>.i_demand` (`G_i e_in`), `<prefix>.i_error`,
+/// `<prefix>.K_i` and `<prefix>.u_limited`, the compliance limit `+-U_c` as the power
+/// amplifier's smooth limit ([`AmplifierLimit::Saturating`]). The current is a state function
+/// (the flux over `L_bob`), so the loop is not algebraic.
+///
+/// With the coil `i = u_L / (R_bob + L_bob s)` and ignoring the back-EMF, the current follows its
+/// demand as `i / (G_i e_in) = K_i / (R_bob + K_i + L_bob s)`: a lag at `(R_bob + K_i) / L_bob`
+/// (1.0 kHz with the defaults) in place of the voltage drive's `R_bob / L_bob` (64 1/s).
+fn add_current_amplifier(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &ServoValveParameters,
+    command: SignalId,
+    current: SignalId,
+) -> SignalId {
+    let demand = g.add_gain(format!("{prefix}.i_demand"), p.g_i, command);
+    let error = g.add_sum(
+        format!("{prefix}.i_error"),
+        &[(1.0, demand), (-1.0, current)],
+    );
+    let u = g.add_gain(format!("{prefix}.K_i"), p.k_i, error);
+    let limit = AmplifierLimit::Saturating { e_max: p.u_c };
+    g.add_function(
+        format!("{prefix}.u_limited"),
+        NonlinearLaw::new(format!("compliance limit +-{} V", p.u_c), move |u| {
+            limit.eval(u)
+        }),
+        u,
+    )
 }

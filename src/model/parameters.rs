@@ -8,7 +8,7 @@ use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
 use crate::fragments::plate::{Formulation, PlateParameters, Root, MAX_FUNCTIONS};
 use crate::fragments::reference::MoveParameters;
-use crate::fragments::servo_valve::ServoValveParameters;
+use crate::fragments::servo_valve::{CoilDrive, ServoValveParameters};
 use crate::fragments::validity::Limits;
 use crate::solver::{Atol, Method, SolverOptions};
 
@@ -221,6 +221,10 @@ impl Parameters {
                 dp_cr: values.real(idx::SERVO_VALVE_DP_CR),
                 r_bob: values.real(idx::SERVO_VALVE_R_BOB),
                 l_bob: values.real(idx::SERVO_VALVE_L_BOB),
+                drive: CoilDrive::from_code(values.integer(idx::SERVO_VALVE_DRIVE))?,
+                g_i: values.real(idx::SERVO_VALVE_G_I),
+                k_i: values.real(idx::SERVO_VALVE_K_I),
+                u_c: values.real(idx::SERVO_VALVE_U_C),
                 k_phi: values.real(idx::SERVO_VALVE_K_PHI),
                 m_f: values.real(idx::SERVO_VALVE_M_F),
                 b_f: values.real(idx::SERVO_VALVE_B_F),

@@ -36,28 +36,45 @@ pub fn stop_stiffness(a_s: f64, p_supply: f64, x_max: f64) -> f64 {
     20.0 * a_s * p_supply / x_max
 }
 
-/// The spool end stops: a force `F(x) = k delta (sp((x - x_max)/delta) - sp((-x - x_max)/delta))`
-/// pushing the spool back inside `|x| <= x_max` (`delta = x_max / 20`), plus a contact damping
-/// `c(x) v` with `c(x) = c_0 (sp'(..) + sp'(..))`, present only at the stops.
+/// The spool end stops' contact spring: `F(x) = k delta (sp((x - x_max)/delta) - sp((-x - x_max)/delta))`
+/// pushes the spool back inside `|x| <= x_max` (`delta = x_max / 20`), a law on the spool port of
+/// the spring field (so its state is the spool position `x`, which the field already holds).
 ///
-/// As an R law in resistance form on the spool's 1-junction, modulated by the spool position
-/// `x`: `e = F(x) + c(x) f`, with `f` the spool velocity. The damping part dissipates; the
-/// stop force is the contact spring, whose energy is not a state of the model (the law acts
-/// within a few micrometres of the stop, where the spool's own spring energy is not of interest).
-/// `c_0 = 2 zeta sqrt(k m_v)` with `zeta` = 0.5: the spool does not bounce.
-pub fn spool_stop(x_max: f64, k: f64, m_v: f64) -> Law {
+/// A stored-energy law: with `d/dz Li₂(-e^z) = -sp(z)` its energy is
+/// `E(x) = -k delta² (Li₂(-e^z₊) + Li₂(-e^z₋)) + 2 k delta² Li₂(-e^(-x_max/delta))`,
+/// `z± = (±x - x_max)/delta`, zero at `x = 0` and the exact integral of `F`; so the contact's
+/// energy is in the model's `energy` and it returns what it takes.
+pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
     let delta = x_max / 20.0;
-    let c0 = 2.0 * 0.5 * (k * m_v).sqrt();
-    Law::Nonlinear(NonlinearLaw::modulated("spool stop", move |v, x| {
+    let e_side =
+        move |x: f64| -> f64 { -k * delta * delta * dilog_of_minus_exp((x - x_max) / delta) };
+    let e0 = 2.0 * e_side(0.0);
+    NonlinearLaw::new("spool stop spring", move |x| {
         let (sp_hi, s_hi) = softplus((x - x_max) / delta);
         let (sp_lo, s_lo) = softplus((-x - x_max) / delta);
-        let force = k * delta * (sp_hi - sp_lo);
-        let dforce = k * (s_hi + s_lo);
-        // d sigma/dz = sigma (1 - sigma)
-        let c = c0 * (s_hi + s_lo);
-        let dc = c0 * (s_hi * (1.0 - s_hi) - s_lo * (1.0 - s_lo)) / delta;
-        (force + c * v, c, dforce + dc * v)
-    }))
+        (k * delta * (sp_hi - sp_lo), k * (s_hi + s_lo))
+    })
+    .with_energy(move |x| e_side(x) + e_side(-x) - e0)
+}
+
+/// The spool end stops' contact damping: `e = c(x) v` with `c(x) = c_0 (sp'(z₊) + sp'(z₋))`
+/// (`z±` as in [`spool_stop_spring`]), present only at the stops, as an R law in resistance form
+/// on the spool's 1-junction modulated by the spool position `x`; it dissipates `c(x) v² >= 0`.
+/// `c_0 = 2 zeta sqrt(k m_v)` with `zeta` = 0.5: the spool does not bounce.
+pub fn spool_stop_damping(x_max: f64, k: f64, m_v: f64) -> Law {
+    let delta = x_max / 20.0;
+    let c0 = 2.0 * 0.5 * (k * m_v).sqrt();
+    Law::Nonlinear(NonlinearLaw::modulated(
+        "spool stop damping",
+        move |v, x| {
+            let (_, s_hi) = softplus((x - x_max) / delta);
+            let (_, s_lo) = softplus((-x - x_max) / delta);
+            let c = c0 * (s_hi + s_lo);
+            // d sigma/dz = sigma (1 - sigma)
+            let dc = c0 * (s_hi * (1.0 - s_hi) - s_lo * (1.0 - s_lo)) / delta;
+            (c * v, c, dc * v)
+        },
+    ))
 }
 
 /// Absolute pressure below which the oil releases its dissolved air and the chamber becomes a
@@ -220,28 +237,63 @@ mod tests {
     }
 
     #[test]
+    fn stop_spring_energy_is_the_integral_of_its_law() {
+        let (x_max, k) = (4e-4, 7e6);
+        let spring = spool_stop_spring(x_max, k);
+        let energy = spring.energy.as_ref().unwrap();
+        assert_eq!(energy(0.0), 0.0);
+        // Against a fine trapezoidal integral of the law, inside the stroke, at and past the
+        // stops, on both sides.
+        for x in [1e-4, 3.9e-4, 4e-4, 4.3e-4, -4.1e-4, -5e-4] {
+            let n = 200_000;
+            let h = x / n as f64;
+            let trapezoid: f64 = (0..=n)
+                .map(|i| {
+                    let w = if i == 0 || i == n { 0.5 } else { 1.0 };
+                    w * spring.eval(i as f64 * h, 0.0).0
+                })
+                .sum::<f64>()
+                * h;
+            let e = energy(x);
+            assert!(e >= 0.0, "{x}: {e}");
+            assert!(
+                (e - trapezoid).abs() <= 1e-8 * trapezoid.abs() + 1e-22,
+                "{x}: {e} vs {trapezoid}"
+            );
+        }
+    }
+
+    #[test]
     fn laws_have_exact_derivatives_and_their_limits() {
-        let stop = spool_stop(4e-4, 7e6, 3e-3);
-        let Law::Nonlinear(stop) = stop else {
+        let (x_max, k) = (4e-4, 7e6);
+        let spring = spool_stop_spring(x_max, k);
+        let Law::Nonlinear(damping) = spool_stop_damping(x_max, k, 3e-3) else {
             unreachable!()
         };
         for &x in &[-5e-4, -4.1e-4, -3.9e-4, 0.0, 1e-4, 3.95e-4, 4.2e-4] {
+            let hx = 1e-10;
+            let (f, df, _) = spring.eval(x, 0.0);
+            let fx = (spring.eval(x + hx, 0.0).0 - spring.eval(x - hx, 0.0).0) / (2.0 * hx);
+            assert!((df - fx).abs() <= 1e-5 * (1.0 + fx.abs()), "x {x}");
+            // odd in x
+            assert!((spring.eval(-x, 0.0).0 + f).abs() <= 1e-12 * (1.0 + f.abs()));
             for &v in &[-0.3, 0.0, 0.2] {
-                let (e, de_dv, de_dx) = stop.eval(v, x);
-                let (hv, hx) = (1e-6, 1e-10);
-                let fv = (stop.eval(v + hv, x).0 - stop.eval(v - hv, x).0) / (2.0 * hv);
-                let fx = (stop.eval(v, x + hx).0 - stop.eval(v, x - hx).0) / (2.0 * hx);
+                let (e, de_dv, de_dx) = damping.eval(v, x);
+                let hv = 1e-6;
+                let fv = (damping.eval(v + hv, x).0 - damping.eval(v - hv, x).0) / (2.0 * hv);
+                let fx = (damping.eval(v, x + hx).0 - damping.eval(v, x - hx).0) / (2.0 * hx);
                 assert!((de_dv - fv).abs() <= 1e-6 * (1.0 + fv.abs()), "x {x} v {v}");
                 assert!((de_dx - fx).abs() <= 1e-5 * (1.0 + fx.abs()), "x {x} v {v}");
-                // odd in (v, x) together
-                assert!((stop.eval(-v, -x).0 + e).abs() <= 1e-12 * (1.0 + e.abs()));
+                // a damper: never delivers power, and odd in v
+                assert!(e * v >= 0.0, "x {x} v {v}");
+                assert!((damping.eval(-v, x).0 + e).abs() <= 1e-12 * (1.0 + e.abs()));
             }
         }
         // inside the stroke: no force (e^-20 of the stiffness at null), at the stop: k delta ln 2
-        let (f0, _, k0) = stop.eval(0.0, 0.0);
-        assert!(f0 == 0.0 && k0 < 1e-8 * 7e6, "{k0}");
-        let (fs, _, _) = stop.eval(0.0, 4e-4);
-        assert!((fs - 7e6 * 2e-5 * 2f64.ln()).abs() < 1e-9 * fs);
+        let (f0, k0, _) = spring.eval(0.0, 0.0);
+        assert!(f0 == 0.0 && k0 < 1e-8 * k, "{k0}");
+        let (fs, _, _) = spring.eval(x_max, 0.0);
+        assert!((fs - k * 2e-5 * 2f64.ln()).abs() < 1e-9 * fs);
 
         let Law::Nonlinear(ch) = chamber(1.5e-4, 1.4e9) else {
             unreachable!()

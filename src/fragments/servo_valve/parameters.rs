@@ -4,6 +4,36 @@
 use super::super::loes::PRINTED_I_B;
 use super::super::orifice::OrificeFluid;
 
+/// How the power amplifier drives the torque motor's coil (`servo_valve.drive`).
+///
+/// The paper drives the coil from a "linear power operational amplifier": a voltage. The coil's
+/// current then lags the command by `R_bob / L_bob`, which is the 65 1/s pole of `G_est`. Many
+/// installations of two-stage valves use a current-feedback amplifier instead (the coil's
+/// resistance drifts 0.4 %/K with its temperature, a current does not): the coil's lag moves
+/// to the current loop's pole, far above the band, and `G_est` no longer describes the valve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum CoilDrive {
+    /// 1: the coil voltage is the command `e_in` (the paper's amplifier; reproduces `G_est`).
+    Voltage,
+    /// 2: a current-feedback amplifier: coil voltage `u = K_i (G_i e_in - i)`, limited to the
+    /// compliance voltage `+-U_c`.
+    Current,
+}
+
+impl CoilDrive {
+    /// The drive of the FMU's integer code (1 = voltage, 2 = current), or an error naming
+    /// `servo_valve.drive`.
+    pub fn from_code(code: i32) -> Result<Self, String> {
+        match code {
+            1 => Ok(CoilDrive::Voltage),
+            2 => Ok(CoilDrive::Current),
+            other => Err(format!(
+                "servo_valve.drive: {other} is not a coil drive (1 = voltage, 2 = current feedback)"
+            )),
+        }
+    }
+}
+
 /// Every physical constant of the full servo valve and actuator (SI units). The FMU names are
 /// `servo_valve.<name>` with the names in brackets. Ranges quoted are those of two-stage
 /// flapper-nozzle valves with mechanical feedback (README, "The full servo valve").
@@ -28,6 +58,21 @@ pub struct ServoValveParameters {
     /// coil's lag `R_bob / L_bob` = 64 1/s is the identified 65 1/s pole. Above the 0.1-1 H of
     /// single coils: the two coils of a torque motor in series, at low frequency, reach it.
     pub l_bob: f64,
+    /// How the power amplifier drives the coil (`drive`): a voltage (the paper's linear power
+    /// operational amplifier, the default) or a current (a current-feedback amplifier).
+    pub drive: CoilDrive,
+    /// Transconductance of the current-feedback amplifier \[A/V\] (`G_i`): 12.5 mA/V, the
+    /// voltage drive's DC `1 / R_bob`, so that 10 V commands the rated 125 mA either way.
+    pub g_i: f64,
+    /// Loop gain of the current-feedback amplifier \[V/A\] (`K_i`): the coil voltage per ampere of
+    /// current error, `u = K_i (G_i e_in - i)`. 7.8 kV/A puts the current loop's pole
+    /// `(R_bob + K_i) / L_bob` at 1.0 kHz (a servo amplifier's current loop, far above the
+    /// valve's 120 Hz) and leaves a DC current error `R_bob / (R_bob + K_i)` of 1.0 %.
+    pub k_i: f64,
+    /// Compliance voltage of the current-feedback amplifier \[V\] (`U_c`): the most voltage it
+    /// can put across the coil, 12 V as the voltage amplifier's rail (a +-15 V supply less the
+    /// output stage's headroom). It limits how fast the current can change, `U_c / L_bob`.
+    pub u_c: f64,
     /// Torque-motor force constant at the nozzle \[N/A\] (`k_phi`): fitted to `G_est` (it sets the
     /// loop gain), 0.1692 N/A: 10 V drive 125 mA, 21 mN, which the wire balances at 0.4 mm of
     /// spool travel, the full stroke.
@@ -67,7 +112,7 @@ pub struct ServoValveParameters {
     /// Radial clearance of the spool \[m\] (`c_r`): 2.5 um; rounds the critical-centre null.
     pub c_r: f64,
     /// Spool stroke \[m\] (`x_v_max`): +-0.4 mm (range 0.3-0.5), where the spool meets its end
-    /// stops ([`super::limits::spool_stop`]).
+    /// stops ([`super::limits::spool_stop_spring`]).
     pub x_v_max: f64,
     /// Volume of each actuator chamber with its line \[m^3\] (`V_1`): 150 cm^3, half the swept
     /// volume of a +-90 deg vane stroke (`D_m pi / 2` = 126 cm^3) plus 25 cm^3 of line (0.5 m of
@@ -98,6 +143,10 @@ impl Default for ServoValveParameters {
             dp_cr: 5e3,
             r_bob: 80.0,
             l_bob: 1.252,
+            drive: CoilDrive::Voltage,
+            g_i: 0.0125,
+            k_i: 7.8e3,
+            u_c: 12.0,
             k_phi: 0.1692,
             m_f: 2e-5,
             b_f: 0.06,
@@ -138,6 +187,12 @@ impl ServoValveParameters {
         std::f64::consts::PI * self.d_s * self.d_s / 4.0
     }
 
+    /// Stiffness of the spool end stops' contact spring \[N/m\]
+    /// ([`super::limits::stop_stiffness`] of the spool area and the supply-to-tank pressure).
+    pub fn stop_stiffness(&self) -> f64 {
+        super::limits::stop_stiffness(self.spool_area(), self.p_supply - self.p_tank, self.x_v_max)
+    }
+
     /// Null flow gain of the four-way stage `Cd w sqrt((p_s - p_t)/rho)` \[m^2/s\].
     pub fn flow_gain(&self) -> f64 {
         self.cd * self.w * ((self.p_supply - self.p_tank) / self.rho).sqrt()
@@ -165,6 +220,9 @@ impl ServoValveParameters {
             ("dp_cr", self.dp_cr),
             ("R_bob", self.r_bob),
             ("L_bob", self.l_bob),
+            ("G_i", self.g_i),
+            ("K_i", self.k_i),
+            ("U_c", self.u_c),
             ("k_phi", self.k_phi),
             ("m_f", self.m_f),
             ("b_f", self.b_f),
