@@ -113,7 +113,7 @@ pub fn add_torque_motor(
 /// With the coil `i = u_L / (R_bob + L_bob s)` and ignoring the back-EMF, the current follows its
 /// demand as `i / (G_i e_in) = K_i / (R_bob + K_i + L_bob s)`: a lag at `(R_bob + K_i) / L_bob`
 /// (1.0 kHz with the defaults) in place of the voltage drive's `R_bob / L_bob` (64 1/s).
-fn add_current_amplifier(
+pub fn add_current_amplifier(
     g: &mut BondGraph,
     prefix: &str,
     p: &ServoValveParameters,

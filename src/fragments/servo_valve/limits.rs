@@ -200,6 +200,19 @@ mod tests {
         }
     }
 
+    /// `int_0^x phi(s) ds` by the trapezoidal rule on 200 000 intervals.
+    fn trapezoid(law: &NonlinearLaw, x: f64) -> f64 {
+        let n = 200_000;
+        let h = x / n as f64;
+        (0..=n)
+            .map(|i| {
+                let w = if i == 0 || i == n { 0.5 } else { 1.0 };
+                w * law.eval(i as f64 * h, 0.0).0
+            })
+            .sum::<f64>()
+            * h
+    }
+
     #[test]
     fn chamber_energy_is_the_integral_of_its_law() {
         let Law::Nonlinear(ch) = chamber(1.5e-4, 1.4e9) else {
@@ -215,15 +228,7 @@ mod tests {
         // Through the cavitation knee: against a fine trapezoidal integral of the law.
         for p_target in [-0.5e5, -0.9e5, -0.913e5] {
             let q = p_target / k;
-            let n = 200_000;
-            let h = q / n as f64;
-            let trapezoid: f64 = (0..=n)
-                .map(|i| {
-                    let w = if i == 0 || i == n { 0.5 } else { 1.0 };
-                    w * ch.eval(i as f64 * h, 0.0).0
-                })
-                .sum::<f64>()
-                * h;
+            let trapezoid = trapezoid(&ch, q);
             let e = energy(q);
             assert!(
                 (e - trapezoid).abs() <= 1e-8 * e.abs(),
@@ -245,15 +250,7 @@ mod tests {
         // Against a fine trapezoidal integral of the law, inside the stroke, at and past the
         // stops, on both sides.
         for x in [1e-4, 3.9e-4, 4e-4, 4.3e-4, -4.1e-4, -5e-4] {
-            let n = 200_000;
-            let h = x / n as f64;
-            let trapezoid: f64 = (0..=n)
-                .map(|i| {
-                    let w = if i == 0 || i == n { 0.5 } else { 1.0 };
-                    w * spring.eval(i as f64 * h, 0.0).0
-                })
-                .sum::<f64>()
-                * h;
+            let trapezoid = trapezoid(&spring, x);
             let e = energy(x);
             assert!(e >= 0.0, "{x}: {e}");
             assert!(
