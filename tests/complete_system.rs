@@ -146,8 +146,12 @@ fn the_2_volt_step_warns_that_it_leaves_the_models_range() {
             .filter(|w| w.contains(m.variable()))
             .count()
     };
+    // The tip swings to w/a 0.38 and the hub spins at (Omega/omega_1)^2 0.14 (both past 0.1);
+    // the rig-sized motor stalls at 140 N m, which the 20 mm bar carries at 0.24 of its yield,
+    // and the plate's root stays under half of its yield (95 MPa).
     assert_eq!(named(Monitor::TipRatio), 1, "{:?}", r.warnings);
-    assert_eq!(named(Monitor::PlateStress), 1, "{:?}", r.warnings);
+    assert_eq!(named(Monitor::SpinRatio), 1, "{:?}", r.warnings);
+    assert_eq!(named(Monitor::BarStress), 0, "{:?}", r.warnings);
     assert!(r.warnings.iter().all(|w| w.contains(" t = ")));
 }
 

@@ -144,12 +144,26 @@ fn coupled_eigenvalues(values: &Values) -> Result<(Vec<String>, Vec<Mode>), Stri
                 (0..m).map(|i| (v[i].norm() / nominal[i], i)).collect();
             parts.sort_by(|x, y| y.0.total_cmp(&x.0));
             let top = parts[0].0.max(1e-300);
-            let label = parts
+            let mut label = parts
                 .iter()
                 .take(3)
                 .map(|(w, i)| format!("{} {:.2}", lin.state_names[keep[*i]], w / top))
                 .collect::<Vec<_>>()
                 .join(", ");
+            // How much of the hub's swing the potentiometer sees in this mode: the motor's
+            // speed over the hub's (the angles' ratio, both being the speeds over lambda).
+            let speed = |name: &str| {
+                lin.output_names.iter().position(|n| n == name).map(|o| {
+                    (0..m)
+                        .map(|i| v[i] * lin.c[(o, keep[i])])
+                        .sum::<Complex<f64>>()
+                })
+            };
+            if let (Some(motor), Some(hub)) = (speed("omega_motor"), speed("omega_hub")) {
+                if hub.norm() > 0.0 {
+                    label += &format!("; motor/hub swing {:.2}", motor.norm() / hub.norm());
+                }
+            }
             (l, label)
         })
         .collect();

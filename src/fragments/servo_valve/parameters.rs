@@ -1,7 +1,13 @@
 //! The constants of the full servo valve and actuator, with their sources and reasons, and the
 //! checks that reject physically absurd values by name at initialisation.
 
-use super::super::loes::PRINTED_I_B;
+/// The vane motor's displacement \[m^3/rad\]: 10 cm^3/rad (63 cm^3/rev), from the torque budget
+/// of [`ServoValveParameters::d_m`].
+pub const D_M: f64 = 1e-5;
+/// The LOES's identified displacement \[m^3/rad\] (0.5 L/rev), for which the valve's metering
+/// was first sized: scaling the port width by `D_M / LOES_D_M` keeps `k_sv / D_m`, and so
+/// `G_est`.
+pub const LOES_D_M: f64 = 8.04e-5;
 use super::super::orifice::OrificeFluid;
 
 /// How the power amplifier drives the torque motor's coil (`servo_valve.drive`).
@@ -160,13 +166,13 @@ impl Default for ServoValveParameters {
             m_v: 3e-3,
             b_v: 1.0,
             k_v: 200.0,
-            w: std::f64::consts::PI * d_s,
+            w: std::f64::consts::PI * d_s * D_M / LOES_D_M,
             c_r: 2.5e-6,
             x_v_max: 4e-4,
-            v_1: 1.5e-4,
+            v_1: 4.1e-5,
             r_leak: 100e5 / (1e-3 / 60.0),
-            d_m: 8.04e-5,
-            i_m: PRINTED_I_B,
+            d_m: D_M,
+            i_m: 1e-4,
             b_m: 0.1,
         }
     }
