@@ -191,3 +191,29 @@ fn fixed_entries_give_the_bits_of_a_full_evaluation() {
         }
     }
 }
+
+/// `jacobian_varying` on a buffer that holds a J of the same model (written at another point)
+/// gives, point after point, the bits of a full evaluation there: the update the integrators
+/// make at every step for a Jacobian with varying entries.
+#[test]
+fn varying_update_gives_the_bits_of_a_full_evaluation() {
+    for preset in presets::PRESETS {
+        let system = Assembled::new(&parameters(preset.name)).unwrap();
+        let m = system.compiled();
+        if m.jacobian_is_constant() {
+            continue;
+        }
+        let pts = points(&system, 8, 0.5, 3000);
+        let (x0, u0) = &pts[0];
+        let mut held = jacobian(m, x0, u0);
+        for (x, u) in &pts[1..] {
+            assert!(m.jacobian_varying(x, u, &mut held), "{}", preset.name);
+            let full = jacobian(m, x, u);
+            let same = held
+                .iter()
+                .zip(full.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "{}: the update differs from the full J", preset.name);
+        }
+    }
+}

@@ -452,6 +452,32 @@ impl CompiledModel {
         }
     }
 
+    /// Overwrites only the Jacobian's varying entries (the passes over the variable columns of
+    /// [`CompiledModel::jacobian`]), for a `jac` that already holds the constant ones, as a
+    /// `jac` written by [`CompiledModel::jacobian`] after [`CompiledModel::fix_constant_entries`]
+    /// does: the same bits as a full evaluation, without its copy of the n × n constant part.
+    /// Returns whether the varying entries are finite.
+    ///
+    /// # Panics
+    /// If the constant entries have not been fixed.
+    pub fn jacobian_varying(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) -> bool {
+        let n = self.n_states();
+        assert_eq!(jac.shape(), (n, n), "jacobian shape");
+        assert!(
+            self.constant_entries.is_some(),
+            "jacobian_varying before fix_constant_entries"
+        );
+        let st = &self.structure;
+        let passes = st.variable_colours.iter().zip(&st.variable_row_column);
+        for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
+            self.jacobian_pass(ops, group, row_column, x, u, jac);
+        }
+        st.varying
+            .iter()
+            .enumerate()
+            .all(|(i, row)| row.iter().all(|&j| jac[(i, j as usize)].is_finite()))
+    }
+
     /// One dual-number pass through `ops` with the columns `group` seeded, writing the entry
     /// `(i, row_column[i])` of each row that has one.
     fn jacobian_pass(

@@ -201,6 +201,10 @@ pub struct Assembled {
     /// The Jacobian and its stamp (a hash of its bits) when it is constant (the LOES with the
     /// plate: linear with constant coefficients), evaluated once per parameter set.
     constant_jacobian: Option<(u64, DMatrix<f64>)>,
+    /// When the Jacobian varies: the stamp of its constant entries (kept by the compiled model),
+    /// so that the integrator updates only the varying ones
+    /// ([`OdeSystem::jacobian_constant_part`]).
+    constant_part: Option<u64>,
     /// `dx/dt` and the outputs as sparse products for their affine rows (see [`Affine`]): all
     /// of them with a constant Jacobian, all but the servo valve's with the full valve.
     affine: Option<Affine>,
@@ -286,6 +290,10 @@ impl Assembled {
             }
             _ => None,
         };
+        let constant_part = match (&constant_jacobian, compiled.constant_entries()) {
+            (None, Some(fixed)) => Some(stamp(fixed)),
+            _ => None,
+        };
         let energy_bound = compiled.stored_energy_bound();
         let mut on_demand = on_demand(&compiled, affine.as_ref(), &output_index, &state_slot);
         if energy_bound.is_some() && !on_demand.is_empty() {
@@ -294,6 +302,7 @@ impl Assembled {
         Ok(Assembled {
             energy_bound,
             constant_jacobian,
+            constant_part,
             affine,
             on_demand,
             inputs,
@@ -649,6 +658,14 @@ impl OdeSystem for Assembled {
 
     fn constant_jacobian(&self) -> Option<u64> {
         self.constant_jacobian.as_ref().map(|(s, _)| *s)
+    }
+
+    fn jacobian_constant_part(&self) -> Option<u64> {
+        self.constant_part
+    }
+
+    fn jacobian_varying(&self, _t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> bool {
+        self.constant_part.is_some() && self.compiled.jacobian_varying(x, &self.inputs, jac)
     }
 
     fn jacobian_pattern(&self) -> Option<&[Vec<u32>]> {

@@ -98,7 +98,9 @@ pub(crate) fn with_kept_memory<W: Workspace, R>(
 /// J = ∂f/∂x at the integrator's current point, into `jac`, or, for a constant Jacobian
 /// (`stamp`, [`OdeSystem::constant_jacobian`]), the one kept in the integrator's cache
 /// (evaluated once per stamp). `fd_tolerances` are the (atol, rtol) of a finite-difference
-/// Jacobian (None: the integrator's own). False if J is not finite.
+/// Jacobian (None: the integrator's own). `holds` is the stamp of the constant part of the J
+/// that `jac` holds ([`OdeSystem::jacobian_constant_part`]), None when it holds none: with it,
+/// only the varying entries are written. False if J is not finite.
 pub(crate) fn jacobian_here<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
@@ -106,6 +108,7 @@ pub(crate) fn jacobian_here<S: OdeSystem + ?Sized>(
     f0: &[f64],
     fd_tolerances: Option<(&Atol, f64)>,
     jac: &mut DMatrix<f64>,
+    holds: &mut Option<u64>,
 ) -> bool {
     let Integrator {
         t,
@@ -120,7 +123,7 @@ pub(crate) fn jacobian_here<S: OdeSystem + ?Sized>(
         Some(stamp) => cache.constant_jacobian(sys, stamp, *t, x, stats, counted),
         None => {
             let (atol, rtol) = fd_tolerances.unwrap_or((&options.atol, options.rtol));
-            super::jacobian::evaluate(sys, stats, *t, x, f0, atol, rtol, jac)
+            super::jacobian::evaluate(sys, stats, *t, x, f0, atol, rtol, jac, holds)
         }
     }
 }

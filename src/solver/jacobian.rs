@@ -86,16 +86,28 @@ pub(crate) fn evaluate<S: OdeSystem + ?Sized>(
     atol: &super::Atol,
     rtol: f64,
     jac: &mut DMatrix<f64>,
+    holds: &mut Option<u64>,
 ) -> bool {
     stats.jac_evals += 1;
     let n = x.len();
+    let part = sys.jacobian_constant_part();
+    if part.is_some() && *holds == part && jac.shape() == (n, n) {
+        // `jac` holds a J of this system under the same constant part: only the rest varies.
+        return sys.jacobian_varying(t, x, jac);
+    }
+    *holds = None;
     if jac.nrows() != n || jac.ncols() != n {
         *jac = DMatrix::zeros(n, n);
     }
-    if !sys.jacobian(t, x, jac) {
+    let analytic = sys.jacobian(t, x, jac);
+    if !analytic {
         stats.f_evals += fd_jacobian_with(sys, t, x, f0, &|j| atol.get(j) / rtol, jac);
     }
-    all_finite(jac.as_slice())
+    let finite = all_finite(jac.as_slice());
+    if analytic && finite {
+        *holds = part;
+    }
+    finite
 }
 
 /// df/dt at (t, x) for non-autonomous systems: the model's, else a forward difference with

@@ -134,6 +134,23 @@ pub trait OdeSystem {
     fn constant_jacobian(&self) -> Option<u64> {
         None
     }
+    /// `Some(stamp)` if part of J is the same at every (t, x) and the system can write the rest
+    /// alone ([`OdeSystem::jacobian_varying`]); `stamp` identifies the constant part (its pattern
+    /// and values). An integrator whose J buffer holds a J this system wrote under the same
+    /// stamp then updates only the varying entries instead of writing the whole matrix (for a
+    /// large model with a few nonlinear terms, the dense copy was most of the cost of a step).
+    /// Default `None`.
+    fn jacobian_constant_part(&self) -> Option<u64> {
+        None
+    }
+    /// Overwrites the entries of `jac` that vary with (t, x), leaving the constant ones, which
+    /// `jac` must already hold: it holds a J that [`OdeSystem::jacobian`] wrote under the stamp
+    /// [`OdeSystem::jacobian_constant_part`] gives now. The result has the bits `jacobian` would
+    /// give. Returns false if a varying entry is not finite (the constant ones were checked when
+    /// `jac` was written) or if the system cannot (the default).
+    fn jacobian_varying(&self, _t: f64, _x: &[f64], _jac: &mut DMatrix<f64>) -> bool {
+        false
+    }
     /// Where J may be nonzero: for each row i, the columns j for which ∂f_i/∂x_j is not zero
     /// at some point (a structural pattern, such as a compiled model knows; the diagonal need
     /// not be listed). With it, the block partition of the iteration matrices ([`linalg`]) is

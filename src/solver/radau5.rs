@@ -198,6 +198,9 @@ fn factor(jac: &DMatrix<f64>, part: &Arc<Partition>, h: f64, old: Option<Lu>) ->
 /// overwritten before they are read.
 pub(crate) struct Work {
     jac: DMatrix<f64>,
+    /// The stamp of the constant part of the J that `jac` holds (see
+    /// [`OdeSystem::jacobian_constant_part`]), None while it holds none.
+    jac_holds: Option<u64>,
     f0: Vec<f64>,
     /// 1/SCAL (see [`set_scal`]).
     inv_scal: Vec<f64>,
@@ -243,6 +246,7 @@ impl Workspace for Work {
         let v = || vec![0.0; n];
         Work {
             jac: DMatrix::zeros(n, n),
+            jac_holds: None,
             f0: v(),
             inv_scal: v(),
             z: [v(), v(), v()],
@@ -329,6 +333,8 @@ fn resume_kept_jacobian<S: OdeSystem + ?Sized>(
         }
     }
     let pattern = sys.jacobian_pattern();
+    // The rebuilt J is one the system wrote, but restored from a saved state: claim nothing.
+    work.jac_holds = None;
     if !kept.rebuild(pattern, &mut work.jac) {
         integ.kept_jac.clear();
         return false;
@@ -662,7 +668,15 @@ fn jacobian_at<S: OdeSystem + ?Sized>(
         lus.clear();
     }
     let fd = Some((&work.atol_for_fd, rtol));
-    jacobian_here(integ, sys, stamp, &work.f0, fd, &mut work.jac)
+    jacobian_here(
+        integ,
+        sys,
+        stamp,
+        &work.f0,
+        fd,
+        &mut work.jac,
+        &mut work.jac_holds,
+    )
 }
 
 /// Makes `lus[0]` the factorisations for step size `h` (RADAU5's DECOMR and DECOMC: the real LU

@@ -273,6 +273,9 @@ pub(crate) struct Work {
     f0: Vec<f64>,
     dfdt: Vec<f64>,
     jac: DMatrix<f64>,
+    /// The stamp of the constant part of the J that `jac` holds (see
+    /// [`OdeSystem::jacobian_constant_part`]), None while it holds none.
+    jac_holds: Option<u64>,
     u: Vec<Vec<f64>>,
     y: Vec<f64>,
     fy: Vec<f64>,
@@ -295,6 +298,7 @@ impl Workspace for Work {
             f0: vec![0.0; n],
             dfdt: vec![0.0; n],
             jac: DMatrix::zeros(n, n),
+            jac_holds: None,
             u: vec![vec![0.0; n]; STAGES],
             y: vec![0.0; n],
             fy: vec![0.0; n],
@@ -628,7 +632,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
         };
         let t = integ.t;
         if !jac_ok {
-            let ok = jacobian_here(integ, sys, stamp, &w.f0, None, &mut w.jac)
+            let ok = jacobian_here(integ, sys, stamp, &w.f0, None, &mut w.jac, &mut w.jac_holds)
                 && (autonomous
                     || jacobian::time_derivative(
                         sys,
