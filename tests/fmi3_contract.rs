@@ -383,10 +383,10 @@ fn a_wrong_instantiation_token_is_refused() {
             c"x".as_ptr(),
             token.as_ptr(),
             std::ptr::null(),
-            false,
-            false,
-            false,
-            false,
+            0,
+            0,
+            0,
+            0,
             std::ptr::null(),
             0,
             std::ptr::null_mut(),
@@ -395,4 +395,81 @@ fn a_wrong_instantiation_token_is_refused() {
         )
     };
     assert!(c.is_null());
+}
+
+/// FMI 3.0's scalar Booleans are C `bool`s, taken as the byte the caller passed: 0 is false and
+/// any other byte true (C's truthiness), at every scalar Boolean argument, with no undefined
+/// behaviour for bytes other than 0 and 1 (a Rust `bool` holding 2 would be).
+#[test]
+fn scalar_boolean_arguments_take_any_nonzero_byte_as_true() {
+    for b in [0u8, 1, 2, 255] {
+        let truth = b != 0;
+        // eventModeUsed: the FMU has no event mode and refuses to be instantiated with it.
+        assert_eq!(
+            Fmu3::try_new_bytes(0, b).is_err(),
+            truth,
+            "eventModeUsed byte {b}"
+        );
+        // loggingOn: with logging on, a step logs its statistics; off, nothing.
+        let f = Fmu3::try_new_bytes(b, 0).expect("instantiated");
+        assert_eq!(f.init(0.0), Fmi3Status::Ok);
+        let before = f.log_len();
+        assert_eq!(f.step(0.0, 1e-3), Fmi3Status::Ok);
+        assert_eq!(
+            f.log_len() > before,
+            truth,
+            "loggingOn byte {b}: {:?}",
+            f.log()
+        );
+        // fmi3SetDebugLogging's loggingOn: the same, switched after instantiation.
+        let g = Fmu3::new();
+        assert_eq!(
+            unsafe { fmi3SetDebugLogging(g.c, b, 0, std::ptr::null()) },
+            Fmi3Status::Ok
+        );
+        assert_eq!(g.init(0.0), Fmi3Status::Ok);
+        let before = g.log_len();
+        assert_eq!(g.step(0.0, 1e-3), Fmi3Status::Ok);
+        assert_eq!(g.log_len() > before, truth, "fmi3SetDebugLogging byte {b}");
+        // toleranceDefined and stopTimeDefined: a tolerance of -1 and a stop time before the
+        // start are refused when defined, ignored when not.
+        for (tol_defined, stop_defined) in [(b, 0), (0, b)] {
+            let h = Fmu3::new();
+            let s = unsafe {
+                fmi3EnterInitializationMode(h.c, tol_defined, -1.0, 1.0, stop_defined, 0.0)
+            };
+            let expected = if truth {
+                Fmi3Status::Error
+            } else {
+                Fmi3Status::Ok
+            };
+            assert_eq!(
+                s,
+                expected,
+                "byte {b} ({tol_defined}, {stop_defined}): {}",
+                h.last()
+            );
+        }
+        // noSetFMUStatePriorToCurrentPoint: read, and without effect on the step.
+        let k = Fmu3::new();
+        assert_eq!(k.init(0.0), Fmi3Status::Ok);
+        let (mut event, mut terminate, mut early, mut last) = (true, true, true, f64::NAN);
+        let s = unsafe {
+            fmi3DoStep(
+                k.c,
+                0.0,
+                1e-3,
+                b,
+                &mut event,
+                &mut terminate,
+                &mut early,
+                &mut last,
+            )
+        };
+        assert_eq!(
+            s,
+            Fmi3Status::Ok,
+            "noSetFMUStatePriorToCurrentPoint byte {b}"
+        );
+    }
 }

@@ -39,14 +39,14 @@ unsafe fn me3() -> Fmi3Instance {
         c"me3".as_ptr(),
         token.as_ptr(),
         std::ptr::null(),
-        false,
-        false,
+        0,
+        0,
         std::ptr::null_mut(),
         Some(quiet3),
     );
     assert!(!c.is_null());
     assert_eq!(
-        fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0),
+        fmi3EnterInitializationMode(c, 0, 0.0, 0.0, 0, 0.0),
         Fmi3Status::Ok
     );
     assert_eq!(fmi3SetFloat64(c, &vr("r"), 1, &2.0, 1), Fmi3Status::Ok);
@@ -162,7 +162,7 @@ fn model_exchange_matches_the_fmi2_interface_state_for_state() {
             assert!(d3.iter().any(|d| *d != 0.0), "r = 2 V moves something");
             let (mut event, mut terminate) = (true, true);
             assert_eq!(
-                fmi3CompletedIntegratorStep(c3, true, &mut event, &mut terminate),
+                fmi3CompletedIntegratorStep(c3, 1, &mut event, &mut terminate),
                 Fmi3Status::Ok
             );
             assert!(!event && !terminate);
@@ -372,7 +372,7 @@ fn interface_rules() {
         let c = me3();
         let (mut a, mut b, mut d, mut t) = (false, false, false, 0.0);
         assert_eq!(
-            fmi3DoStep(c, 0.0, 1e-3, true, &mut a, &mut b, &mut d, &mut t),
+            fmi3DoStep(c, 0.0, 1e-3, 1, &mut a, &mut b, &mut d, &mut t),
             Fmi3Status::Error
         );
         // Time is not a known of a derivative.

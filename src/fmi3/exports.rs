@@ -828,48 +828,56 @@ macro_rules! export_fmi3 {
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetDebugLogging(
                 c: Fmi3Instance,
-                on: bool,
+                on: Fmi3Boolean,
                 n: usize,
                 cats: *const Fmi3String,
             ) -> Fmi3Status {
-                x::set_debug_logging::<M>(c, on, n, cats)
+                x::set_debug_logging::<M>(c, truthy(on), n, cats)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
                 name: Fmi3String,
                 token: Fmi3String,
                 resources: Fmi3String,
-                _visible: bool,
-                logging_on: bool,
-                event_mode_used: bool,
-                _early_return_allowed: bool,
+                _visible: Fmi3Boolean,
+                logging_on: Fmi3Boolean,
+                event_mode_used: Fmi3Boolean,
+                _early_return_allowed: Fmi3Boolean,
                 _required: *const Fmi3ValueReference,
                 _n_required: usize,
                 env: Fmi3InstanceEnvironment,
                 log: Fmi3LogMessageCallback,
                 _intermediate: Fmi3IntermediateUpdateCallback,
             ) -> Fmi3Instance {
-                x::instantiate_co_simulation::<M>(name, token, resources, logging_on, event_mode_used, env, log)
+                x::instantiate_co_simulation::<M>(
+                    name,
+                    token,
+                    resources,
+                    truthy(logging_on),
+                    truthy(event_mode_used),
+                    env,
+                    log,
+                )
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateModelExchange(
                 name: Fmi3String,
                 token: Fmi3String,
                 resources: Fmi3String,
-                _visible: bool,
-                logging_on: bool,
+                _visible: Fmi3Boolean,
+                logging_on: Fmi3Boolean,
                 env: Fmi3InstanceEnvironment,
                 log: Fmi3LogMessageCallback,
             ) -> Fmi3Instance {
-                x::instantiate_model_exchange::<M>(name, token, resources, logging_on, env, log)
+                x::instantiate_model_exchange::<M>(name, token, resources, truthy(logging_on), env, log)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
                 name: Fmi3String,
                 _token: Fmi3String,
                 _resources: Fmi3String,
-                _visible: bool,
-                _logging_on: bool,
+                _visible: Fmi3Boolean,
+                _logging_on: Fmi3Boolean,
                 env: Fmi3InstanceEnvironment,
                 log: Fmi3LogMessageCallback,
                 _clock: Fmi3ClockUpdateCallback,
@@ -885,13 +893,13 @@ macro_rules! export_fmi3 {
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterInitializationMode(
                 c: Fmi3Instance,
-                tol_defined: bool,
+                tol_defined: Fmi3Boolean,
                 tol: f64,
                 start: f64,
-                stop_defined: bool,
+                stop_defined: Fmi3Boolean,
                 stop: f64,
             ) -> Fmi3Status {
-                x::enter_initialization_mode::<M>(c, tol_defined, tol, start, stop_defined, stop)
+                x::enter_initialization_mode::<M>(c, truthy(tol_defined), tol, start, truthy(stop_defined), stop)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ExitInitializationMode(c: Fmi3Instance) -> Fmi3Status {
@@ -1175,13 +1183,13 @@ macro_rules! export_fmi3 {
                 c: Fmi3Instance,
                 t: f64,
                 h: f64,
-                no_prior: bool,
+                no_prior: Fmi3Boolean,
                 event: *mut bool,
                 terminate: *mut bool,
                 early: *mut bool,
                 last: *mut f64,
             ) -> Fmi3Status {
-                x::do_step::<M>(c, t, h, no_prior, event, terminate, early, last)
+                x::do_step::<M>(c, t, h, truthy(no_prior), event, terminate, early, last)
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ActivateModelPartition(
@@ -1225,7 +1233,7 @@ macro_rules! export_fmi3 {
             #[no_mangle]
             pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
                 c: Fmi3Instance,
-                _no_prior: bool,
+                _no_prior: Fmi3Boolean,
                 enter_event_mode: *mut bool,
                 terminate: *mut bool,
             ) -> Fmi3Status {

@@ -16,8 +16,16 @@ pub type Fmi3Int32 = i32;
 pub type Fmi3UInt32 = u32;
 pub type Fmi3Int64 = i64;
 pub type Fmi3UInt64 = u64;
-/// C's `bool`, one byte (unlike FMI 2.0's `int`).
-pub type Fmi3Boolean = bool;
+/// C's `bool`, one byte (unlike FMI 2.0's `int`), taken as the byte the caller passed: a Rust
+/// `bool` holding any byte other than 0 or 1 is undefined behaviour, and C code can pass one (a
+/// `bool` filled from an integer, a struct's padding). Every scalar Boolean argument of the
+/// `fmi3*` functions has this type and is read with [`truthy`].
+pub type Fmi3Boolean = u8;
+
+/// C's truthiness: any nonzero byte is true.
+pub fn truthy(b: Fmi3Boolean) -> bool {
+    b != 0
+}
 pub type Fmi3Char = c_char;
 pub type Fmi3String = *const c_char;
 pub type Fmi3Byte = u8;

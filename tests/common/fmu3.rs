@@ -42,6 +42,12 @@ impl Fmu3 {
 
     /// The instance, or the log when instantiation returned NULL.
     pub fn try_new(event_mode_used: bool) -> Result<Fmu3, Vec<Line>> {
+        Self::try_new_bytes(0, u8::from(event_mode_used))
+    }
+
+    /// As [`Fmu3::try_new`], with `loggingOn` and `eventModeUsed` passed as the bytes given
+    /// (C's `bool` arguments: an importer may pass any byte).
+    pub fn try_new_bytes(logging_on: u8, event_mode_used: u8) -> Result<Fmu3, Vec<Line>> {
         let log = Box::new(Mutex::new(Vec::new()));
         let env = &*log as *const Mutex<Vec<Line>> as *mut c_void;
         let token = CString::new(GUID).unwrap();
@@ -50,10 +56,10 @@ impl Fmu3 {
                 c"contract3".as_ptr(),
                 token.as_ptr(),
                 std::ptr::null(),
-                false,
-                false,
+                0,
+                logging_on,
                 event_mode_used,
-                false,
+                0,
                 std::ptr::null(),
                 0,
                 env,
@@ -114,7 +120,7 @@ impl Fmu3 {
 
     /// `fmi3EnterInitializationMode` with the experiment starting at `start`.
     pub fn enter(&self, start: f64) -> Fmi3Status {
-        unsafe { fmi3EnterInitializationMode(self.c, false, 0.0, start, false, 0.0) }
+        unsafe { fmi3EnterInitializationMode(self.c, 0, 0.0, start, 0, 0.0) }
     }
 
     pub fn exit(&self) -> Fmi3Status {
@@ -134,7 +140,7 @@ impl Fmu3 {
                 self.c,
                 t,
                 h,
-                true,
+                1,
                 &mut event,
                 &mut terminate,
                 &mut early,
