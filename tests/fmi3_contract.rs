@@ -473,3 +473,40 @@ fn scalar_boolean_arguments_take_any_nonzero_byte_as_true() {
         );
     }
 }
+
+/// `fmi3GetAdjointDerivative` with no knowns (nKnowns = 0, so nSensitivity = 0) is checked as
+/// any other call: refused before initialisation and with a parameter as unknown, allowed with
+/// an output once initialised (campaign defect N2: it returned OK in every case, its checks ran
+/// inside the loop over the knowns).
+#[test]
+fn adjoint_derivative_without_knowns_is_checked_like_any_call() {
+    let none: [u32; 0] = [];
+    let mut sensitivity: [f64; 0] = [];
+    let seed = [1.0];
+    let mut adjoint = |f: &Fmu3, unknown: &str| unsafe {
+        fmi3GetAdjointDerivative(
+            f.c,
+            &Fmu3::vr(unknown),
+            1,
+            none.as_ptr(),
+            0,
+            seed.as_ptr(),
+            1,
+            sensitivity.as_mut_ptr(),
+            0,
+        )
+    };
+    // Instantiated, not initialised: refused.
+    let f = Fmu3::new();
+    assert_eq!(adjoint(&f, "y_pot"), Fmi3Status::Error, "{}", f.last());
+    assert!(f.last().contains("fmi3G"), "{}", f.last());
+    // A parameter as the unknown: refused, naming it.
+    let g = Fmu3::new();
+    assert_eq!(g.init(0.0), Fmi3Status::Ok);
+    assert_eq!(adjoint(&g, "plate.zeta"), Fmi3Status::Error);
+    assert!(g.last().contains("plate.zeta"), "{}", g.last());
+    // An output, initialised: allowed (an empty sensitivity).
+    let h = Fmu3::new();
+    assert_eq!(h.init(0.0), Fmi3Status::Ok);
+    assert_eq!(adjoint(&h, "y_pot"), Fmi3Status::Ok, "{}", h.last());
+}

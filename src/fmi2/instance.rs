@@ -688,6 +688,44 @@ impl<M: FmuModel> Instance<M> {
         Ok((false, false))
     }
 
+    /// The checks of a partial-derivative call before anything is computed: the call is allowed
+    /// in this state, every value reference is a Real, every unknown an output or a state
+    /// derivative and every known an input or a continuous state. Returns the variables'
+    /// indices. FMI 3.0's adjoint runs it once up front, so that a call with no knowns is
+    /// refused wherever one with knowns would be.
+    pub fn check_derivative_call(
+        &mut self,
+        unknown_vrs: &[u32],
+        known_vrs: &[u32],
+    ) -> Result<(Vec<usize>, Vec<usize>), Fmi2Status> {
+        const F: &str = "fmi2GetDirectionalDerivative";
+        self.allowed(F, Operation::DirectionalDerivative)?;
+        let unknowns = self.resolve(F, unknown_vrs, "Real")?;
+        let knowns = self.resolve(F, known_vrs, "Real")?;
+        let states = M::continuous_states();
+        for &u in &unknowns {
+            let var = &M::variables()[u];
+            let derivative = states.iter().any(|&(_, d)| d == u);
+            if !(var.causality == Causality::Output || derivative) {
+                return Err(self.error(&format!(
+                    "{F}: unknown '{}' (value reference {}) is neither an output nor a state derivative",
+                    var.name, var.value_reference
+                )));
+            }
+        }
+        for &k in &knowns {
+            let var = &M::variables()[k];
+            let state = states.iter().any(|&(x, _)| x == k);
+            if !(var.causality == Causality::Input || state) {
+                return Err(self.error(&format!(
+                    "{F}: known '{}' (value reference {}) is neither an input nor a continuous state",
+                    var.name, var.value_reference
+                )));
+            }
+        }
+        Ok((unknowns, knowns))
+    }
+
     /// `fmi2GetDirectionalDerivative`: `dv_unknown = (d unknowns / d knowns) dv_known` from the
     /// model's exact Jacobian, at the current point. Unknowns are outputs or state derivatives,
     /// knowns inputs or continuous states (FMI 2.0.4, section 2.1.9), all Real.
@@ -699,38 +737,10 @@ impl<M: FmuModel> Instance<M> {
         dv_unknown: &mut [f64],
     ) -> Fmi2Status {
         const F: &str = "fmi2GetDirectionalDerivative";
-        if let Err(s) = self.allowed(F, Operation::DirectionalDerivative) {
-            return s;
-        }
-        let unknowns = match self.resolve(F, unknown_vrs, "Real") {
-            Ok(i) => i,
+        let (unknowns, knowns) = match self.check_derivative_call(unknown_vrs, known_vrs) {
+            Ok(indices) => indices,
             Err(s) => return s,
         };
-        let knowns = match self.resolve(F, known_vrs, "Real") {
-            Ok(i) => i,
-            Err(s) => return s,
-        };
-        let states = M::continuous_states();
-        for &u in &unknowns {
-            let var = &M::variables()[u];
-            let derivative = states.iter().any(|&(_, d)| d == u);
-            if !(var.causality == Causality::Output || derivative) {
-                return self.error(&format!(
-                    "{F}: unknown '{}' (value reference {}) is neither an output nor a state derivative",
-                    var.name, var.value_reference
-                ));
-            }
-        }
-        for &k in &knowns {
-            let var = &M::variables()[k];
-            let state = states.iter().any(|&(x, _)| x == k);
-            if !(var.causality == Causality::Input || state) {
-                return self.error(&format!(
-                    "{F}: known '{}' (value reference {}) is neither an input nor a continuous state",
-                    var.name, var.value_reference
-                ));
-            }
-        }
         if let Some((k, v)) = dv_known.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return self.error(&format!("{F}: dvKnown[{k}] = {v} is not finite"));
         }

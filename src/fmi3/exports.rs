@@ -697,6 +697,11 @@ pub unsafe fn partial_derivative<M: FmuModel>(
         if !adjoint {
             return inst.directional_derivative(&u2, &k2, seed, out);
         }
+        // The state and causality checks run before the loop over the knowns: with none, the
+        // loop would not run them.
+        if let Err(s) = inst.check_derivative_call(&u2, &k2) {
+            return s;
+        }
         let mut direction = vec![0.0; k2.len()];
         let mut column = vec![0.0; u2.len()];
         for j in 0..k2.len() {
