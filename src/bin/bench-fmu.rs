@@ -131,7 +131,6 @@ const CONFIGS: &[Config] = &[
             "hydraulics.model=2",
             "hydraulics.motor_coupled=true",
             "plate.Cd=0",
-            "plate.zeta=0.01",
         ],
         linear: false,
         scipy: false,
