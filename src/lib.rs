@@ -3,9 +3,9 @@
 //! The reference open implementation of Barbosa & Góes, "Modeling system of a flexible structure
 //! with hydraulic actuation using bond-graphs" (II CONEM, 2002): a flexible aluminium plate on a
 //! gas-bearing hub, slewed through a torsion bar by a vane motor under a two-stage
-//! electro-hydraulic servo valve and an analog position loop. It is shipped as an FMI 2.0 FMU
-//! offering Co-Simulation and Model Exchange from one binary (model identifier
-//! `HydraulicSlewingPlate`).
+//! electro-hydraulic servo valve and an analog position loop. It is shipped as an FMI 2.0 FMU and
+//! an FMI 3.0 FMU, each offering Co-Simulation and Model Exchange, from one binary (model
+//! identifier `HydraulicSlewingPlate`).
 //!
 //! The layers, each usable and testable on its own:
 //!
@@ -15,12 +15,14 @@
 //! | [`bond_graph`] | elements, causality, compilation to state equations | energy and signals |
 //! | [`fragments`] | the paper's physical parts as bond-graph fragments | physics, no FMI |
 //! | [`model`] | the assembled model behind the FMU, its parameters and outputs | fragments, solver |
-//! | [`fmi2`] | the FMI 2.0 C ABI (Co-Simulation, Model Exchange), generic over a model | FMI, no physics |
-//! | [`fmi3`] | the FMI 3.0 C ABI (Co-Simulation, Model Exchange) over the same core | FMI, no physics |
+//! | [`fmu`] | the version-neutral FMU core: instance, state machine, values, FMU states, logging | a model trait, no FMI version, no physics |
+//! | [`fmi2`] | the FMI 2.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
+//! | [`fmi3`] | the FMI 3.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
 
 pub mod bond_graph;
 pub mod fmi2;
 pub mod fmi3;
+pub mod fmu;
 pub mod fragments;
 pub mod model;
 pub mod solver;

@@ -8,7 +8,7 @@ mod fmu;
 
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
 use hydraulic_slewing_plate::fragments::plate::Formulation;
 use hydraulic_slewing_plate::fragments::validity::Monitor;

@@ -3,7 +3,7 @@
 //! structure the solver relies on there (constant Jacobian, kept across steps).
 
 use hydraulic_slewing_plate::bond_graph::ExactDiscretisation;
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;

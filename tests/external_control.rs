@@ -2,7 +2,7 @@
 //! LOES's valve command) in place of the analog controller, through the power amplifier's output
 //! limit; `r` is not used; `y_pot` stays an output.
 
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;

@@ -15,8 +15,8 @@ mod fmu;
 
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::*;
-use hydraulic_slewing_plate::fmi2::Causality;
 use hydraulic_slewing_plate::fmi2_exports::*;
+use hydraulic_slewing_plate::fmu::Causality;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
 /// xorshift64*: small, seeded, good enough to pick calls.
@@ -68,7 +68,7 @@ const INTEGERS: [(&str, [i32; 3]); 3] = [
 
 fn start_value(name: &str) -> f64 {
     match VARIABLES.iter().find(|v| v.name == name).unwrap().kind {
-        hydraulic_slewing_plate::fmi2::Kind::Real { start, .. } => start.unwrap_or(0.0),
+        hydraulic_slewing_plate::fmu::Kind::Real { start, .. } => start.unwrap_or(0.0),
         _ => 0.0,
     }
 }

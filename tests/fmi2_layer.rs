@@ -2,14 +2,14 @@
 //! make it fail or panic): what the shipped model cannot provoke on purpose. A panic inside a
 //! model call becomes fmi2Fatal with a log line and never unwinds into the caller; after it only
 //! fmi2FreeInstance is allowed. A model failure becomes fmi2Discard with the time reached. The
-//! generic entry points of `fmi2::exports` are called directly, as the exported symbols do.
+//! generic entry points of `fmi2::entries` are called directly, as the exported symbols do.
 
 use std::ffi::{c_char, c_void, CStr};
 use std::sync::Mutex;
 
-use hydraulic_slewing_plate::fmi2::exports as x;
+use hydraulic_slewing_plate::fmi2::entries as x;
 use hydraulic_slewing_plate::fmi2::ffi::*;
-use hydraulic_slewing_plate::fmi2::{
+use hydraulic_slewing_plate::fmu::{
     Causality, Experiment, FmuModel, Kind, StepFailure, StepLog, Value, Values, Variability,
     Variable,
 };

@@ -11,8 +11,8 @@ mod fmu;
 
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::*;
-use hydraulic_slewing_plate::fmi2::{Causality, Experiment, Values};
 use hydraulic_slewing_plate::fmi2_exports::*;
+use hydraulic_slewing_plate::fmu::{Causality, Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{Assembled, STATE_PREFIX};
 use hydraulic_slewing_plate::model::parameters::Parameters;
 use hydraulic_slewing_plate::model::variables::{CONTINUOUS_STATES, VARIABLES};

@@ -27,8 +27,8 @@ use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};
 use fmi::traits::FmiImport;
 use hydraulic_slewing_plate::fmi2::ffi::{Fmi2CallbackFunctions, Fmi2Status, FMI2_CO_SIMULATION};
-use hydraulic_slewing_plate::fmi2::Kind;
 use hydraulic_slewing_plate::fmi2_exports as f2;
+use hydraulic_slewing_plate::fmu::Kind;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
 

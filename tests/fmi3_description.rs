@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use hydraulic_slewing_plate::fmi2::{Causality, Variability};
 use hydraulic_slewing_plate::fmi3::variables::{fmi3_type_name, Fmi3Table, TIME_VALUE_REFERENCE};
+use hydraulic_slewing_plate::fmu::{Causality, Variability};
 use hydraulic_slewing_plate::model::variables::{CONTINUOUS_STATES, GUID, VARIABLES};
 
 fn root() -> PathBuf {

@@ -65,23 +65,7 @@ unsafe fn me3() -> Fmi3Instance {
 
 /// The FMI 2.0 twin of [`me3`].
 unsafe fn me2() -> *mut c_void {
-    let callbacks = Fmi2CallbackFunctions::with_plain_logger(quiet2, std::ptr::null_mut());
-    let guid = CString::new(GUID).unwrap();
-    let c = f2::fmi2Instantiate(
-        c"me2".as_ptr(),
-        FMI2_MODEL_EXCHANGE,
-        guid.as_ptr(),
-        std::ptr::null(),
-        &callbacks,
-        0,
-        0,
-    );
-    assert!(!c.is_null());
-    assert_eq!(
-        f2::fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0),
-        Fmi2Status::Ok
-    );
-    assert_eq!(f2::fmi2EnterInitializationMode(c), Fmi2Status::Ok);
+    let c = me2_in_initialization_mode();
     assert_eq!(f2::fmi2SetReal(c, &vr("r"), 1, &2.0), Fmi2Status::Ok);
     assert_eq!(f2::fmi2ExitInitializationMode(c), Fmi2Status::Ok);
     let mut info = std::mem::zeroed();
@@ -382,4 +366,80 @@ fn interface_rules() {
         assert_eq!(s, Fmi3Status::Error);
         fmi3FreeInstance(c);
     }
+}
+
+/// FMI 3.0 allows `fmi3GetContinuousStateDerivatives` in initialization mode (FMI 3.0, section
+/// 2.3.3, "State: Initialization Mode", allowed function calls): the derivatives at the initial
+/// point, the same as read in event mode right after initialisation. (FMI 2.0.4 allows
+/// `fmi2GetDerivatives` only after initialisation; that layer keeps refusing it there.)
+#[test]
+fn derivatives_are_readable_in_initialization_mode() {
+    unsafe {
+        let token = CString::new(GUID).unwrap();
+        let c = fmi3InstantiateModelExchange(
+            c"init".as_ptr(),
+            token.as_ptr(),
+            std::ptr::null(),
+            0,
+            0,
+            std::ptr::null_mut(),
+            Some(quiet3),
+        );
+        assert!(!c.is_null());
+        let mut n = 0usize;
+        assert_eq!(fmi3GetNumberOfContinuousStates(c, &mut n), Fmi3Status::Ok);
+        assert_eq!(
+            fmi3EnterInitializationMode(c, 0, 0.0, 0.0, 0, 0.0),
+            Fmi3Status::Ok
+        );
+        assert_eq!(fmi3SetFloat64(c, &vr("r"), 1, &2.0, 1), Fmi3Status::Ok);
+        let mut initial = vec![f64::NAN; n];
+        assert_eq!(
+            fmi3GetContinuousStateDerivatives(c, initial.as_mut_ptr(), n),
+            Fmi3Status::Ok
+        );
+        assert!(initial.iter().all(|d| d.is_finite()));
+        // A step of r = 2 V at rest: the loop drives the coil at once, so something moves.
+        assert!(initial.iter().any(|&d| d != 0.0), "{initial:?}");
+        assert_eq!(fmi3ExitInitializationMode(c), Fmi3Status::Ok);
+        let mut after = vec![f64::NAN; n];
+        assert_eq!(
+            fmi3GetContinuousStateDerivatives(c, after.as_mut_ptr(), n),
+            Fmi3Status::Ok
+        );
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&initial), bits(&after));
+        fmi3FreeInstance(c);
+
+        // FMI 2.0: refused in initialization mode, as before.
+        let c = me2_in_initialization_mode();
+        let mut dx = vec![0.0; n];
+        assert_eq!(
+            f2::fmi2GetDerivatives(c, dx.as_mut_ptr(), n),
+            Fmi2Status::Error
+        );
+        f2::fmi2FreeInstance(c);
+    }
+}
+
+/// An FMI 2.0 Model Exchange instance in initialization mode.
+unsafe fn me2_in_initialization_mode() -> *mut c_void {
+    let callbacks = Fmi2CallbackFunctions::with_plain_logger(quiet2, std::ptr::null_mut());
+    let guid = CString::new(GUID).unwrap();
+    let c = f2::fmi2Instantiate(
+        c"me2".as_ptr(),
+        FMI2_MODEL_EXCHANGE,
+        guid.as_ptr(),
+        std::ptr::null(),
+        &callbacks,
+        0,
+        0,
+    );
+    assert!(!c.is_null());
+    assert_eq!(
+        f2::fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0),
+        Fmi2Status::Ok
+    );
+    assert_eq!(f2::fmi2EnterInitializationMode(c), Fmi2Status::Ok);
+    c
 }

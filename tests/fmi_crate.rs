@@ -16,7 +16,7 @@ use std::process::Command;
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::traits::{FmiImport, FmiStatus};
-use hydraulic_slewing_plate::fmi2::Kind;
+use hydraulic_slewing_plate::fmu::Kind;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
 use nalgebra::Complex;

@@ -4,7 +4,7 @@
 //! at every point, and the Jacobian with the fixed entries has the bits of a full evaluation.
 
 use hydraulic_slewing_plate::bond_graph::CompiledModel;
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};
 use hydraulic_slewing_plate::model::parameters::Parameters;
 use hydraulic_slewing_plate::model::presets;

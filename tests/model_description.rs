@@ -2,7 +2,7 @@
 //! start values are the fragments' documented defaults, every compiled input and output is an FMU
 //! variable, and `hsp linearize` gives eq. 1 of the paper.
 
-use hydraulic_slewing_plate::fmi2::{Causality, Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Causality, Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::LoesParameters;
 use hydraulic_slewing_plate::model::assembly::Assembled;

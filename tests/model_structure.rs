@@ -17,7 +17,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use hydraulic_slewing_plate::fmi2::{Causality, Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Causality, Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{Assembled, STATE_PREFIX};
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::{CONTINUOUS_STATES, VARIABLES};

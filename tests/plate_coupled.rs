@@ -1,7 +1,7 @@
 //! The plate in the assembled model: FRFs against Table 1 and the experiment (Fig. 10), energy
 //! conservation of the consistent formulation, power balance.
 
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};

@@ -1,7 +1,7 @@
 //! Air drag of the plate (`src/fragments/plate/drag.rs`): a free decay of the plate clamped at
 //! the root with drag as its only loss, against an independent quadrature of the drag's work.
 
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::plate::beam_functions::{BeamFunction, BeamKind};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};

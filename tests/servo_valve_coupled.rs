@@ -9,7 +9,7 @@
 //!   is fixed), so `theta_a - twist` is conserved: their rows of A are equal, and A has one
 //!   exact zero eigenvalue (the bar held twisted by a chamber pressure difference is at rest too).
 
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;

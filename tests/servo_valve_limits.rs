@@ -1,7 +1,7 @@
 //! The complete plant (full servo valve, motor coupled to the hub through the torsion bar):
 //! its physical limits under a large command.
 
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::servo_valve::limits::CAVITATION_PRESSURE;
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};

@@ -3,7 +3,7 @@
 //! rejection.
 
 use hydraulic_slewing_plate::bond_graph::CompiledModel;
-use hydraulic_slewing_plate::fmi2::{Experiment, Value, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::orifice::{regularised_sqrt, smooth_ramp};
 use hydraulic_slewing_plate::fragments::servo_valve::{

@@ -4,7 +4,7 @@
 //! damping, is not stable on its own.
 
 use hydraulic_slewing_plate::bond_graph::BondGraph;
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::plate::damping::modal_dashpots;
 use hydraulic_slewing_plate::fragments::plate::{self, Formulation, PlateModel, PlateParameters};
 use hydraulic_slewing_plate::fragments::{hub, torsion_bar};

@@ -23,8 +23,8 @@ use std::cell::Cell;
 
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
-use hydraulic_slewing_plate::fmi2::{Causality, Kind};
 use hydraulic_slewing_plate::fmi2_exports::{fmi2GetReal, fmi2SetReal};
+use hydraulic_slewing_plate::fmu::{Causality, Kind};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
 struct Counting;

@@ -39,7 +39,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use hydraulic_slewing_plate::bond_graph::ExactDiscretisation;
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};

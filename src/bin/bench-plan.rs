@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use hydraulic_slewing_plate::bond_graph::{BondGraph, CompiledModel};
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::{self, LoesParameters};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};

@@ -13,7 +13,7 @@
 //! named `servo_valve.*` constants by Nelder-Mead in their logarithms, minimising
 //! [`g_est_cost`] over 40 log-spaced frequencies from 0.5 to 100 Hz, and prints them.
 
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::servo_valve::{
     compare_with_g_est, log_frequencies, open_loop_linearization, GEstPoint,
 };

@@ -3,6 +3,8 @@
 
 use std::os::raw::{c_char, c_double, c_int, c_uint, c_void};
 
+use crate::fmu::Status;
+
 pub type Fmi2Component = *mut c_void;
 pub type Fmi2ComponentEnvironment = *mut c_void;
 pub type Fmi2FmuState = *mut c_void;
@@ -92,7 +94,7 @@ impl Fmi2CallbackFunctions {
         );
         Fmi2CallbackFunctions {
             // SAFETY: the callee reads only the five fixed arguments, and the FMU passes no
-            // variadic ones (see `Logger::log` in `instance.rs`).
+            // variadic ones (see `Fmi2Sink` in `fmi2/logger.rs`).
             logger: Some(unsafe { std::mem::transmute::<Fmi2PlainLogger, Variadic>(logger) }),
             allocate_memory: None,
             free_memory: None,
@@ -112,4 +114,27 @@ pub struct Fmi2EventInfo {
     pub values_of_continuous_states_changed: Fmi2Boolean,
     pub next_event_time_defined: Fmi2Boolean,
     pub next_event_time: Fmi2Real,
+}
+
+/// The FMI 2.0 status of the core's status: the same five numbers; the core never returns
+/// `fmi2Pending`.
+impl From<Status> for Fmi2Status {
+    fn from(s: Status) -> Self {
+        match s {
+            Status::Ok => Fmi2Status::Ok,
+            Status::Warning => Fmi2Status::Warning,
+            Status::Discard => Fmi2Status::Discard,
+            Status::Error => Fmi2Status::Error,
+            Status::Fatal => Fmi2Status::Fatal,
+        }
+    }
+}
+
+/// An FMI 2.0 Boolean of a Rust one.
+pub fn fmi2_boolean(b: bool) -> Fmi2Boolean {
+    if b {
+        FMI2_TRUE
+    } else {
+        FMI2_FALSE
+    }
 }

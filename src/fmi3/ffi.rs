@@ -2,6 +2,8 @@
 
 use std::os::raw::{c_char, c_void};
 
+use crate::fmu::Status;
+
 pub type Fmi3Instance = *mut c_void;
 pub type Fmi3InstanceEnvironment = *mut c_void;
 pub type Fmi3FmuState = *mut c_void;
@@ -77,3 +79,16 @@ pub type Fmi3IntermediateUpdateCallback = Option<
 pub type Fmi3ClockUpdateCallback = Option<unsafe extern "C" fn(Fmi3InstanceEnvironment)>;
 /// `fmi3LockPreemptionCallback` and `fmi3UnlockPreemptionCallback` (scheduled execution).
 pub type Fmi3PreemptionCallback = Option<unsafe extern "C" fn()>;
+
+/// The FMI 3.0 status of the core's status (the same five numbers).
+impl From<Status> for Fmi3Status {
+    fn from(s: Status) -> Self {
+        match s {
+            Status::Ok => Fmi3Status::Ok,
+            Status::Warning => Fmi3Status::Warning,
+            Status::Discard => Fmi3Status::Discard,
+            Status::Error => Fmi3Status::Error,
+            Status::Fatal => Fmi3Status::Fatal,
+        }
+    }
+}

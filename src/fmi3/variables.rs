@@ -10,7 +10,7 @@
 
 use std::collections::HashMap;
 
-use crate::fmi2::{Kind, Variable};
+use crate::fmu::{Kind, Variable};
 
 /// The value reference of `time`, the independent variable FMI 3.0 asks for. It is not in the
 /// FMI 2.0 table; `modelDescription/fmi3.py` refuses a table that uses 0.
@@ -131,7 +131,7 @@ impl Fmi3Table {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::{Causality, Variability};
+    use crate::fmu::{Causality, Variability};
 
     fn real(name: &'static str, vr: u32) -> Variable {
         Variable {

@@ -5,7 +5,7 @@
 use nalgebra::DMatrix;
 
 use crate::bond_graph::{BondGraph, CompiledModel};
-use crate::fmi2::Values;
+use crate::fmu::Values;
 use crate::fragments::plate::modes::{natural_modes, NaturalMode};
 use crate::fragments::plate::{self, Formulation, PlateModel};
 use crate::fragments::{
@@ -581,7 +581,7 @@ impl Assembled {
                     // The derivative of a declared state the model does not have is 0.
                     None => 0.0,
                 }
-            } else if VARIABLES[k].causality == crate::fmi2::Causality::Output {
+            } else if VARIABLES[k].causality == crate::fmu::Causality::Output {
                 // An output of another configuration (the servo valve's with the LOES): 0.
                 0.0
             } else {
@@ -682,7 +682,7 @@ impl OdeSystem for Assembled {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::Experiment;
+    use crate::fmu::Experiment;
     use crate::model::parameters::set_by_name;
 
     fn assembled(sets: &[(&str, &str)]) -> (Assembled, Values) {
@@ -747,7 +747,7 @@ mod tests {
                 a.write_on_demand(&x, i, &mut lazy);
             }
             for (i, variable) in VARIABLES.iter().enumerate() {
-                if let (crate::fmi2::Value::Real(e), crate::fmi2::Value::Real(l)) =
+                if let (crate::fmu::Value::Real(e), crate::fmu::Value::Real(l)) =
                     (eager.get(i), lazy.get(i))
                 {
                     assert!(

@@ -21,9 +21,9 @@ pub mod variables;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fmi2::logging::Short;
-use crate::fmi2::variables::reals_of;
-use crate::fmi2::{
+use crate::fmu::logging::Short;
+use crate::fmu::variables::reals_of;
+use crate::fmu::{
     Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
 };
 use crate::fragments::validity::Monitor;
@@ -327,6 +327,15 @@ impl FmuModel for HydraulicSlewingPlate {
         }
     }
 
+    /// The solver's minimum step ([`SolverOptions::min_step`](crate::solver::SolverOptions)):
+    /// a shorter communication step would fail inside the solver with a step size that says
+    /// less than the step the importer asked for.
+    fn min_step(&self) -> f64 {
+        self.integrator
+            .as_ref()
+            .map_or(0.0, |integrator| integrator.options().min_step)
+    }
+
     fn continuous_states() -> &'static [(usize, usize)] {
         &variables::CONTINUOUS_STATES
     }
@@ -543,5 +552,14 @@ fn check_restored_integrator(
             3 * dim
         ));
     }
-    integrator.ahead.check(dim, time)
+    if integrator.h > options.max_step {
+        return Err(format!(
+            "its integrator's next step h = {} is above the maximum step {}",
+            Short(integrator.h),
+            Short(options.max_step)
+        ));
+    }
+    integrator
+        .ahead
+        .check(dim, time, integrator.x(), options.max_step)
 }

@@ -1,9 +1,9 @@
 //! The typed parameter set of the FMU, read from its variable values, and the checks that the
 //! XML's `min`/`max` cannot express (strictly positive physical constants).
 
-use crate::fmi2::logging::Short;
-use crate::fmi2::variables::{check_value, Value, Values};
-use crate::fmi2::{Causality, Experiment, Kind};
+use crate::fmu::logging::Short;
+use crate::fmu::variables::{check_value, Value, Values};
+use crate::fmu::{Causality, Experiment, Kind};
 use crate::fragments::controller::ControllerParameters;
 use crate::fragments::loes::LoesParameters;
 use crate::fragments::plate::{Formulation, PlateParameters, Root, MAX_FUNCTIONS};

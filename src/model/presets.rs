@@ -22,7 +22,7 @@
 //! formulation (which is what reproduces eq. 16 and Table 1) and switch the generator and the
 //! air drag off, so that `r` alone drives them as in the paper.
 
-use crate::fmi2::{Kind, Values};
+use crate::fmu::{Kind, Values};
 
 use super::parameters::set_by_name;
 use super::variables::VARIABLES;
@@ -229,7 +229,7 @@ pub fn presets_json() -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::Experiment;
+    use crate::fmu::Experiment;
     use crate::model::parameters::{HydraulicsModel, Parameters};
 
     #[test]

@@ -2,7 +2,7 @@
 //! leaves the linear model's range (the quantities and their limits are in
 //! [`crate::fragments::validity`]).
 
-use crate::fmi2::Values;
+use crate::fmu::Values;
 use crate::fragments::validity::{Limits, Monitor};
 
 use super::variables::idx;

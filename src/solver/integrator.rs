@@ -359,8 +359,12 @@ impl Ahead {
         self.coef.resize(3 * x0.len(), 0.0);
     }
 
-    /// Checks a restored step: finite, of the right sizes, and covering `t`.
-    pub fn check(&self, n: usize, t: f64) -> Result<(), String> {
+    /// Checks a restored step: finite, of the right sizes, covering `t`, as long as its step
+    /// `h` (to rounding) and no longer than `max_step`, and agreeing with the state `x` at `t`
+    /// (bit for bit: `x` was read from this step's dense output). A crafted step stretched over
+    /// a longer window would otherwise hand out its interpolant far outside the step it was
+    /// fitted to (issue 24, N3).
+    pub fn check(&self, n: usize, t: f64, x: &[f64], max_step: f64) -> Result<(), String> {
         if !self.active {
             return Ok(());
         }
@@ -386,6 +390,33 @@ impl Ahead {
             return Err(format!(
                 "its step past the communication point, from t = {} to {}, does not cover t = {t}",
                 self.t0, self.t1
+            ));
+        }
+        // t1 is t0 + h, or the limit the step was cut to with h = limit - t0: equal to h but
+        // for the rounding of one addition.
+        let rounding = 4.0 * f64::EPSILON * self.t0.abs().max(self.t1.abs());
+        if ((self.t1 - self.t0) - self.h).abs() > rounding || self.h > max_step {
+            return Err(format!(
+                "its step past the communication point, from t = {:e} to {:e}, is not its step size h = {:e} long, or h is above the maximum step {:e}",
+                self.t0, self.t1, self.h, max_step
+            ));
+        }
+        let mut at_t = vec![0.0; n];
+        if t == self.t1 {
+            at_t.copy_from_slice(&self.x1);
+        } else {
+            super::rodas5p::dense(
+                &self.x0,
+                &self.x1,
+                &self.coef,
+                (t - self.t0) / self.h,
+                &mut at_t,
+            );
+        }
+        if let Some(i) = (0..n).find(|&i| at_t[i].to_bits() != x[i].to_bits()) {
+            return Err(format!(
+                "its state x[{i}] = {:e} at t = {t:e} is not its step's dense output there ({:e})",
+                x[i], at_t[i]
             ));
         }
         Ok(())

@@ -8,9 +8,13 @@ use std::os::raw::c_char;
 use std::sync::Mutex;
 
 use hydraulic_slewing_plate::fmi2::ffi::*;
-use hydraulic_slewing_plate::fmi2::fmu_state::fnv1a64;
 use hydraulic_slewing_plate::fmi2_exports::*;
 use hydraulic_slewing_plate::model::variables::{GUID, VARIABLES};
+
+#[path = "state_blob.rs"]
+mod state_blob;
+#[allow(unused_imports)]
+pub use state_blob::{blob, find_key, payload};
 
 /// One log line: status and message.
 pub type Line = (Fmi2Status, String);
@@ -190,21 +194,6 @@ impl Drop for Fmu {
     }
 }
 
-/// A serialised state's JSON payload, and a blob from an edited one with the checksum recomputed,
-/// as a hostile importer would.
-pub fn payload(bytes: &[u8]) -> serde_json::Value {
-    serde_json::from_slice(&bytes[24..]).unwrap()
-}
-
-pub fn blob(payload: &serde_json::Value) -> Vec<u8> {
-    let p = serde_json::to_vec(payload).unwrap();
-    let mut b = b"HSPFMUS1".to_vec();
-    b.extend_from_slice(&(p.len() as u64).to_le_bytes());
-    b.extend_from_slice(&fnv1a64(&p).to_le_bytes());
-    b.extend_from_slice(&p);
-    b
-}
-
 /// Takes FMU states from point `k` on, calling `advance(k)` to step one point further each time,
 /// until a state's payload holds `key` (by the time point `limit`): the point reached, that state
 /// and its payload.
@@ -230,19 +219,5 @@ pub fn until_state_holds(
         );
         advance(k);
         k += 1;
-    }
-}
-
-/// The first value under `key` anywhere in `v` (a state payload, say).
-pub fn find_key<'a>(v: &'a mut serde_json::Value, key: &str) -> Option<&'a mut serde_json::Value> {
-    match v {
-        serde_json::Value::Object(m) => {
-            if m.contains_key(key) {
-                return m.get_mut(key);
-            }
-            m.values_mut().find_map(|x| find_key(x, key))
-        }
-        serde_json::Value::Array(a) => a.iter_mut().find_map(|x| find_key(x, key)),
-        _ => None,
     }
 }

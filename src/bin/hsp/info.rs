@@ -112,7 +112,7 @@ pub fn text(system: &Assembled) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+    use hydraulic_slewing_plate::fmu::{Experiment, Values};
     use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
     use hydraulic_slewing_plate::model::presets;
     use hydraulic_slewing_plate::model::variables::VARIABLES;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use hydraulic_slewing_plate::fmi2::ffi::{
     Fmi2CallbackFunctions, Fmi2Component, Fmi2Status, FMI2_CO_SIMULATION, FMI2_FALSE, FMI2_TRUE,
 };
-use hydraulic_slewing_plate::fmi2::Kind;
+use hydraulic_slewing_plate::fmu::Kind;
 use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
 
 type Instantiate = unsafe extern "C" fn(

@@ -32,7 +32,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use hydraulic_slewing_plate::bond_graph::matrix_json;
-use hydraulic_slewing_plate::fmi2::{Experiment, Values};
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, plate_modes, Assembled};
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::{Args, ValueEnum};
-use hydraulic_slewing_plate::fmi2::Experiment;
+use hydraulic_slewing_plate::fmu::Experiment;
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
 use hydraulic_slewing_plate::fragments::plate::Root;
 use hydraulic_slewing_plate::fragments::validity::{SPIN_LIMIT, TIP_RATIO_LIMIT};

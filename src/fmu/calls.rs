@@ -142,6 +142,9 @@ pub enum Operation {
     GetContinuousStates,
     /// `fmi2GetDerivatives`.
     GetDerivatives,
+    /// `fmi3GetContinuousStateDerivatives`: the derivatives where FMI 3.0 allows them, in
+    /// initialization mode too (FMI 3.0, section 2.3.3, "State: Initialization Mode").
+    GetDerivativesWithInitialization,
     /// `fmi2GetNominalsOfContinuousStates`.
     GetNominals,
     /// `fmi2EnterEventMode`.
@@ -198,6 +201,9 @@ impl Operation {
                 INITIALIZATION_MODE.or(ME_RUNNING).or(TERMINATED).or(ERROR)
             }
             Operation::GetDerivatives => ME_RUNNING.or(TERMINATED).or(ERROR),
+            Operation::GetDerivativesWithInitialization => {
+                INITIALIZATION_MODE.or(ME_RUNNING).or(TERMINATED).or(ERROR)
+            }
             Operation::GetNominals => INSTANTIATED.or(ME_RUNNING).or(TERMINATED).or(ERROR),
             Operation::EnterEventMode => ME_RUNNING,
             Operation::NewDiscreteStates | Operation::EnterContinuousTimeMode => EVENT_MODE,
@@ -213,6 +219,7 @@ impl Operation {
             | Operation::SetContinuousStates
             | Operation::GetContinuousStates
             | Operation::GetDerivatives
+            | Operation::GetDerivativesWithInitialization
             | Operation::GetNominals
             | Operation::EnterEventMode
             | Operation::NewDiscreteStates
@@ -223,7 +230,7 @@ impl Operation {
     }
 
     /// Every operation, for the tests of the table.
-    pub const ALL: [Operation; 22] = [
+    pub const ALL: [Operation; 23] = [
         Operation::SetDebugLogging,
         Operation::SetupExperiment,
         Operation::EnterInitializationMode,
@@ -240,6 +247,7 @@ impl Operation {
         Operation::SetContinuousStates,
         Operation::GetContinuousStates,
         Operation::GetDerivatives,
+        Operation::GetDerivativesWithInitialization,
         Operation::GetNominals,
         Operation::EnterEventMode,
         Operation::NewDiscreteStates,
