@@ -593,17 +593,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
     let mut outputs = Outputs::new(times, integ.t, n);
     eval_f0(integ, sys, &mut w.f0)?;
     if integ.h <= 0.0 {
-        let opts = integ.options.clone();
-        integ.h = initial_step(
-            sys,
-            &opts,
-            &mut integ.stats,
-            integ.t,
-            &integ.x,
-            &w.f0,
-            t_end,
-            4.0,
-        );
+        integ.h = initial_step(sys, integ, &w.f0, t_end, 4.0);
     }
     let mut jac_ok = false; // J (and ∂f/∂t) evaluated at the current point?
     let mut attempts: u64 = 0;
