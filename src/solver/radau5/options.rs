@@ -9,10 +9,10 @@
 /// The integrator uses `Radau5Options::default()`; they are not part of
 /// [`SolverOptions`](crate::solver::SolverOptions), which the integrator saves with its state.
 ///
-/// RADAU5's other parameters are elsewhere or fixed: IWORK(2) (NMAX) is
-/// [`SolverOptions::max_steps`](crate::solver::SolverOptions::max_steps), WORK(7) (HMAX) is
-/// [`SolverOptions::max_step`](crate::solver::SolverOptions::max_step), WORK(1) (UROUND) is
-/// `f64::EPSILON`; the Newton start values are always the extrapolated collocation polynomial
+/// RADAU5's other parameters are elsewhere or fixed: IWORK(2) (NMAX) corresponds to
+/// [`SolverOptions::max_steps`](crate::solver::SolverOptions::max_steps) (per call), WORK(7)
+/// (HMAX) to [`SolverOptions::max_step`](crate::solver::SolverOptions::max_step), WORK(1)
+/// (UROUND) is `f64::EPSILON`; the Newton start values are always the extrapolated collocation polynomial
 /// (IWORK(4) = 0), the step-size strategy always Gustafsson's predictive controller
 /// (IWORK(8) = 1), and J is never transformed to Hessenberg form (IWORK(1) = 0). The method's
 /// coefficients ([`nodes`](super::nodes), [`T`](super::T), …) and the tolerance transformation
@@ -133,5 +133,27 @@ impl Default for Radau5Options {
             map_max_dim: crate::solver::step_map::MAX_DIM,
             map_after_divisor: 2,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Radau5Options;
+
+    /// The defaults are RADAU5's: its IWORK/WORK defaults (FACL and FACR the reciprocals of
+    /// WORK(8) = 0.2 and WORK(9) = 8) and the numbers RADCOR and ESTRAD hard-code.
+    #[test]
+    fn the_defaults_are_radau5s() {
+        let o = Radau5Options::default();
+        assert_eq!((o.nit, o.safe, o.thet, o.fnewt_cap), (7, 0.9, 0.001, 0.03));
+        assert_eq!((o.quot1, o.quot2, o.facl, o.facr), (1.0, 1.2, 5.0, 0.125));
+        assert_eq!((o.faccon_exponent, o.theta_diverge), (0.8, 0.99));
+        assert_eq!(
+            (o.hhfac_safety, o.qnewt_min, o.qnewt_max),
+            (0.8, 1e-4, 20.0)
+        );
+        assert_eq!((o.unexpected_reject, o.first_reject), (0.5, 0.1));
+        assert_eq!((o.err_floor, o.erracc_floor), (1e-10, 1e-2));
+        assert_eq!((o.map_max_dim, o.map_after_divisor), (128, 2));
     }
 }
