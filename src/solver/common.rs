@@ -156,17 +156,22 @@ pub(crate) fn h_min(opts: &SolverOptions, t: f64) -> f64 {
 /// Starting step size, Hairer, Nørsett & Wanner I, Sec. II.4 ("Starting step size"), with the
 /// weights of the error norm: h0 from |x|/|f|, then one explicit Euler probe estimates the
 /// second derivative, and h = (0.01 / max(|f|, |f'|))^(1/(p+1)). The controller corrects it.
-#[allow(clippy::too_many_arguments)]
+/// From the integrator's current point, with its options; `f0` is f there, `order` is p.
 pub(crate) fn initial_step<S: OdeSystem + ?Sized>(
     sys: &S,
-    opts: &SolverOptions,
-    stats: &mut Stats,
-    t: f64,
-    x: &[f64],
+    integ: &mut Integrator,
     f0: &[f64],
     t_end: f64,
     order: f64,
 ) -> f64 {
+    let Integrator {
+        options: opts,
+        stats,
+        t,
+        x,
+        ..
+    } = integ;
+    let (t, x) = (*t, x.as_slice());
     let span = (t_end - t).abs();
     let cap = span.min(opts.max_step);
     if let Some(h0) = opts.initial_step {

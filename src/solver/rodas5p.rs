@@ -250,14 +250,54 @@ pub fn classical_form() -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
 
 /// Order of the error estimator's local error exponent minus one: err ~ h^5.
 const ERR_ORDER: f64 = 5.0;
-/// PI controller exponents (Hairer & Wanner II, Sec. IV.2 / Gustafsson 1991):
-/// h_new = h · SAFE · err^(-BETA1) · err_prev^(BETA2), with β1 = 0.7/k, β2 = 0.4/k, k = 5.
-const BETA1: f64 = 0.7 / ERR_ORDER;
-const BETA2: f64 = 0.4 / ERR_ORDER;
-const SAFE: f64 = 0.9;
-/// Bounds of h_new / h (as in Hairer's RODAS: 0.2 ≤ h_new/h ≤ 6).
-const FAC_MIN: f64 = 0.2;
-const FAC_MAX: f64 = 6.0;
+
+/// The tunables of the Rodas5P integrator's step-size control, with their defaults, in the
+/// manner of the WORK parameters of Hairer's RODAS (its name given where it has one). The
+/// integrator uses `Rodas5POptions::default()`; they are not part of
+/// [`SolverOptions`](super::SolverOptions), which the integrator saves with its state.
+///
+/// The step size after an accepted step is that of a PI controller (Hairer & Wanner II,
+/// Sec. IV.2 / Gustafsson 1991): h_new = h · safe · err^(-β1) · err_prev^(β2), with
+/// β1 = 0.7/k, β2 = 0.4/k, k = 5 (err^(-1/k) on the first step), h_new / h within
+/// [fac_min, fac_max] and not above 1 after a rejection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rodas5POptions {
+    /// Safety factor of the step-size prediction. RODAS's SAFE, WORK(5). Default 0.9, RODAS's.
+    pub safe: f64,
+    /// Exponent β1 of the current error in the PI controller. Default 0.7/5 = 0.14.
+    pub beta1: f64,
+    /// Exponent β2 of the previous accepted step's error in the PI controller. Default
+    /// 0.4/5 = 0.08.
+    pub beta2: f64,
+    /// Smallest h_new / h the step-size prediction gives (also after a rejection by the error
+    /// test). RODAS's WORK(3). Default 0.2, RODAS's.
+    pub fac_min: f64,
+    /// Largest h_new / h. RODAS's WORK(4). Default 6, RODAS's.
+    pub fac_max: f64,
+    /// Floor of an accepted step's error norm in the controller (and in the error it
+    /// remembers), so that err^(-β1) stays finite for a vanishing error estimate.
+    /// Default 1e-10.
+    pub err_floor: f64,
+    /// Factor of h after an attempt whose stages were not finite. Default 0.25.
+    pub nonfinite_reject: f64,
+    /// Factor of h after an attempt whose iteration matrix was singular. Default 0.5.
+    pub singular_reject: f64,
+}
+
+impl Default for Rodas5POptions {
+    fn default() -> Self {
+        Rodas5POptions {
+            safe: 0.9,
+            beta1: 0.7 / ERR_ORDER,
+            beta2: 0.4 / ERR_ORDER,
+            fac_min: 0.2,
+            fac_max: 6.0,
+            err_floor: 1e-10,
+            nonfinite_reject: 0.25,
+            singular_reject: 0.5,
+        }
+    }
+}
 
 /// Why a step attempt failed.
 enum Reject {
@@ -568,12 +608,16 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     times: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
+    let opts = Rodas5POptions::default();
     let stamp = sys.constant_jacobian();
     with_kept_memory(
         integ,
         stamp,
         |c| (&mut c.rodas, &mut c.rodas_lu),
-        |integ, w, lus| advance_with(integ, sys, (t_end, limit), times, out, w, lus, stamp),
+        |integ, w, lus| {
+            let span = (t_end, limit);
+            advance_with(integ, sys, &opts, span, times, out, w, lus, stamp)
+        },
     )
 }
 
@@ -581,6 +625,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
 fn advance_with<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
+    opts: &Rodas5POptions,
     (t_end, limit): (f64, f64),
     times: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
@@ -593,17 +638,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
     let mut outputs = Outputs::new(times, integ.t, n);
     eval_f0(integ, sys, &mut w.f0)?;
     if integ.h <= 0.0 {
-        let opts = integ.options.clone();
-        integ.h = initial_step(
-            sys,
-            &opts,
-            &mut integ.stats,
-            integ.t,
-            &integ.x,
-            &w.f0,
-            t_end,
-            4.0,
-        );
+        integ.h = initial_step(sys, integ, &w.f0, t_end, 4.0);
     }
     let mut jac_ok = false; // J (and ∂f/∂t) evaluated at the current point?
     let mut attempts: u64 = 0;
@@ -733,13 +768,13 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 consecutive_rejections = 0;
                 last_nonfinite = false;
                 // PI step-size controller.
-                let e = err.max(1e-10);
+                let e = err.max(opts.err_floor);
                 let mut fac = if integ.hist.err_prev > 0.0 {
-                    SAFE * e.powf(-BETA1) * integ.hist.err_prev.powf(BETA2)
+                    opts.safe * e.powf(-opts.beta1) * integ.hist.err_prev.powf(opts.beta2)
                 } else {
-                    SAFE * e.powf(-1.0 / ERR_ORDER)
+                    opts.safe * e.powf(-1.0 / ERR_ORDER)
                 };
-                fac = fac.clamp(FAC_MIN, FAC_MAX);
+                fac = fac.clamp(opts.fac_min, opts.fac_max);
                 if integ.hist.last_rejected {
                     fac = fac.min(1.0);
                 }
@@ -765,13 +800,13 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 let fac = match result {
                     Ok(err) => {
                         last_nonfinite = false;
-                        (SAFE * err.powf(-1.0 / ERR_ORDER)).clamp(FAC_MIN, 1.0)
+                        (opts.safe * err.powf(-1.0 / ERR_ORDER)).clamp(opts.fac_min, 1.0)
                     }
                     Err(Reject::NonFinite) => {
                         last_nonfinite = true;
-                        0.25
+                        opts.nonfinite_reject
                     }
-                    Err(Reject::Singular) => 0.5,
+                    Err(Reject::Singular) => opts.singular_reject,
                 };
                 integ.h = h * fac;
                 if consecutive_rejections > integ.options.max_consecutive_rejections {

@@ -1,0 +1,435 @@
+//! LU factors of M for a [`Partition`] (see the module documentation of [`super`]): the block
+//! elimination with its Schur complement, and the solves.
+
+use std::sync::Arc;
+
+use super::lu::{lu_in_place, lu_solve, solve_2x2};
+use super::partition::Partition;
+use super::scalar::Scalar;
+
+/// A block whose smallest pivot is below this share of its largest entry is left to the dense
+/// LU: elimination inside blocks does not pivot across them.
+const PIVOT_FLOOR: f64 = 1e-10;
+
+/// LU factors of M for a [`Partition`] (see the [module documentation](super)).
+#[derive(Clone, Debug)]
+pub struct Factorisation<T: Scalar> {
+    part: Arc<Partition>,
+    /// LU of each block, column-major k × k, one after the other.
+    lu: Vec<T>,
+    /// Row interchanges of each block (LAPACK style, local to the block), at the block's
+    /// positions.
+    piv: Vec<usize>,
+    /// X_b = A_b⁻¹ B_b, column-major k × (links of b), one block after the other.
+    x: Vec<T>,
+    /// C_b, row-major (links of b) × k, at the same offsets as `x`.
+    c: Vec<T>,
+    /// LU of the Schur complement (m × m, column-major) and its interchanges.
+    schur: Vec<T>,
+    schur_piv: Vec<usize>,
+}
+
+impl<T: Scalar> Factorisation<T> {
+    /// An empty factorisation (to be filled by [`Factorisation::factor`]).
+    pub fn new(part: Arc<Partition>) -> Self {
+        Factorisation {
+            part,
+            lu: Vec::new(),
+            piv: Vec::new(),
+            x: Vec::new(),
+            c: Vec::new(),
+            schur: Vec::new(),
+            schur_piv: Vec::new(),
+        }
+    }
+
+    /// The partition in use.
+    pub fn partition(&self) -> &Arc<Partition> {
+        &self.part
+    }
+
+    /// Factorises the matrix with entries `entry(i, j)` for the partition `part` (reusing this
+    /// factorisation's memory). False if a pivot is zero, or, for a structured partition, small
+    /// against its block (below 1e-10 of its largest entry); the factors are then unusable.
+    pub fn factor(&mut self, part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T) -> bool {
+        if !Arc::ptr_eq(&self.part, part) {
+            self.part = Arc::clone(part);
+        }
+        let p = &*self.part;
+        let n = p.n;
+        let nb = p.starts[p.blocks()];
+        let m = n - nb;
+        let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
+        resize(&mut self.lu, p.lu_len);
+        resize(&mut self.x, p.x_len);
+        resize(&mut self.c, p.x_len);
+        self.piv.resize(n, 0);
+        resize(&mut self.schur, m * m);
+        self.schur_piv.resize(m, 0);
+        let border = &p.perm[nb..];
+        for q in 0..m {
+            for r in 0..m {
+                self.schur[r + q * m] = entry(border[r], border[q]);
+            }
+        }
+        // The blocks at the offsets the solves read them from (the Schur complement takes the
+        // linked blocks' updates in block order; the free ones have none).
+        for at in p.linked.iter().chain(&p.free) {
+            let (s, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
+            let idx = &p.perm[s..s + k];
+            let a = &mut self.lu[at.lu..at.lu + k * k];
+            for cj in 0..k {
+                for r in 0..k {
+                    a[r + cj * k] = entry(idx[r], idx[cj]);
+                }
+            }
+            if !lu_in_place(a, k, &mut self.piv[s..s + k], floor) {
+                return false;
+            }
+            let l = links.len();
+            let x = &mut self.x[at.x..at.x + k * l];
+            let c = &mut self.c[at.x..at.x + k * l];
+            for (li, &q) in links.iter().enumerate() {
+                let col = &mut x[li * k..(li + 1) * k];
+                for r in 0..k {
+                    col[r] = entry(idx[r], border[q]);
+                    c[li * k + r] = entry(border[q], idx[r]);
+                }
+                lu_solve(a, k, &self.piv[s..s + k], col);
+            }
+            // S -= C_b X_b, only where block b touches the border.
+            for (l2, &q) in links.iter().enumerate() {
+                let xc = &x[l2 * k..(l2 + 1) * k];
+                for (l1, &r) in links.iter().enumerate() {
+                    let cr = &c[l1 * k..(l1 + 1) * k];
+                    let mut acc = T::ZERO;
+                    for i in 0..k {
+                        acc = acc + cr[i] * xc[i];
+                    }
+                    self.schur[r + q * m] = self.schur[r + q * m] - acc;
+                }
+            }
+        }
+        lu_in_place(&mut self.schur, m, &mut self.schur_piv, floor)
+    }
+
+    /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
+    /// overwritten).
+    ///
+    /// One pass over the blocks coupled to the border forward (each block's solve and its share
+    /// of the border's right-hand side), the border's solve, one pass back (each block's back
+    /// substitution, written straight to its states), and one pass over the free blocks, whose
+    /// solve is final at once. Blocks of one and two states, all the plate's modes, are written
+    /// out; the operations and their order are those of the general block solve and the block
+    /// formulas, so the bits do not depend on the block size's path or on a block's being free.
+    pub fn solve(&self, rhs: &mut [T], scratch: &mut [T]) {
+        let p = &*self.part;
+        let nb = p.starts[p.blocks()];
+        let (blocks, border) = scratch[..p.n].split_at_mut(nb);
+        for (dst, &i) in border.iter_mut().zip(&p.perm[nb..]) {
+            *dst = rhs[i];
+        }
+        // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
+        for at in &p.linked {
+            let (st, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
+            let lu = &self.lu[at.lu..at.lu + k * k];
+            let c = &self.c[at.x..at.x + k * links.len()];
+            let idx = &p.perm[st..st + k];
+            match (lu, idx, &mut blocks[st..st + k]) {
+                (&[inv_u00], &[i0], [y0]) => {
+                    let v = rhs[i0] * inv_u00;
+                    *y0 = v;
+                    for (&q, &c0) in links.iter().zip(c) {
+                        border[q] = border[q] - (T::ZERO + c0 * v);
+                    }
+                }
+                (&[inv_u00, l10, u01, inv_u11], &[i0, i1], [y0, y1]) => {
+                    let (v0, v1) = solve_2x2(
+                        inv_u00,
+                        l10,
+                        u01,
+                        inv_u11,
+                        self.piv[st] != 0,
+                        rhs[i0],
+                        rhs[i1],
+                    );
+                    (*y0, *y1) = (v0, v1);
+                    for (&q, cr) in links.iter().zip(c.chunks_exact(2)) {
+                        border[q] = border[q] - (T::ZERO + cr[0] * v0 + cr[1] * v1);
+                    }
+                }
+                (_, _, y) => {
+                    for (dst, &i) in y.iter_mut().zip(idx) {
+                        *dst = rhs[i];
+                    }
+                    lu_solve(lu, k, &self.piv[st..st + k], y);
+                    for (&q, cr) in links.iter().zip(c.chunks_exact(k)) {
+                        let mut acc = T::ZERO;
+                        for i in 0..k {
+                            acc = acc + cr[i] * y[i];
+                        }
+                        border[q] = border[q] - acc;
+                    }
+                }
+            }
+        }
+        lu_solve(&self.schur, p.n - nb, &self.schur_piv, border);
+        // x_b = y_b - X_b x_B.
+        for at in &p.linked {
+            let (st, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
+            let x = &self.x[at.x..at.x + k * links.len()];
+            let idx = &p.perm[st..st + k];
+            match (idx, &mut blocks[st..st + k]) {
+                (&[i0], &mut [mut y0]) => {
+                    for (&q, &x0) in links.iter().zip(x) {
+                        y0 = y0 - x0 * border[q];
+                    }
+                    rhs[i0] = y0;
+                }
+                (&[i0, i1], &mut [mut y0, mut y1]) => {
+                    for (&q, xc) in links.iter().zip(x.chunks_exact(2)) {
+                        let v = border[q];
+                        y0 = y0 - xc[0] * v;
+                        y1 = y1 - xc[1] * v;
+                    }
+                    (rhs[i0], rhs[i1]) = (y0, y1);
+                }
+                (_, y) => {
+                    for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
+                        let v = border[q];
+                        for i in 0..k {
+                            y[i] = y[i] - xc[i] * v;
+                        }
+                    }
+                    for (&yi, &i) in y.iter().zip(idx) {
+                        rhs[i] = yi;
+                    }
+                }
+            }
+        }
+        for (&v, &i) in border.iter().zip(&p.perm[nb..]) {
+            rhs[i] = v;
+        }
+        // x_b = A_b⁻¹ r_b for the blocks without a border link (the dense partition's one
+        // block among them).
+        for at in &p.free {
+            let (st, k) = (at.start, at.size);
+            let lu = &self.lu[at.lu..at.lu + k * k];
+            match (lu, &p.perm[st..st + k]) {
+                (&[inv_u00], &[i0]) => rhs[i0] = rhs[i0] * inv_u00,
+                (&[inv_u00, l10, u01, inv_u11], &[i0, i1]) => {
+                    let swap = self.piv[st] != 0;
+                    (rhs[i0], rhs[i1]) =
+                        solve_2x2(inv_u00, l10, u01, inv_u11, swap, rhs[i0], rhs[i1]);
+                }
+                (_, idx) => {
+                    let y = &mut blocks[st..st + k];
+                    for (dst, &i) in y.iter_mut().zip(idx) {
+                        *dst = rhs[i];
+                    }
+                    lu_solve(lu, k, &self.piv[st..st + k], y);
+                    for (&yi, &i) in y.iter().zip(idx) {
+                        rhs[i] = yi;
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn resize<T: Scalar>(v: &mut Vec<T>, len: usize) {
+    v.resize(len, T::ZERO);
+}
+
+/// Factorises `entry` with `part`, or with the dense partition if the structured elimination
+/// fails (a small pivot inside a block); reuses `f`'s memory. False if M is singular.
+pub(crate) fn factor_with_fallback<T: Scalar>(
+    f: &mut Factorisation<T>,
+    part: &Arc<Partition>,
+    entry: impl Fn(usize, usize) -> T,
+) -> bool {
+    if f.factor(part, &entry) {
+        return true;
+    }
+    if part.is_dense() {
+        return false;
+    }
+    let dense = Arc::new(Partition::dense(part.dim()));
+    f.factor(&dense, &entry)
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Complex, DMatrix};
+
+    use super::super::testing::{arrowhead, arrowhead_with_free, residual, Rng};
+    use super::*;
+
+    /// The solve as it was written before [`Factorisation::solve`] was flattened: block by
+    /// block through [`Partition::block`] and [`lu_solve`], gathering into and scattering from
+    /// the elimination order. The reference for the flat solve's bits.
+    fn solve_blockwise<T: Scalar>(f: &Factorisation<T>, rhs: &mut [T], scratch: &mut [T]) {
+        let p = &*f.part;
+        let n = p.n;
+        let nb = p.starts[p.blocks()];
+        let m = n - nb;
+        let s = &mut scratch[..n];
+        for (dst, &i) in s.iter_mut().zip(&p.perm) {
+            *dst = rhs[i];
+        }
+        let (blocks, border) = s.split_at_mut(nb);
+        // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
+        let (mut lo, mut xo) = (0, 0);
+        for b in 0..p.blocks() {
+            let (st, k, links) = p.block(b);
+            let y = &mut blocks[st..st + k];
+            lu_solve(&f.lu[lo..lo + k * k], k, &f.piv[st..st + k], y);
+            for (li, &q) in links.iter().enumerate() {
+                let cr = &f.c[xo + li * k..xo + (li + 1) * k];
+                let mut acc = T::ZERO;
+                for i in 0..k {
+                    acc = acc + cr[i] * y[i];
+                }
+                border[q] = border[q] - acc;
+            }
+            lo += k * k;
+            xo += k * links.len();
+        }
+        lu_solve(&f.schur, m, &f.schur_piv, border);
+        // x_b = y_b - X_b x_B.
+        let mut xo = 0;
+        for b in 0..p.blocks() {
+            let (st, k, links) = p.block(b);
+            let y = &mut blocks[st..st + k];
+            for (li, &q) in links.iter().enumerate() {
+                let v = border[q];
+                let xc = &f.x[xo + li * k..xo + (li + 1) * k];
+                for i in 0..k {
+                    y[i] = y[i] - xc[i] * v;
+                }
+            }
+            xo += k * links.len();
+        }
+        for (src, &i) in s.iter().zip(&p.perm) {
+            rhs[i] = *src;
+        }
+    }
+
+    /// The flat solve gives the bits of the block-by-block one, for blocks of one, two and
+    /// three states, linked to the border and free, real and complex, with zeros in the
+    /// right-hand side (which the written-out blocks skip as the loops do).
+    #[test]
+    fn the_flat_solve_has_the_blockwise_bits() {
+        fn check<T: Scalar>(part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T, b: &[T]) {
+            let mut f = Factorisation::new(Arc::clone(part));
+            assert!(f.factor(part, entry));
+            let n = b.len();
+            let (mut flat, mut blockwise) = (b.to_vec(), b.to_vec());
+            let mut scratch = vec![T::ZERO; n];
+            f.solve(&mut flat, &mut scratch);
+            solve_blockwise(&f, &mut blockwise, &mut scratch);
+            assert_eq!(format!("{flat:?}"), format!("{blockwise:?}"));
+        }
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        for &(blocks, k, m) in &[(30, 2, 4), (60, 1, 3), (12, 3, 5)] {
+            let j = arrowhead_with_free(&mut rng, blocks, k, m, 3);
+            let n = j.nrows();
+            let part = Arc::new(Partition::of_matrix(&j));
+            assert!(!part.is_dense());
+            assert!(!part.free.is_empty() && !part.linked.is_empty());
+            let b: Vec<f64> = (0..n)
+                .map(|i| if i % 5 == 0 { 0.0 } else { rng.next() })
+                .collect();
+            check(
+                &part,
+                |i, jj| if i == jj { 3.0 } else { 0.0 } - j[(i, jj)],
+                &b,
+            );
+            let bc: Vec<Complex<f64>> = b.iter().map(|&v| Complex::new(v, 0.5 * v)).collect();
+            let c = Complex::new(2.0, 1.5);
+            let entry = |i: usize, jj: usize| {
+                let d = if i == jj {
+                    c
+                } else {
+                    <Complex<f64> as Scalar>::ZERO
+                };
+                d - Complex::new(j[(i, jj)], 0.0)
+            };
+            check(&part, entry, &bc);
+        }
+    }
+
+    #[test]
+    fn complex_arrowhead_matches_the_dense_lu() {
+        let mut rng = Rng(7);
+        let j = arrowhead(&mut rng, 40, 2, 6);
+        let n = j.nrows();
+        let part = Arc::new(Partition::of_matrix(&j));
+        assert!(!part.is_dense());
+        let shift = Complex::new(2.5, 1.7);
+        let entry = |i: usize, jj: usize| {
+            let d = if i == jj { shift } else { Complex::ZERO };
+            d - Complex::new(j[(i, jj)], 0.0)
+        };
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(f.factor(&part, entry));
+        let b: Vec<Complex<f64>> = (0..n)
+            .map(|_| Complex::new(rng.next(), rng.next()))
+            .collect();
+        let mut x = b.clone();
+        let mut scratch = vec![Complex::ZERO; n];
+        f.solve(&mut x, &mut scratch);
+        let m_dense = DMatrix::from_fn(n, n, entry);
+        let reference = m_dense.lu().solve(&nalgebra::DVector::from(b)).unwrap();
+        let diff = x
+            .iter()
+            .zip(reference.iter())
+            .map(|(a, r)| (a - r).norm())
+            .fold(0.0, f64::max);
+        let scale = reference.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        assert!(diff <= 1e-11 * scale, "{diff:e} vs {scale:e}");
+    }
+
+    #[test]
+    fn singular_matrices_are_reported_and_bad_blocks_fall_back_to_dense() {
+        // Exactly singular: two equal rows.
+        let mut m = DMatrix::from_fn(4, 4, |i, j| (i * 4 + j) as f64 + 1.0);
+        m.set_row(3, &m.row(0).clone_owned());
+        let part = Arc::new(Partition::dense(4));
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(!factor_with_fallback(&mut f, &part, |i, j| m[(i, j)]));
+        // A block that is singular on its own inside a regular matrix: the border rescues it
+        // only with pivoting across blocks, which the dense fallback does.
+        let mut rng = Rng(11);
+        let mut j = arrowhead(&mut rng, 30, 2, 3);
+        let part = Arc::new(Partition::of_matrix(&j));
+        assert!(!part.is_dense());
+        let (s, _, _) = part.block(0);
+        let v = part.perm[s];
+        for c in 0..j.ncols() {
+            if part.perm[..part.starts[part.blocks()]].contains(&c) {
+                j[(v, c)] = 0.0; // row v vanishes inside its block...
+            }
+        }
+        let (_, _, links) = part.block(0);
+        let nb = part.starts[part.blocks()];
+        let q = part.perm[nb + links.first().copied().unwrap_or(0)];
+        j[(v, q)] = 1.0; // ...but not towards the border
+        let n = j.nrows();
+        let entry = |i: usize, k: usize| j[(i, k)];
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(!f.factor(&part, entry));
+        let dense_ok = DMatrix::from_fn(n, n, entry).lu().is_invertible();
+        assert_eq!(factor_with_fallback(&mut f, &part, entry), dense_ok);
+        if dense_ok {
+            assert!(f.partition().is_dense());
+            let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+            let mut x = b.clone();
+            f.solve(&mut x, &mut vec![0.0; n]);
+            assert!(residual(n, entry, &x, &b) < 1e-9);
+        }
+    }
+}

@@ -1,0 +1,193 @@
+//! The dense LU of one block (or of the border's Schur complement): LU with partial pivoting in
+//! place, and its solves, written out for the small block sizes.
+
+use super::scalar::Scalar;
+
+/// LU with partial pivoting of the column-major k × k matrix `a` in place (unit lower L below
+/// the diagonal, U above it, and the reciprocals of U's diagonal on the diagonal), interchanges
+/// in `piv` (row j was swapped with row piv[j]). False if a pivot is zero or below `floor`
+/// times the largest entry of `a`.
+///
+/// The diagonal is stored inverted because every factorisation serves many solves (8 per
+/// Rodas5P step, several per Newton iteration of Radau5, hundreds of steps with a constant
+/// Jacobian): a solve then multiplies where it would divide, and a division (a complex one
+/// above all) costs several multiplications' latency on the solve's critical path.
+pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
+    let tiny = floor * amax;
+    for j in 0..k {
+        let mut p = j;
+        let mut pmax = a[j + j * k].norm1();
+        for r in j + 1..k {
+            let v = a[r + j * k].norm1();
+            if v > pmax {
+                p = r;
+                pmax = v;
+            }
+        }
+        piv[j] = p;
+        if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+            return false;
+        }
+        if p != j {
+            for c in 0..k {
+                a.swap(j + c * k, p + c * k);
+            }
+        }
+        let d = a[j + j * k];
+        for r in j + 1..k {
+            a[r + j * k] = a[r + j * k] / d;
+        }
+        // The elimination below reads only rows and columns after j: the pivot is free to go.
+        a[j + j * k] = T::ONE / d;
+        for c in j + 1..k {
+            let f = a[j + c * k];
+            if f != T::ZERO {
+                let (left, right) = a.split_at_mut(c * k);
+                let lcol = &left[j * k..j * k + k];
+                let col = &mut right[..k];
+                for r in j + 1..k {
+                    col[r] = col[r] - lcol[r] * f;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves with the factors of [`lu_in_place`] in place.
+#[inline]
+pub(super) fn lu_solve<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
+    // The plate's modes make blocks of one or two states: written out, the same operations in
+    // the same order (so the same bits) cost a fraction of the loops' bookkeeping.
+    match (k, a, piv, &mut *x) {
+        (1, &[inv_u00], _, [x0]) => *x0 = *x0 * inv_u00,
+        (2, &[inv_u00, l10, u01, inv_u11], &[p0, _], [x0, x1]) => {
+            (*x0, *x1) = solve_2x2(inv_u00, l10, u01, inv_u11, p0 != 0, *x0, *x1);
+        }
+        // The servo valve's border and its three-state block: with k known, the loops unroll.
+        (3, ..) => lu_solve_loops(a, 3, piv, x),
+        (4, ..) => lu_solve_loops(a, 4, piv, x),
+        (5, ..) => lu_solve_loops(a, 5, piv, x),
+        (6, ..) => lu_solve_loops(a, 6, piv, x),
+        (7, ..) => lu_solve_loops(a, 7, piv, x),
+        (8, ..) => lu_solve_loops(a, 8, piv, x),
+        _ => lu_solve_loops(a, k, piv, x),
+    }
+}
+
+/// [`lu_solve`] for k = 2, from the factors `[inv_u00, l10, u01, inv_u11]` (column-major), the
+/// interchange of the two rows if `swap`, and the right-hand side (r0, r1).
+#[inline(always)]
+pub(super) fn solve_2x2<T: Scalar>(
+    inv_u00: T,
+    l10: T,
+    u01: T,
+    inv_u11: T,
+    swap: bool,
+    r0: T,
+    r1: T,
+) -> (T, T) {
+    let (mut x0, mut x1) = if swap { (r1, r0) } else { (r0, r1) };
+    if x0 != T::ZERO {
+        x1 = x1 - l10 * x0;
+    }
+    x1 = x1 * inv_u11;
+    if x1 != T::ZERO {
+        x0 = x0 - u01 * x1;
+    }
+    (x0 * inv_u00, x1)
+}
+
+/// [`lu_solve`] for any k (inlined, so that a constant k unrolls the loops).
+#[inline(always)]
+pub(super) fn lu_solve_loops<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
+    let (a, piv, x) = (&a[..k * k], &piv[..k], &mut x[..k]);
+    for j in 0..k {
+        if piv[j] != j {
+            x.swap(j, piv[j]);
+        }
+    }
+    for j in 0..k {
+        let v = x[j];
+        if v != T::ZERO {
+            let col = &a[j * k..j * k + k];
+            for r in j + 1..k {
+                x[r] = x[r] - col[r] * v;
+            }
+        }
+    }
+    for j in (0..k).rev() {
+        let col = &a[j * k..j * k + k];
+        let v = x[j] * col[j];
+        x[j] = v;
+        if v != T::ZERO {
+            for r in 0..j {
+                x[r] = x[r] - col[r] * v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Complex;
+
+    use super::super::testing::Rng;
+    use super::*;
+
+    /// The written-out solves for blocks of one and two states, and the unrolled ones of three
+    /// to eight, give the loops' bits, with and without a row interchange, for real and complex
+    /// systems, zeros included.
+    #[test]
+    fn small_block_solves_match_the_loops_bit_for_bit() {
+        fn check<T: Scalar + std::fmt::Debug>(a: &[T], k: usize, rhs: &[T]) {
+            let mut lu = a.to_vec();
+            let mut piv = vec![0; k];
+            assert!(lu_in_place(&mut lu, k, &mut piv, 0.0));
+            let (mut fast, mut loops) = (rhs.to_vec(), rhs.to_vec());
+            lu_solve(&lu, k, &piv, &mut fast);
+            lu_solve_loops(&lu, k, &piv, &mut loops);
+            assert_eq!(
+                format!("{fast:?}"),
+                format!("{loops:?}"),
+                "k = {k}, pivots {piv:?}"
+            );
+        }
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut pivoted = 0;
+        for trial in 0..2000 {
+            let a: Vec<f64> = (0..4).map(|_| rng.next()).collect();
+            let mut rhs: Vec<f64> = (0..2).map(|_| rng.next()).collect();
+            if trial % 7 == 0 {
+                rhs[trial % 2] = 0.0;
+            }
+            pivoted += usize::from(a[1].abs() > a[0].abs());
+            check(&a, 2, &rhs);
+            check(&a[..1], 1, &rhs[..1]);
+            let c = |i: usize| Complex::new(a[i], a[(i + 1) % 4]);
+            check(
+                &[c(0), c(1), c(2), c(3)],
+                2,
+                &[c(2), Complex::new(0.0, 0.0)],
+            );
+        }
+        assert!(pivoted > 500, "both pivot orders are exercised: {pivoted}");
+        // The sizes whose loops are unrolled (3 to 8), and 9, which is not.
+        for k in 3..=9 {
+            for trial in 0..50 {
+                let a: Vec<f64> = (0..k * k).map(|_| rng.next()).collect();
+                let mut rhs: Vec<f64> = (0..k).map(|_| rng.next()).collect();
+                rhs[trial % k] = 0.0;
+                check(&a, k, &rhs);
+                let ac: Vec<Complex<f64>> = a
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &x)| Complex::new(x, a[(i * 7) % (k * k)]))
+                    .collect();
+                let rc: Vec<Complex<f64>> = rhs.iter().map(|&v| Complex::new(v, -v)).collect();
+                check(&ac, k, &rc);
+            }
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! The block partition of the states (see the module documentation of [`super`]): groups of
+//! states (blocks) and the border, in elimination order, with where each block's data lie in the
+//! factors. Found by [`Partition::detect`].
+
+/// Groups and border of the states (see the [module documentation](super)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Partition {
+    pub(super) n: usize,
+    /// The states in elimination order: block after block, then the border.
+    pub(super) perm: Vec<usize>,
+    /// Block b holds positions `starts[b]..starts[b + 1]` of `perm`; the border is
+    /// `perm[nb..]` with `nb = starts[k]`.
+    pub(super) starts: Vec<usize>,
+    /// Border positions (0-based within the border) coupled to block b, ascending:
+    /// `links[link_starts[b]..link_starts[b + 1]]`.
+    pub(super) links: Vec<usize>,
+    pub(super) link_starts: Vec<usize>,
+    /// Where each block's data lie, precomputed for the solves (see [`BlockAt`]): the blocks
+    /// coupled to the border, and apart the free ones (no link to the border), which a solve
+    /// finishes in one go (a plate mode that no force of the hub excites is one).
+    pub(super) linked: Vec<BlockAt>,
+    pub(super) free: Vec<BlockAt>,
+    /// Numbers of the blocks' LUs (Σ k²) and of their X_b (and C_b) (Σ k × links), which
+    /// [`BlockAt::lu`] and [`BlockAt::x`] lay out one block after the other.
+    pub(super) lu_len: usize,
+    pub(super) x_len: usize,
+}
+
+/// One block's place in the partition and in the factors: what a solve would otherwise
+/// recompute from `starts` and `link_starts` block by block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct BlockAt {
+    /// First position of the block in `perm`.
+    pub(super) start: usize,
+    /// Its size k.
+    pub(super) size: usize,
+    /// Offset of its k × k LU in the factors.
+    pub(super) lu: usize,
+    /// Offset of its X_b and C_b (k × links numbers each).
+    pub(super) x: usize,
+    /// Its border links: `links[links_from..links_to]`.
+    pub(super) links_from: usize,
+    pub(super) links_to: usize,
+}
+
+impl Partition {
+    /// The partition with these fields, and the offsets derived from them.
+    pub(super) fn with(
+        n: usize,
+        perm: Vec<usize>,
+        starts: Vec<usize>,
+        links: Vec<usize>,
+        link_starts: Vec<usize>,
+    ) -> Partition {
+        let (mut linked, mut free) = (Vec::new(), Vec::new());
+        let (mut lu, mut x) = (0, 0);
+        for b in 0..starts.len() - 1 {
+            let (start, size) = (starts[b], starts[b + 1] - starts[b]);
+            let (links_from, links_to) = (link_starts[b], link_starts[b + 1]);
+            let at = BlockAt {
+                start,
+                size,
+                lu,
+                x,
+                links_from,
+                links_to,
+            };
+            if links_to > links_from {
+                linked.push(at);
+            } else {
+                free.push(at);
+            }
+            lu += size * size;
+            x += size * (links_to - links_from);
+        }
+        Partition {
+            n,
+            perm,
+            starts,
+            links,
+            link_starts,
+            linked,
+            free,
+            lu_len: lu,
+            x_len: x,
+        }
+    }
+
+    /// One block holding every state in natural order, no border: a dense LU.
+    pub fn dense(n: usize) -> Partition {
+        Partition::with(n, (0..n).collect(), vec![0, n], Vec::new(), vec![0, 0])
+    }
+
+    /// Number of states.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+    /// Number of independent blocks.
+    pub fn blocks(&self) -> usize {
+        self.starts.len() - 1
+    }
+    /// Number of border states.
+    pub fn border(&self) -> usize {
+        self.n - self.starts[self.blocks()]
+    }
+    /// Size of the largest block.
+    pub fn largest_block(&self) -> usize {
+        self.starts
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .max()
+            .unwrap_or(0)
+    }
+    /// Whether this is the dense partition (one block, no border).
+    pub fn is_dense(&self) -> bool {
+        self.blocks() == 1 && self.border() == 0
+    }
+
+    /// Block b's first position, size and border links (the tests' view; the factorisation and
+    /// the solves read [`BlockAt`]).
+    #[cfg(test)]
+    pub(super) fn block(&self, b: usize) -> (usize, usize, &[usize]) {
+        let (s, e) = (self.starts[b], self.starts[b + 1]);
+        (
+            s,
+            e - s,
+            &self.links[self.link_starts[b]..self.link_starts[b + 1]],
+        )
+    }
+}
