@@ -6,6 +6,11 @@
 //! The GUID is derived from the XML itself (a hash of the file with the GUID left out), so that it
 //! changes whenever the interface does; the build fails and names the new GUID when it is stale.
 
+// The GUID rule, shared with the library and tools/guid.rs (which update.py runs).
+#[path = "src/fnv1a.rs"]
+#[allow(dead_code)]
+mod fnv1a;
+
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -15,6 +20,7 @@ const XML: &str = "modelDescription/modelDescription.xml";
 fn main() {
     println!("cargo:rerun-if-changed={XML}");
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/fnv1a.rs");
     let text =
         std::fs::read_to_string(XML).unwrap_or_else(|e| fail(&format!("cannot read {XML}: {e}")));
     let code = generate(&text).unwrap_or_else(|e| fail(&e));
@@ -26,32 +32,6 @@ fn main() {
 fn fail(message: &str) -> ! {
     eprintln!("error in {XML}: {message}");
     panic!("{XML}: {message}");
-}
-
-/// FNV-1a, 64 bits, with a chosen offset basis.
-fn fnv1a(bytes: &[u8], basis: u64) -> u64 {
-    let mut hash = basis;
-    for b in bytes {
-        hash ^= u64::from(*b);
-        hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    hash
-}
-
-/// The GUID the XML must carry: two FNV-1a hashes of the text with the guid value blanked,
-/// written in the 8-4-4-4-12 form.
-fn expected_guid(text: &str, current: &str) -> String {
-    let blanked = text.replacen(&format!("guid=\"{current}\""), "guid=\"\"", 1);
-    let a = fnv1a(blanked.as_bytes(), 0xcbf2_9ce4_8422_2325);
-    let b = fnv1a(blanked.as_bytes(), 0x8422_2325_cbf2_9ce4);
-    format!(
-        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-        a >> 32,
-        (a >> 16) & 0xffff,
-        a & 0xffff,
-        b >> 48,
-        b & 0xffff_ffff_ffff
-    )
 }
 
 /// A Rust identifier for a variable name: `plate.f[1]` -> `PLATE_F_1`.
@@ -94,10 +74,10 @@ fn generate(text: &str) -> Result<String, String> {
         return Err("fmiVersion must be \"2.0\"".into());
     }
     let guid = root.attribute("guid").ok_or("the root has no guid")?;
-    let expected = expected_guid(text, guid);
+    let expected = fnv1a::model_guid(text, guid);
     if guid != expected {
         return Err(format!(
-            "the file changed, so its GUID must too: set guid=\"{expected}\" (it is \"{guid}\")"
+            "the file changed, so its GUID must too: run python3 modelDescription/update.py, or set guid=\"{expected}\" (it is \"{guid}\")"
         ));
     }
     let cs = root
