@@ -21,6 +21,10 @@ mod binaries;
 mod docpage;
 mod info;
 mod loader;
+// The one reader of modelDescription.xml, shared with build.rs.
+#[path = "../../../tools/model_description.rs"]
+#[allow(dead_code)]
+mod model_description;
 mod modeshape;
 mod package;
 mod plot;
