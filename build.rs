@@ -1,10 +1,22 @@
 //! Reads `modelDescription/modelDescription.xml`, the one source of truth for the FMU's variables,
+//! through the project's one reader of it (`tools/model_description.rs`, shared with `hsp`),
 //! checks the rules of FMI 2.0 that a typo would break, and writes the Rust variable table
 //! (`$OUT_DIR/variables.rs`, included by `src/model/variables.rs`). Code and XML cannot drift: a
 //! variable exists in Rust only because it exists in the XML.
 //!
 //! The GUID is derived from the XML itself (a hash of the file with the GUID left out), so that it
 //! changes whenever the interface does; the build fails and names the new GUID when it is stale.
+
+// The GUID rule, shared with the library and tools/guid.rs (which update.py runs).
+#[path = "src/fnv1a.rs"]
+#[allow(dead_code)]
+mod fnv1a;
+// The one reader of the XML, shared with `hsp`'s documentation page.
+#[path = "tools/model_description.rs"]
+#[allow(dead_code)]
+mod model_description;
+
+use model_description::{get, ModelDescription, Unit, Unknown};
 
 use std::collections::{BTreeSet, HashMap};
 use std::fmt::Write as _;
@@ -15,6 +27,8 @@ const XML: &str = "modelDescription/modelDescription.xml";
 fn main() {
     println!("cargo:rerun-if-changed={XML}");
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/fnv1a.rs");
+    println!("cargo:rerun-if-changed=tools/model_description.rs");
     let text =
         std::fs::read_to_string(XML).unwrap_or_else(|e| fail(&format!("cannot read {XML}: {e}")));
     let code = generate(&text).unwrap_or_else(|e| fail(&e));
@@ -26,32 +40,6 @@ fn main() {
 fn fail(message: &str) -> ! {
     eprintln!("error in {XML}: {message}");
     panic!("{XML}: {message}");
-}
-
-/// FNV-1a, 64 bits, with a chosen offset basis.
-fn fnv1a(bytes: &[u8], basis: u64) -> u64 {
-    let mut hash = basis;
-    for b in bytes {
-        hash ^= u64::from(*b);
-        hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    hash
-}
-
-/// The GUID the XML must carry: two FNV-1a hashes of the text with the guid value blanked,
-/// written in the 8-4-4-4-12 form.
-fn expected_guid(text: &str, current: &str) -> String {
-    let blanked = text.replacen(&format!("guid=\"{current}\""), "guid=\"\"", 1);
-    let a = fnv1a(blanked.as_bytes(), 0xcbf2_9ce4_8422_2325);
-    let b = fnv1a(blanked.as_bytes(), 0x8422_2325_cbf2_9ce4);
-    format!(
-        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
-        a >> 32,
-        (a >> 16) & 0xffff,
-        a & 0xffff,
-        b >> 48,
-        b & 0xffff_ffff_ffff
-    )
 }
 
 /// A Rust identifier for a variable name: `plate.f[1]` -> `PLATE_F_1`.
@@ -88,29 +76,27 @@ fn opt_i32(v: Option<&str>, what: &str) -> Result<String, String> {
 }
 
 fn generate(text: &str) -> Result<String, String> {
-    let doc = roxmltree::Document::parse(text).map_err(|e| format!("not well-formed XML: {e}"))?;
-    let root = doc.root_element();
-    if root.attribute("fmiVersion") != Some("2.0") {
+    let md = ModelDescription::parse(text)?;
+    if md.attribute("fmiVersion") != Some("2.0") {
         return Err("fmiVersion must be \"2.0\"".into());
     }
-    let guid = root.attribute("guid").ok_or("the root has no guid")?;
-    let expected = expected_guid(text, guid);
+    let guid = md.attribute("guid").ok_or("the root has no guid")?;
+    let expected = fnv1a::model_guid(text, guid);
     if guid != expected {
         return Err(format!(
-            "the file changed, so its GUID must too: set guid=\"{expected}\" (it is \"{guid}\")"
+            "the file changed, so its GUID must too: run python3 modelDescription/update.py, or set guid=\"{expected}\" (it is \"{guid}\")"
         ));
     }
-    let cs = root
-        .children()
-        .find(|n| n.has_tag_name("CoSimulation"))
+    let cs = md
+        .co_simulation
+        .as_deref()
         .ok_or("no <CoSimulation> element")?;
-    let model_identifier = cs
-        .attribute("modelIdentifier")
-        .ok_or("CoSimulation has no modelIdentifier")?;
+    let model_identifier =
+        get(cs, "modelIdentifier").ok_or("CoSimulation has no modelIdentifier")?;
     // Model Exchange, where offered, is the same binary: the same modelIdentifier.
-    let me = root.children().find(|n| n.has_tag_name("ModelExchange"));
+    let me = md.model_exchange.as_deref();
     if let Some(me) = me {
-        if me.attribute("modelIdentifier") != Some(model_identifier) {
+        if get(me, "modelIdentifier") != Some(model_identifier) {
             return Err(format!(
                 "ModelExchange's modelIdentifier must be CoSimulation's, {model_identifier:?}: one binary offers both"
             ));
@@ -119,23 +105,12 @@ fn generate(text: &str) -> Result<String, String> {
 
     // Units and their display units.
     let mut units: HashMap<String, BTreeSet<String>> = HashMap::new();
-    if let Some(defs) = root.children().find(|n| n.has_tag_name("UnitDefinitions")) {
-        for u in defs.children().filter(|n| n.has_tag_name("Unit")) {
-            let name = u.attribute("name").ok_or("a Unit has no name")?;
-            check_unit(u)?;
-            let displays = u
-                .children()
-                .filter(|n| n.has_tag_name("DisplayUnit"))
-                .filter_map(|d| d.attribute("name").map(String::from))
-                .collect();
-            units.insert(name.to_string(), displays);
-        }
+    for u in &md.units {
+        check_unit(u)?;
+        let displays = u.display_units.iter().map(|d| d.name.clone()).collect();
+        units.insert(u.name.clone(), displays);
     }
 
-    let vars_node = root
-        .children()
-        .find(|n| n.has_tag_name("ModelVariables"))
-        .ok_or("no <ModelVariables>")?;
     let mut names = BTreeSet::new();
     let mut vrs = BTreeSet::new();
     let mut table = String::new();
@@ -148,37 +123,25 @@ fn generate(text: &str) -> Result<String, String> {
     let mut exact = BTreeSet::new();
     // (state position, derivative position), 1-based, in XML order of the derivatives.
     let mut derivatives: Vec<(usize, usize)> = Vec::new();
-    for (i, sv) in vars_node
-        .children()
-        .filter(|n| n.has_tag_name("ScalarVariable"))
-        .enumerate()
-    {
+    for (i, sv) in md.variables.iter().enumerate() {
         let position = i + 1;
-        let name = sv
-            .attribute("name")
-            .ok_or(format!("variable {position} has no name"))?;
+        let name = sv.name.as_str();
         let at = |what: &str| format!("variable '{name}': {what}");
         if !names.insert(name.to_string()) {
             return Err(at("duplicate name"));
         }
-        let vr: u32 = sv
-            .attribute("valueReference")
-            .and_then(|v| v.parse().ok())
-            .ok_or(at("missing or bad valueReference"))?;
+        let vr = sv.value_reference;
         if !vrs.insert(vr) {
             return Err(at(&format!("valueReference {vr} is used twice")));
         }
         let description = sv
-            .attribute("description")
+            .description
+            .as_deref()
             .ok_or(at("every variable needs a description"))?;
-        let causality = sv.attribute("causality").unwrap_or("local");
-        let variability = sv.attribute("variability").unwrap_or("continuous");
-        let initial = sv.attribute("initial");
-        let ty = sv
-            .children()
-            .find(|n| n.is_element())
-            .ok_or(at("no type element"))?;
-        let start = ty.attribute("start");
+        let causality = sv.causality.as_str();
+        let variability = sv.variability.as_str();
+        let initial = sv.initial.as_deref();
+        let start = sv.start.as_deref();
         let needs_start = matches!(causality, "input" | "parameter")
             || matches!(initial, Some("exact") | Some("approx"))
             || variability == "constant";
@@ -203,14 +166,14 @@ fn generate(text: &str) -> Result<String, String> {
                 )))
             }
         }
-        if variability == "continuous" && ty.tag_name().name() != "Real" {
+        if variability == "continuous" && sv.kind != "Real" {
             return Err(at("only Real variables can be continuous"));
         }
-        if let Some(unit) = ty.attribute("unit") {
+        if let Some(unit) = sv.unit.as_deref() {
             let Some(displays) = units.get(unit) else {
                 return Err(at(&format!("unit '{unit}' is not in <UnitDefinitions>")));
             };
-            if let Some(d) = ty.attribute("displayUnit") {
+            if let Some(d) = sv.display_unit.as_deref() {
                 if !displays.contains(d) {
                     return Err(at(&format!(
                         "displayUnit '{d}' is not defined for unit '{unit}'"
@@ -227,7 +190,7 @@ fn generate(text: &str) -> Result<String, String> {
         if causality == "parameter" && initial != Some("calculated") {
             exact.insert(position);
         }
-        if let Some(of) = ty.attribute("derivative") {
+        if let Some(of) = sv.derivative.as_deref() {
             let of: usize = of
                 .parse()
                 .map_err(|_| at(&format!("bad derivative attribute '{of}'")))?;
@@ -242,18 +205,18 @@ fn generate(text: &str) -> Result<String, String> {
         {
             initial_unknowns.push(position);
         }
-        let kind = match ty.tag_name().name() {
+        let kind = match sv.kind.as_str() {
             "Real" => format!(
                 "Kind::Real {{ start: {}, min: {}, max: {} }}",
                 opt_f64(start, &at("start"))?,
-                opt_f64(ty.attribute("min"), &at("min"))?,
-                opt_f64(ty.attribute("max"), &at("max"))?
+                opt_f64(sv.min.as_deref(), &at("min"))?,
+                opt_f64(sv.max.as_deref(), &at("max"))?
             ),
             "Integer" => format!(
                 "Kind::Integer {{ start: {}, min: {}, max: {} }}",
                 opt_i32(start, &at("start"))?,
-                opt_i32(ty.attribute("min"), &at("min"))?,
-                opt_i32(ty.attribute("max"), &at("max"))?
+                opt_i32(sv.min.as_deref(), &at("min"))?,
+                opt_i32(sv.max.as_deref(), &at("max"))?
             ),
             "Boolean" => format!(
                 "Kind::Boolean {{ start: {} }}",
@@ -278,7 +241,7 @@ fn generate(text: &str) -> Result<String, String> {
             "    Variable {{ name: {name:?}, value_reference: {vr}, causality: Causality::{}, variability: Variability::{}, kind: {kind}, unit: {:?}, description: {description:?} }},",
             rust_enum(causality),
             rust_enum(variability),
-            ty.attribute("unit"),
+            sv.unit,
         )
         .unwrap();
         let id = ident(name);
@@ -298,22 +261,8 @@ fn generate(text: &str) -> Result<String, String> {
     }
 
     // ModelStructure must list exactly the outputs and the initial unknowns, by 1-based position.
-    let structure = root
-        .children()
-        .find(|n| n.has_tag_name("ModelStructure"))
-        .ok_or("no <ModelStructure>")?;
-    let listed = |tag: &str| -> Vec<usize> {
-        structure
-            .children()
-            .find(|n| n.has_tag_name(tag))
-            .map(|n| {
-                n.children()
-                    .filter(|u| u.has_tag_name("Unknown"))
-                    .filter_map(|u| u.attribute("index").and_then(|i| i.parse().ok()))
-                    .collect()
-            })
-            .unwrap_or_default()
-    };
+    let structure = &md.structure;
+    let listed = |list: &[Unknown]| -> Vec<usize> { list.iter().map(|u| u.index).collect() };
     // The continuous states (each named by a derivative) are calculated at initialisation, like
     // their derivatives: both are initial unknowns (FMI 2.0.4, section 2.2.8).
     let states: BTreeSet<usize> = derivatives.iter().map(|&(x, _)| x).collect();
@@ -328,25 +277,21 @@ fn generate(text: &str) -> Result<String, String> {
     // Every unknown declares its dependencies: the outputs and derivatives on inputs and states
     // (the knowns of a step), the initial unknowns on inputs and exact parameters (the knowns of
     // initialisation mode).
-    for (tag, knowns) in [
-        ("Outputs", &inputs | &states),
-        ("Derivatives", &inputs | &states),
-        ("InitialUnknowns", &inputs | &exact),
+    for (tag, unknowns, knowns) in [
+        ("Outputs", &structure.outputs, &inputs | &states),
+        ("Derivatives", &structure.derivatives, &inputs | &states),
+        (
+            "InitialUnknowns",
+            &structure.initial_unknowns,
+            &inputs | &exact,
+        ),
     ] {
-        let unknowns = structure
-            .children()
-            .find(|n| n.has_tag_name(tag))
-            .into_iter()
-            .flat_map(|n| n.children().filter(|u| u.has_tag_name("Unknown")));
         for u in unknowns {
-            let index = u.attribute("index").unwrap_or("?");
-            let deps = u.attribute("dependencies").ok_or(format!(
+            let index = u.index;
+            let deps = u.dependencies.as_ref().ok_or(format!(
                 "<{tag}> Unknown {index} has no dependencies attribute (without it, it depends on every known)"
             ))?;
-            for d in deps.split_whitespace() {
-                let d: usize = d
-                    .parse()
-                    .map_err(|_| format!("<{tag}> Unknown {index}: bad dependency '{d}'"))?;
+            for &d in deps {
                 if !knowns.contains(&d) {
                     return Err(format!(
                         "<{tag}> Unknown {index} depends on variable {d}, which is not a known there"
@@ -355,23 +300,23 @@ fn generate(text: &str) -> Result<String, String> {
             }
         }
     }
-    if listed("Outputs") != outputs {
+    if listed(&structure.outputs) != outputs {
         return Err(format!(
             "<ModelStructure><Outputs> lists {:?}, but the outputs are at positions {outputs:?}",
-            listed("Outputs")
+            listed(&structure.outputs)
         ));
     }
     let derivative_positions: Vec<usize> = derivatives.iter().map(|&(_, d)| d).collect();
-    if listed("Derivatives") != derivative_positions {
+    if listed(&structure.derivatives) != derivative_positions {
         return Err(format!(
             "<ModelStructure><Derivatives> lists {:?}, but the derivatives are at positions {derivative_positions:?}",
-            listed("Derivatives")
+            listed(&structure.derivatives)
         ));
     }
-    if listed("InitialUnknowns") != initial_unknowns {
+    if listed(&structure.initial_unknowns) != initial_unknowns {
         return Err(format!(
             "<ModelStructure><InitialUnknowns> lists {:?}, but they are at positions {initial_unknowns:?}",
-            listed("InitialUnknowns")
+            listed(&structure.initial_unknowns)
         ));
     }
 
@@ -545,20 +490,19 @@ fn unit_meanings(expr: &str) -> Result<Vec<(f64, Dims)>, String> {
 
 /// Checks a `<Unit>`: its name means what its `<BaseUnit>` says, and every `<DisplayUnit>`'s
 /// factor converts to what its name means (so `bar.min/L` must have factor 1/6e9).
-fn check_unit(u: roxmltree::Node) -> Result<(), String> {
-    let name = u.attribute("name").unwrap_or("");
-    let base = u.children().find(|n| n.has_tag_name("BaseUnit"));
+fn check_unit(u: &Unit) -> Result<(), String> {
+    let name = u.name.as_str();
     let mut dims: Dims = [0; 8];
     let mut base_factor = 1.0;
-    if let Some(b) = base {
+    if let Some(b) = &u.base_unit {
         for (k, e) in BASE.iter().enumerate() {
-            if let Some(x) = b.attribute(*e) {
+            if let Some(x) = get(b, e) {
                 dims[k] = x
                     .parse()
                     .map_err(|_| format!("unit '{name}': bad exponent {e}=\"{x}\""))?;
             }
         }
-        if let Some(f) = b.attribute("factor") {
+        if let Some(f) = get(b, "factor") {
             base_factor = f
                 .parse()
                 .map_err(|_| format!("unit '{name}': bad factor"))?;
@@ -575,13 +519,8 @@ fn check_unit(u: roxmltree::Node) -> Result<(), String> {
             "unit '{name}' does not mean its <BaseUnit> (exponents {dims:?} of {BASE:?}, factor {base_factor})"
         ));
     }
-    for du in u.children().filter(|n| n.has_tag_name("DisplayUnit")) {
-        let dname = du.attribute("name").unwrap_or("");
-        let factor: f64 = du
-            .attribute("factor")
-            .unwrap_or("1")
-            .parse()
-            .map_err(|_| format!("display unit '{dname}': bad factor"))?;
+    for du in &u.display_units {
+        let (dname, factor) = (du.name.as_str(), du.factor);
         // display value = factor * value in the unit; one display unit is base_factor / factor
         // in SI.
         if !means(dname, base_factor / factor)

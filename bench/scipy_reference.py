@@ -17,9 +17,10 @@ Second use, by the FMU speed benchmark (`cargo run --release --bin bench-fmu`):
 
     .venv/bin/python bench/scipy_reference.py --linear MODEL.json
 
-MODEL.json holds a linear configuration of the FMU's model as `hsp linearize --json` gives it
-(A, B, and the rows C, D of the outputs whose error is measured), the start state x0, the held
-input u, each state's nominal value, the stop time and the communication step. One solve_ivp
+MODEL.json holds a linear configuration of the FMU's model in the layout `hsp linearize --json`
+prints (Linearization::to_json: A, B, the start state x0, and here only the rows C, D of the
+outputs whose error is measured), with what the benchmark adds: the held input u, each state's
+nominal value, the stop time and the communication step. One solve_ivp
 call per method (Radau, BDF, LSODA) and rtol (1e-3 ... 1e-10; atol = 1e-2 rtol nominal, as the
 FMU), with the constant Jacobian A (sparse when A is large and sparse), output at every
 communication point. Each run's delivered error is the largest deviation of each output from the

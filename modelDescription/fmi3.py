@@ -24,7 +24,8 @@ What changes from FMI 2.0 to 3.0:
 import pathlib
 import re
 import sys
-import xml.etree.ElementTree as ET
+
+import reader
 
 HERE = pathlib.Path(__file__).parent
 FMI2 = HERE / "modelDescription.xml"
@@ -48,18 +49,12 @@ def attrs(pairs):
     return "".join(f' {k}="{esc(str(v))}"' for k, v in pairs if v is not None)
 
 
-class Var:
-    def __init__(self, index, sv):
-        self.index = index
-        self.name = sv.get("name")
-        self.vr = int(sv.get("valueReference"))
-        self.causality = sv.get("causality", "local")
-        self.variability = sv.get("variability", "continuous")
-        self.initial = sv.get("initial")
-        self.description = sv.get("description")
-        typed = next(iter(sv))
-        self.type = TYPES[typed.tag]
-        self.type_attrs = dict(typed.attrib)
+class Var(reader.Variable):
+    """A variable of the FMI 2.0 file (read by reader.py) with what FMI 3.0 makes of it."""
+
+    @property
+    def type(self):
+        return TYPES[self.kind]
 
     def family(self):
         m = re.fullmatch(r"(.*)\[(\d+)\]", self.name)
@@ -102,8 +97,8 @@ def group(variables):
 
 
 def generate(text):
-    root = ET.fromstring(text)
-    variables = [Var(i, sv) for i, sv in enumerate(root.find("ModelVariables"), start=1)]
+    root = reader.parse(text)
+    variables = reader.variables(root, Var)
     if any(v.vr == TIME_VR for v in variables):
         raise SystemExit(f"value reference {TIME_VR} is taken; the FMI 3.0 time variable needs it")
     groups = group(variables)

@@ -2,9 +2,16 @@
 """Rewrites the derived parts of modelDescription.xml after its variables were edited: the
 continuous states and their derivatives (the last variables, from model_structure.json),
 <ModelStructure> (Outputs, Derivatives and InitialUnknowns, by 1-based position, with their
-dependencies) and the GUID (a hash of the file with the GUID left out, as build.rs computes it).
-build.rs stays the judge: it fails the build if any is stale. Usage:
-python3 modelDescription/update.py
+dependencies) and the GUID (a hash of the file with the GUID left out). build.rs stays the judge:
+it fails the build if any is stale. Usage: python3 modelDescription/update.py (needs rustc)
+
+One source per rule: the XML is read through reader.py (ElementTree), the reader fmi3.py uses too;
+regular expressions here only rewrite text (the state block, <ModelStructure>, the guid value), so
+that the hand-written rest of the file keeps its layout and comments, which an ElementTree
+round trip would lose. The GUID rule (FNV-1a) is written once, in src/fnv1a.rs: this script blanks
+the guid, compiles tools/guid.rs (which includes src/fnv1a.rs) with plain rustc and lets it hash
+the text. Not with cargo: the crate's build.rs refuses a stale GUID, so the crate cannot build
+until this script has written the new one.
 
 Continuous states (Model Exchange): FMI 2.0 fixes their number in the XML, while the model's
 states depend on its structural parameters. model_structure.json, written by
@@ -27,9 +34,14 @@ parameters and hub.I_H."""
 import json
 import pathlib
 import re
+import subprocess
+import tempfile
+
+import reader
 
 XML = pathlib.Path(__file__).with_name("modelDescription.xml")
 STRUCTURE = pathlib.Path(__file__).with_name("model_structure.json")
+GUID_TOOL = pathlib.Path(__file__).parent.parent / "tools" / "guid.rs"
 STATES_MARK = "    <!-- continuous states and their derivatives: written by update.py from model_structure.json -->\n"
 # Value references of the states and their derivatives: STATE_VR + k, DERIVATIVE_VR + k, k from 1.
 STATE_VR, DERIVATIVE_VR = 10000, 20000
@@ -82,28 +94,21 @@ FEEDTHROUGH = {
 }
 
 
-def fnv1a(data: bytes, basis: int) -> int:
-    h = basis
-    for b in data:
-        h ^= b
-        h = (h * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
-    return h
-
-
 def guid_for(text: str) -> str:
-    current = re.search(r'guid="([^"]*)"', text).group(1)
-    blanked = text.replace(f'guid="{current}"', 'guid=""', 1).encode()
-    a = fnv1a(blanked, 0xCBF29CE484222325)
-    b = fnv1a(blanked, 0x84222325CBF29CE4)
-    return "{%08x-%04x-%04x-%04x-%012x}" % (a >> 32, (a >> 16) & 0xFFFF, a & 0xFFFF, b >> 48, b & 0xFFFFFFFFFFFF)
+    """The GUID of `text`, whose guid attribute is blank, by the rule of src/fnv1a.rs (tools/guid.rs)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = pathlib.Path(tmp) / "guid"
+        subprocess.run(["rustc", "--edition", "2021", "-o", str(exe), str(GUID_TOOL)], check=True)
+        out = subprocess.run([str(exe)], input=text.encode(), stdout=subprocess.PIPE, check=True)
+    return out.stdout.decode().strip()
 
 
 def write_states(text, structure):
     """Replaces the generated state and derivative variables at the end of ModelVariables."""
     if STATES_MARK in text:
         text = text[: text.index(STATES_MARK)] + text[text.index("  </ModelVariables>") :]
-    before = re.findall(r'<ScalarVariable\b[^>]*?name="([^"]*)"', text[: text.index("  </ModelVariables>")], flags=re.S)
-    position = {f"x.{s}": len(before) + k for k, s in enumerate(structure["states"], start=1)}
+    before = len(reader.variables(reader.parse(text)))
+    position = {f"x.{s}": before + k for k, s in enumerate(structure["states"], start=1)}
     block = "".join(state_variables(structure) + derivative_variables(structure, position))
     at = text.index("  </ModelVariables>")
     return text[:at] + block + text[at:]
@@ -112,8 +117,8 @@ def write_states(text, structure):
 def main():
     structure = json.loads(STRUCTURE.read_text())
     text = write_states(XML.read_text(), structure)
-    variables = re.findall(r"<ScalarVariable\b(.*?)>", text, flags=re.S)
-    names = [re.search(r'name="([^"]*)"', attrs).group(1) for attrs in variables]
+    variables = reader.variables(reader.parse(text))
+    names = [v.name for v in variables]
     position = {name: i for i, name in enumerate(names, start=1)}
 
     def feedthrough(name):
@@ -122,20 +127,17 @@ def main():
     def known(name):
         return position[name] if name in position and name in inputs else position[f"x.{name}"]
 
-    inputs = {n for n, attrs in zip(names, variables) if 'causality="input"' in attrs}
+    inputs = {v.name for v in variables if v.causality == "input"}
 
     def on_states(name):
         return [known(s) for s in structure["outputs"].get(name, [])]
 
     outputs, initial, parameters, plate = [], [], [], []
-    for i, attrs in enumerate(variables, start=1):
-        name = names[i - 1]
-        causality = re.search(r'causality="(\w+)"', attrs)
-        causality = causality.group(1) if causality else "local"
-        init = re.search(r'initial="(\w+)"', attrs)
+    for v in variables:
+        i, name, causality = v.index, v.name, v.causality
         if causality == "output":
             outputs.append((i, sorted(feedthrough(name) + on_states(name))))
-        if (causality == "output" and not (init and init.group(1) == "exact")) or causality == "calculatedParameter":
+        if (causality == "output" and v.initial != "exact") or causality == "calculatedParameter":
             initial.append((i, name))
         if causality == "parameter":
             parameters.append(i)
@@ -168,11 +170,10 @@ def main():
     )
     text = re.sub(r"  <ModelStructure>.*?</ModelStructure>", lambda _: model_structure, text, flags=re.S)
     text = re.sub(r'guid="[^"]*"', 'guid=""', text, count=1)
-    text = text.replace('guid=""', f'guid="{guid_for(text)}"', 1)
+    guid = guid_for(text)
+    text = text.replace('guid=""', f'guid="{guid}"', 1)
     XML.write_text(text)
-    print(
-        f"{XML}: {len(variables)} variables, {len(outputs)} outputs, {len(derivatives)} continuous states, guid {guid_for(text)}"
-    )
+    print(f"{XML}: {len(variables)} variables, {len(outputs)} outputs, {len(derivatives)} continuous states, guid {guid}")
     # The FMI 3.0 description is derived from this one.
     import fmi3
 

@@ -23,6 +23,7 @@ pub mod bond_graph;
 pub mod fmi2;
 pub mod fmi3;
 pub mod fmu;
+pub mod fnv1a;
 pub mod fragments;
 pub mod model;
 pub mod solver;

@@ -294,8 +294,8 @@ fn loes_power_balance_and_jacobian() {
         assert_eq!(jac, m.linearize(&x, &u).a);
     }
     let json = m.linearize(&[0.0; 3], &[0.0]).to_json();
-    assert_eq!(json["state_names"][0], "loes.theta_a");
-    assert_eq!(json["a"].as_array().unwrap().len(), 3);
+    assert_eq!(json["states"][0], "loes.theta_a");
+    assert_eq!(json["A"].as_array().unwrap().len(), 3);
 }
 
 #[test]

@@ -10,6 +10,18 @@ use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::{idx, VARIABLES};
 
+// The project's one reader of the XML (build.rs and hsp read it through the same file).
+#[path = "../tools/model_description.rs"]
+#[allow(dead_code)]
+mod model_description;
+
+use model_description::ModelDescription;
+
+fn model_description() -> ModelDescription {
+    let xml = std::fs::read_to_string("modelDescription/modelDescription.xml").unwrap();
+    ModelDescription::parse(&xml).unwrap()
+}
+
 fn defaults() -> Parameters {
     Parameters::from_values(&Values::from_start(&VARIABLES), &Experiment::default()).unwrap()
 }
@@ -164,23 +176,18 @@ fn output_dependencies_are_those_of_the_compiled_model() {
         }
     }
     assert!(found[&position("y_pot")].is_empty());
-    let xml = std::fs::read_to_string("modelDescription/modelDescription.xml").unwrap();
-    let block = &xml[xml.find("<Outputs>").unwrap()..xml.find("</Outputs>").unwrap()];
     let mut declared = BTreeMap::new();
-    for line in block.lines().filter(|l| l.contains("<Unknown ")) {
-        let attr = |name: &str| {
-            let key = format!("{name}=\"");
-            let at = line.find(&key).unwrap() + key.len();
-            line[at..at + line[at..].find('"').unwrap()].to_string()
-        };
+    for u in &model_description().structure.outputs {
         // The dependencies on inputs; those on the continuous states are checked by
         // tests/model_structure.rs.
-        let deps: BTreeSet<usize> = attr("dependencies")
-            .split_whitespace()
-            .map(|d| d.parse().unwrap())
-            .filter(|&d: &usize| VARIABLES[d - 1].causality == Causality::Input)
+        let deps: BTreeSet<usize> = u
+            .dependencies
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|&d| VARIABLES[d - 1].causality == Causality::Input)
             .collect();
-        declared.insert(attr("index").parse::<usize>().unwrap(), deps);
+        declared.insert(u.index, deps);
     }
     assert_eq!(declared, found);
 }
@@ -189,9 +196,13 @@ fn output_dependencies_are_those_of_the_compiled_model() {
 /// one that was wrong): 1 bar min/L = 1e5 Pa * 60 s / 1e-3 m^3 = 6e9 N s/m^5.
 #[test]
 fn bar_min_per_litre_is_six_billion_si() {
-    let xml = std::fs::read_to_string("modelDescription/modelDescription.xml").unwrap();
-    let key = r#"name="bar.min/L" factor=""#;
-    let at = xml.find(key).unwrap() + key.len();
-    let factor: f64 = xml[at..at + xml[at..].find('"').unwrap()].parse().unwrap();
+    let md = model_description();
+    let factor = md
+        .units
+        .iter()
+        .flat_map(|u| &u.display_units)
+        .find(|d| d.name == "bar.min/L")
+        .unwrap()
+        .factor;
     assert!((factor * 6e9 - 1.0).abs() < 1e-15, "{factor}");
 }

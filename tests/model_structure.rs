@@ -23,6 +23,13 @@ use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::{CONTINUOUS_STATES, VARIABLES};
 use serde_json::{json, Value};
 
+// The project's one reader of the XML (build.rs and hsp read it through the same file).
+#[path = "../tools/model_description.rs"]
+#[allow(dead_code)]
+mod model_description;
+
+use model_description::{ModelDescription, Unknown};
+
 /// The most plate modes (plate.N x plate.M) Model Exchange declares states for: 25 covers the
 /// default 3 x 5 and the paper's 5 beam functions across with up to 5 along; co-simulation takes
 /// up to 20 x 20.
@@ -125,24 +132,11 @@ fn structure() -> Value {
 }
 
 /// The `dependencies` of each `<Unknown>` of a `<ModelStructure>` block, by 1-based index.
-fn declared(xml: &str, tag: &str) -> BTreeMap<usize, BTreeSet<usize>> {
-    let open = format!("<{tag}>");
-    let close = format!("</{tag}>");
-    let block = &xml[xml.find(&open).unwrap()..xml.find(&close).unwrap()];
-    let mut out = BTreeMap::new();
-    for line in block.lines().filter(|l| l.contains("<Unknown ")) {
-        let attr = |name: &str| {
-            let key = format!("{name}=\"");
-            let at = line.find(&key).unwrap() + key.len();
-            line[at..at + line[at..].find('"').unwrap()].to_string()
-        };
-        let deps = attr("dependencies")
-            .split_whitespace()
-            .map(|d| d.parse().unwrap())
-            .collect();
-        out.insert(attr("index").parse().unwrap(), deps);
-    }
-    out
+fn declared(unknowns: &[Unknown]) -> BTreeMap<usize, BTreeSet<usize>> {
+    unknowns
+        .iter()
+        .map(|u| (u.index, u.dependencies.iter().flatten().copied().collect()))
+        .collect()
 }
 
 #[test]
@@ -179,6 +173,7 @@ fn xml_declares_the_compiled_models_states_and_dependencies() {
 
     // And the XML's dependencies are the computed ones.
     let xml = std::fs::read_to_string("modelDescription/modelDescription.xml").unwrap();
+    let structure = ModelDescription::parse(&xml).unwrap().structure;
     let position = |name: &str| VARIABLES.iter().position(|v| v.name == name).unwrap() + 1;
     let known = |name: &str| {
         VARIABLES
@@ -194,13 +189,13 @@ fn xml_declares_the_compiled_models_states_and_dependencies() {
             .map(|n| known(n.as_str().unwrap()))
             .collect()
     };
-    let derivatives = declared(&xml, "Derivatives");
+    let derivatives = declared(&structure.derivatives);
     for (state, deps) in computed["derivatives"].as_object().unwrap() {
         let d = position(&format!("der({STATE_PREFIX}{state})"));
         assert_eq!(derivatives[&d], positions(deps), "der({state})");
     }
     assert_eq!(derivatives.len(), CONTINUOUS_STATES.len());
-    let outputs = declared(&xml, "Outputs");
+    let outputs = declared(&structure.outputs);
     let states: BTreeSet<usize> = CONTINUOUS_STATES.iter().map(|&(x, _)| x + 1).collect();
     for (output, deps) in computed["outputs"].as_object().unwrap() {
         let got: BTreeSet<usize> = outputs[&position(output)]

@@ -1,4 +1,4 @@
-//! The RADAU5 constants in src/solver/radau5.rs: T, T⁻¹ and the eigenvalues of A⁻¹ must match
+//! The RADAU5 constants in src/solver/radau5/coefficients.rs: T, T⁻¹ and the eigenvalues of A⁻¹ must match
 //! the Radau IIA coefficient matrix A (Hairer & Wanner II, Table IV.5.6).
 
 // Wrapped in a module so that `cargo test solver` selects these tests by name.

@@ -38,7 +38,7 @@ mod loader;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use hydraulic_slewing_plate::bond_graph::ExactDiscretisation;
+use hydraulic_slewing_plate::bond_graph::{ExactDiscretisation, Linearization};
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
@@ -311,15 +311,13 @@ fn measure(fmu: &Fmu, method: i32, sets: &[&str]) -> Result<Run, String> {
     Ok(runs.swap_remove(1))
 }
 
-/// The linearised model of a configuration (exact for the linear ones).
+/// The linearised model of a configuration (exact for the linear ones) at its start state.
 struct Linear {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    /// Rows of C and D for [`ERR_OUTPUTS`].
-    c: DMatrix<f64>,
-    d: DMatrix<f64>,
-    x0: Vec<f64>,
+    /// Its outputs cut to [`ERR_OUTPUTS`] (the rows of C and D, the names).
+    lin: Linearization,
+    /// The input held over the run: `r` = 1, the others 0.
     u: Vec<f64>,
+    /// The states' nominal values.
     nominal: Vec<f64>,
 }
 
@@ -332,7 +330,7 @@ fn linear_model(sets: &[&str]) -> Result<Linear, String> {
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     let system = Assembled::new(&parameters)?;
     let x0 = system.initial_state();
-    let lin = system.compiled().linearize(&x0, system.inputs());
+    let mut lin = system.compiled().linearize(&x0, system.inputs());
     let rows: Vec<usize> = ERR_OUTPUTS
         .iter()
         .map(|(name, _)| lin.output_names.iter().position(|o| o == name).unwrap())
@@ -344,12 +342,10 @@ fn linear_model(sets: &[&str]) -> Result<Linear, String> {
         .iter()
         .map(|n| if n == "r" { 1.0 } else { 0.0 })
         .collect();
+    (lin.c, lin.d) = (c, d);
+    lin.output_names = ERR_OUTPUTS.iter().map(|(n, _)| n.to_string()).collect();
     Ok(Linear {
-        a: lin.a,
-        b: lin.b,
-        c,
-        d,
-        x0,
+        lin,
         u,
         nominal: system.nominal().to_vec(),
     })
@@ -357,10 +353,11 @@ fn linear_model(sets: &[&str]) -> Result<Linear, String> {
 
 /// The exact discretisation: the output trajectories at 1..=n communication points and the
 /// wall time per step of the propagation (one dense mat-vec).
-fn exact(lin: &Linear, n: usize) -> (Vec<[f64; 2]>, f64) {
+fn exact(linear: &Linear, n: usize) -> (Vec<[f64; 2]>, f64) {
+    let lin = &linear.lin;
     let disc = ExactDiscretisation::new(&lin.a, &lin.b, STEP);
-    let gu = disc.input_term(&lin.u);
-    let du = &lin.d * DVector::from_column_slice(&lin.u);
+    let gu = disc.input_term(&linear.u);
+    let du = &lin.d * DVector::from_column_slice(&linear.u);
     let mut x = DVector::from_column_slice(&lin.x0);
     let mut x1 = DVector::zeros(x.len());
     let mut y = Vec::with_capacity(n);
@@ -394,16 +391,13 @@ fn delivered_error(y: &[[f64; 2]], reference: &[[f64; 2]]) -> f64 {
 }
 
 /// scipy's runs at equal accuracy: per method, the fastest run with error <= `target`.
-fn scipy(lin: &Linear, target: f64) -> Result<Vec<(String, String)>, String> {
-    let to_rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
-        (0..m.nrows())
-            .map(|i| m.row(i).iter().copied().collect())
-            .collect()
-    };
-    let input = serde_json::json!({
-        "A": to_rows(&lin.a), "B": to_rows(&lin.b), "C": to_rows(&lin.c), "D": to_rows(&lin.d),
-        "x0": lin.x0, "u": lin.u, "nominal": lin.nominal, "stop": STOP, "step": STEP,
-    });
+fn scipy(linear: &Linear, target: f64) -> Result<Vec<(String, String)>, String> {
+    // The linearisation's own layout (`hsp linearize`'s), and what the run adds.
+    let mut input = linear.lin.to_json();
+    input["u"] = serde_json::json!(linear.u);
+    input["nominal"] = serde_json::json!(linear.nominal);
+    input["stop"] = serde_json::json!(STOP);
+    input["step"] = serde_json::json!(STEP);
     let path = std::env::temp_dir().join(format!("bench-fmu-{}.json", std::process::id()));
     std::fs::write(&path, input.to_string()).map_err(|e| e.to_string())?;
     let out = std::process::Command::new(PYTHON)
@@ -525,7 +519,7 @@ fn main() {
                 continue;
             }
         };
-        let states = lin.a.nrows();
+        let states = lin.lin.a.nrows();
         let reference = cfg.linear.then(|| exact(&lin, n));
         for &(method, name) in &methods {
             let r = match measure(&fmu, method, cfg.sets) {

@@ -1,8 +1,8 @@
 //! The linearisation `A, B, C, D` of the compiled model at an operating point, exact: dual
 //! numbers through the full plan, one pass per state and per input (outputs included, so not
 //! the coloured derivative plan the Jacobian uses). Used for frequency responses, the exact
-//! discretisation (`discretisation.rs`) and `hsp linearize`, which writes the matrices with
-//! [`matrix_json`].
+//! discretisation (`discretisation.rs`), `hsp linearize` and the FMU benchmark, which write it
+//! with [`Linearization::to_json`], the one JSON layout of a linearisation.
 
 use nalgebra::DMatrix;
 
@@ -32,7 +32,7 @@ pub struct Linearization {
 }
 
 /// A matrix as a JSON array of rows.
-pub fn matrix_json(m: &DMatrix<f64>) -> serde_json::Value {
+fn matrix_json(m: &DMatrix<f64>) -> serde_json::Value {
     serde_json::Value::Array(
         (0..m.nrows())
             .map(|i| serde_json::json!((0..m.ncols()).map(|j| m[(i, j)]).collect::<Vec<_>>()))
@@ -41,19 +41,21 @@ pub fn matrix_json(m: &DMatrix<f64>) -> serde_json::Value {
 }
 
 impl Linearization {
-    /// JSON object `{state_names, input_names, output_names, x0, u0, a, b, c, d}` with the
-    /// matrices as arrays of rows.
+    /// The JSON layout of a linearisation, `{"states", "inputs", "outputs", "x0", "u0", "A",
+    /// "B", "C", "D"}`: the names of the states, inputs and outputs, the operating point and the
+    /// matrices as arrays of rows. `hsp linearize` prints it; `bench/scipy_reference.py --linear`
+    /// reads it (with fields the benchmark adds).
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
-            "state_names": self.state_names,
-            "input_names": self.input_names,
-            "output_names": self.output_names,
+            "states": self.state_names,
+            "inputs": self.input_names,
+            "outputs": self.output_names,
             "x0": self.x0,
             "u0": self.u0,
-            "a": matrix_json(&self.a),
-            "b": matrix_json(&self.b),
-            "c": matrix_json(&self.c),
-            "d": matrix_json(&self.d),
+            "A": matrix_json(&self.a),
+            "B": matrix_json(&self.b),
+            "C": matrix_json(&self.c),
+            "D": matrix_json(&self.d),
         })
     }
 }

@@ -122,4 +122,4 @@ pub use element::{
 pub use energy::PowerBalance;
 pub use error::BondGraphError;
 pub use graph::BondGraph;
-pub use linearization::{matrix_json, Linearization};
+pub use linearization::Linearization;

@@ -6,6 +6,7 @@ use nalgebra::DMatrix;
 
 use crate::bond_graph::{BondGraph, CompiledModel};
 use crate::fmu::Values;
+use crate::fnv1a;
 use crate::fragments::plate::modes::{natural_modes, NaturalMode};
 use crate::fragments::plate::{self, Formulation, PlateModel};
 use crate::fragments::{
@@ -627,13 +628,9 @@ fn on_demand(
 
 /// FNV-1a hash of a matrix's bits: identifies a constant Jacobian for the solver's cache.
 fn stamp(m: &DMatrix<f64>) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for v in m.iter() {
-        for b in v.to_bits().to_le_bytes() {
-            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    h
+    m.iter().fold(fnv1a::OFFSET_BASIS, |h, v| {
+        fnv1a::fnv1a64_from(h, &v.to_bits().to_le_bytes())
+    })
 }
 
 impl OdeSystem for Assembled {

@@ -4,7 +4,7 @@
 
 #![allow(dead_code)]
 
-use hydraulic_slewing_plate::fmu::fmu_state::fnv1a64;
+use hydraulic_slewing_plate::fnv1a::fnv1a64;
 
 /// A serialised state's JSON payload.
 pub fn payload(bytes: &[u8]) -> serde_json::Value {

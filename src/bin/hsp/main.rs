@@ -6,7 +6,8 @@
 //!   default experiment (a slewing manoeuvre of the complete system: a step in the reference `r`),
 //!   prints a summary and writes the results as CSV.
 //! - `hsp presets [--json]`: the named parameter sets (the paper's configurations).
-//! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest.
+//! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest, in
+//!   the layout of `Linearization::to_json` (names, operating point `x0`, `u0`, matrices by rows).
 //! - `hsp graph [--set ...]`: the model's bond graph as Graphviz DOT, with causal strokes.
 //! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14); `--plot FILE`
 //!   draws the first mode shapes.
@@ -21,6 +22,10 @@ mod binaries;
 mod docpage;
 mod info;
 mod loader;
+// The one reader of modelDescription.xml, shared with build.rs.
+#[path = "../../../tools/model_description.rs"]
+#[allow(dead_code)]
+mod model_description;
 mod modeshape;
 mod package;
 mod plot;
@@ -31,7 +36,6 @@ mod run;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use hydraulic_slewing_plate::bond_graph::matrix_json;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::{bond_graph, plate_modes, Assembled};
 use hydraulic_slewing_plate::model::frf::frequency_response;
@@ -91,7 +95,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Linearise the assembled model at rest: A, B, C, D
+    /// Linearise the assembled model at rest: {"states", "inputs", "outputs", "x0", "u0", "A", "B",
+    /// "C", "D"}, the matrices as arrays of rows
     Linearize {
         /// Print JSON (the only format)
         #[arg(long)]
@@ -201,16 +206,7 @@ fn linearize(model: &ModelArgs) -> Result<String, String> {
     let system = model.assembled()?;
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
-    let json = serde_json::json!({
-        "states": lin.state_names,
-        "inputs": lin.input_names,
-        "outputs": lin.output_names,
-        "A": matrix_json(&lin.a),
-        "B": matrix_json(&lin.b),
-        "C": matrix_json(&lin.c),
-        "D": matrix_json(&lin.d),
-    });
-    Ok(json.to_string())
+    Ok(lin.to_json().to_string())
 }
 
 fn model_info(model: &ModelArgs, json: bool) -> Result<String, String> {
