@@ -19,6 +19,8 @@
 //! | [`fmi2`] | the FMI 2.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
 //! | [`fmi3`] | the FMI 3.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
 
+#![deny(unsafe_op_in_unsafe_fn)]
+
 pub mod bond_graph;
 pub mod fmi2;
 pub mod fmi3;

@@ -28,11 +28,11 @@ fn code_lines(path: &Path) -> Vec<(usize, String)> {
     text.lines()
         .enumerate()
         .filter_map(|(i, line)| {
-            let code = match line.find("//") {
-                // A `//` inside a string literal (a URI, say) is not a comment.
-                Some(at) if line[..at].matches('"').count() % 2 == 0 => &line[..at],
-                _ => line,
-            };
+            // The first `//` outside a string literal (a URI, say) starts the comment.
+            let code = line
+                .match_indices("//")
+                .find(|(at, _)| line[..*at].matches('"').count() % 2 == 0)
+                .map_or(line, |(at, _)| &line[..at]);
             (!code.trim().is_empty()).then(|| (i + 1, code.to_string()))
         })
         .collect()
@@ -93,4 +93,34 @@ fn the_scan_finds_code_and_skips_comments() {
     assert!(lines[0].1.contains("fmi2") && !lines[0].1.contains("fmi3"));
     assert!(lines[1].1.contains("file://x") && !lines[1].1.contains("Fmi3"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every `unsafe` block and `unsafe impl` in the sources has a `SAFETY:` comment saying why it
+/// is sound, on the lines just before it or on its own line (and `unsafe_op_in_unsafe_fn` is
+/// denied in the library and `hsp`, so an unsafe function's body needs the blocks too).
+#[test]
+fn every_unsafe_block_says_why_it_is_sound() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut missing = Vec::new();
+    for path in sources(&root) {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            let block = code.contains("unsafe {") || code.contains("unsafe impl");
+            if block
+                && !lines[i.saturating_sub(4)..=i]
+                    .iter()
+                    .any(|l| l.contains("SAFETY:"))
+            {
+                missing.push(format!("{}:{}: {}", path.display(), i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+    for file in ["src/lib.rs", "src/bin/hsp/main.rs"] {
+        let text =
+            std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap();
+        assert!(text.contains("#![deny(unsafe_op_in_unsafe_fn)]"), "{file}");
+    }
 }

@@ -35,7 +35,9 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 cats: *const Fmi2String,
             ) -> Fmi2Status {
-                x::set_debug_logging::<M>(c, on, n, cats)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::set_debug_logging::<M>(c, on, n, cats) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2Instantiate(
@@ -47,11 +49,15 @@ macro_rules! export_fmi2_cosimulation {
                 visible: Fmi2Boolean,
                 logging: Fmi2Boolean,
             ) -> Fmi2Component {
-                x::instantiate::<M>(name, kind, guid, res, f, visible, logging)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::instantiate::<M>(name, kind, guid, res, f, visible, logging) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2FreeInstance(c: Fmi2Component) {
-                x::free_instance::<M>(c)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::free_instance::<M>(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetupExperiment(
@@ -62,27 +68,41 @@ macro_rules! export_fmi2_cosimulation {
                 stop_def: Fmi2Boolean,
                 stop: Fmi2Real,
             ) -> Fmi2Status {
-                x::setup_experiment::<M>(c, tol_def, tol, start, stop_def, stop)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::setup_experiment::<M>(c, tol_def, tol, start, stop_def, stop) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2EnterInitializationMode(c: Fmi2Component) -> Fmi2Status {
-                x::simple_call::<M>(c, "fmi2EnterInitializationMode", |i| {
-                    i.enter_initialization_mode()
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(c, "fmi2EnterInitializationMode", |i| {
+                        i.enter_initialization_mode()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2ExitInitializationMode(c: Fmi2Component) -> Fmi2Status {
-                x::simple_call::<M>(c, "fmi2ExitInitializationMode", |i| {
-                    i.exit_initialization_mode()
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(c, "fmi2ExitInitializationMode", |i| {
+                        i.exit_initialization_mode()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2Terminate(c: Fmi2Component) -> Fmi2Status {
-                x::simple_call::<M>(c, "fmi2Terminate", |i| i.terminate())
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::simple_call::<M>(c, "fmi2Terminate", |i| i.terminate()) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2Reset(c: Fmi2Component) -> Fmi2Status {
-                x::simple_call::<M>(c, "fmi2Reset", |i| i.reset())
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::simple_call::<M>(c, "fmi2Reset", |i| i.reset()) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetReal(
@@ -91,10 +111,14 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *mut Fmi2Real,
             ) -> Fmi2Status {
-                x::get_values::<M, Fmi2Real>(c, "fmi2GetReal", "Real", vr, n, v, |v| match v {
-                    Value::Real(x) => *x,
-                    _ => 0.0,
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, Fmi2Real>(c, "fmi2GetReal", "Real", vr, n, v, |v| match v {
+                        Value::Real(x) => *x,
+                        _ => 0.0,
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetInteger(
@@ -103,12 +127,16 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *mut Fmi2Integer,
             ) -> Fmi2Status {
-                x::get_values::<M, Fmi2Integer>(c, "fmi2GetInteger", "Integer", vr, n, v, |v| {
-                    match v {
-                        Value::Integer(x) => *x,
-                        _ => 0,
-                    }
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, Fmi2Integer>(c, "fmi2GetInteger", "Integer", vr, n, v, |v| {
+                        match v {
+                            Value::Integer(x) => *x,
+                            _ => 0,
+                        }
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetBoolean(
@@ -117,12 +145,16 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *mut Fmi2Boolean,
             ) -> Fmi2Status {
-                x::get_values::<M, Fmi2Boolean>(c, "fmi2GetBoolean", "Boolean", vr, n, v, |v| {
-                    match v {
-                        Value::Boolean(true) => FMI2_TRUE,
-                        _ => FMI2_FALSE,
-                    }
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, Fmi2Boolean>(c, "fmi2GetBoolean", "Boolean", vr, n, v, |v| {
+                        match v {
+                            Value::Boolean(true) => FMI2_TRUE,
+                            _ => FMI2_FALSE,
+                        }
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetString(
@@ -131,7 +163,9 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *mut Fmi2String,
             ) -> Fmi2Status {
-                x::get_string::<M>(c, vr, n, v)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::get_string::<M>(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetReal(
@@ -140,9 +174,13 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *const Fmi2Real,
             ) -> Fmi2Status {
-                x::set_values::<M, Fmi2Real>(c, "fmi2SetReal", "Real", vr, n, v, |v| {
-                    Some(Value::Real(v))
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, Fmi2Real>(c, "fmi2SetReal", "Real", vr, n, v, |v| {
+                        Some(Value::Real(v))
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetInteger(
@@ -151,9 +189,13 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *const Fmi2Integer,
             ) -> Fmi2Status {
-                x::set_values::<M, Fmi2Integer>(c, "fmi2SetInteger", "Integer", vr, n, v, |v| {
-                    Some(Value::Integer(v))
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, Fmi2Integer>(c, "fmi2SetInteger", "Integer", vr, n, v, |v| {
+                        Some(Value::Integer(v))
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetBoolean(
@@ -162,9 +204,13 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *const Fmi2Boolean,
             ) -> Fmi2Status {
-                x::set_values::<M, Fmi2Boolean>(c, "fmi2SetBoolean", "Boolean", vr, n, v, |v| {
-                    Some(Value::Boolean(v != FMI2_FALSE))
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, Fmi2Boolean>(c, "fmi2SetBoolean", "Boolean", vr, n, v, |v| {
+                        Some(Value::Boolean(v != FMI2_FALSE))
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetString(
@@ -173,30 +219,40 @@ macro_rules! export_fmi2_cosimulation {
                 n: usize,
                 v: *const Fmi2String,
             ) -> Fmi2Status {
-                x::set_values::<M, Fmi2String>(c, "fmi2SetString", "String", vr, n, v, |p| unsafe {
-                    x::string_value(p)
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, Fmi2String>(c, "fmi2SetString", "String", vr, n, v, |p| {
+                        x::string_value(p)
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetFMUstate(
                 c: Fmi2Component,
                 s: *mut Fmi2FmuState,
             ) -> Fmi2Status {
-                x::fmu_state::get::<M>(c, s)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::fmu_state::get::<M>(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetFMUstate(
                 c: Fmi2Component,
                 s: Fmi2FmuState,
             ) -> Fmi2Status {
-                x::fmu_state::set::<M>(c, s)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::fmu_state::set::<M>(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2FreeFMUstate(
                 c: Fmi2Component,
                 s: *mut Fmi2FmuState,
             ) -> Fmi2Status {
-                x::fmu_state::free::<M>(c, s)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::fmu_state::free::<M>(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
@@ -204,7 +260,9 @@ macro_rules! export_fmi2_cosimulation {
                 s: Fmi2FmuState,
                 size: *mut usize,
             ) -> Fmi2Status {
-                x::fmu_state::serialized_size::<M>(c, s, size)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::fmu_state::serialized_size::<M>(c, s, size) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SerializeFMUstate(
@@ -213,7 +271,9 @@ macro_rules! export_fmi2_cosimulation {
                 bytes: *mut Fmi2Byte,
                 size: usize,
             ) -> Fmi2Status {
-                x::fmu_state::serialize::<M>(c, s, bytes, size)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::fmu_state::serialize::<M>(c, s, bytes, size) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
@@ -222,7 +282,9 @@ macro_rules! export_fmi2_cosimulation {
                 size: usize,
                 s: *mut Fmi2FmuState,
             ) -> Fmi2Status {
-                x::fmu_state::deserialize::<M>(c, bytes, size, s)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::fmu_state::deserialize::<M>(c, bytes, size, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
@@ -234,24 +296,34 @@ macro_rules! export_fmi2_cosimulation {
                 dv: *const Fmi2Real,
                 dz: *mut Fmi2Real,
             ) -> Fmi2Status {
-                x::get_directional_derivative::<M>(c, u, nu, z, nz, dv, dz)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::get_directional_derivative::<M>(c, u, nu, z, nz, dv, dz) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2EnterEventMode(c: Fmi2Component) -> Fmi2Status {
-                x::simple_call::<M>(c, "fmi2EnterEventMode", |i| i.enter_event_mode())
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::simple_call::<M>(c, "fmi2EnterEventMode", |i| i.enter_event_mode()) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2NewDiscreteStates(
                 c: Fmi2Component,
                 info: *mut Fmi2EventInfo,
             ) -> Fmi2Status {
-                x::new_discrete_states::<M>(c, info)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::new_discrete_states::<M>(c, info) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: Fmi2Component) -> Fmi2Status {
-                x::simple_call::<M>(c, "fmi2EnterContinuousTimeMode", |i| {
-                    i.enter_continuous_time_mode()
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(c, "fmi2EnterContinuousTimeMode", |i| {
+                        i.enter_continuous_time_mode()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
@@ -260,11 +332,17 @@ macro_rules! export_fmi2_cosimulation {
                 enter_event_mode: *mut Fmi2Boolean,
                 terminate: *mut Fmi2Boolean,
             ) -> Fmi2Status {
-                x::completed_integrator_step::<M>(c, no_prior, enter_event_mode, terminate)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::completed_integrator_step::<M>(c, no_prior, enter_event_mode, terminate)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetTime(c: Fmi2Component, t: Fmi2Real) -> Fmi2Status {
-                x::set_time::<M>(c, t)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::set_time::<M>(c, t) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetContinuousStates(
@@ -272,7 +350,9 @@ macro_rules! export_fmi2_cosimulation {
                 v: *const Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::set_continuous_states::<M>(c, v, n)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::set_continuous_states::<M>(c, v, n) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetDerivatives(
@@ -280,13 +360,17 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_state_array::<M>(
-                    c,
-                    ("fmi2GetDerivatives", "derivatives"),
-                    v,
-                    n,
-                    |i, a, o| i.derivatives(Operation::GetDerivatives, a, o),
-                )
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_state_array::<M>(
+                        c,
+                        ("fmi2GetDerivatives", "derivatives"),
+                        v,
+                        n,
+                        |i, a, o| i.derivatives(Operation::GetDerivatives, a, o),
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetEventIndicators(
@@ -294,7 +378,9 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_event_indicators::<M>(c, v, n)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::get_event_indicators::<M>(c, v, n) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetContinuousStates(
@@ -302,9 +388,13 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_state_array::<M>(c, ("fmi2GetContinuousStates", "x"), v, n, |i, a, o| {
-                    i.continuous_states(a, o)
-                })
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_state_array::<M>(c, ("fmi2GetContinuousStates", "x"), v, n, |i, a, o| {
+                        i.continuous_states(a, o)
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
@@ -312,13 +402,17 @@ macro_rules! export_fmi2_cosimulation {
                 v: *mut Fmi2Real,
                 n: usize,
             ) -> Fmi2Status {
-                x::get_state_array::<M>(
-                    c,
-                    ("fmi2GetNominalsOfContinuousStates", "x_nominal"),
-                    v,
-                    n,
-                    |i, a, o| i.nominals_of_continuous_states(a, o),
-                )
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_state_array::<M>(
+                        c,
+                        ("fmi2GetNominalsOfContinuousStates", "x_nominal"),
+                        v,
+                        n,
+                        |i, a, o| i.nominals_of_continuous_states(a, o),
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
@@ -328,11 +422,15 @@ macro_rules! export_fmi2_cosimulation {
                 _order: *const Fmi2Integer,
                 _v: *const Fmi2Real,
             ) -> Fmi2Status {
-                x::unsupported::<M>(
-                    c,
-                    "fmi2SetRealInputDerivatives",
-                    "canInterpolateInputs is false",
-                )
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2SetRealInputDerivatives",
+                        "canInterpolateInputs is false",
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
@@ -342,11 +440,15 @@ macro_rules! export_fmi2_cosimulation {
                 _order: *const Fmi2Integer,
                 _v: *mut Fmi2Real,
             ) -> Fmi2Status {
-                x::unsupported::<M>(
-                    c,
-                    "fmi2GetRealOutputDerivatives",
-                    "maxOutputDerivativeOrder is 0",
-                )
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2GetRealOutputDerivatives",
+                        "maxOutputDerivativeOrder is 0",
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2DoStep(
@@ -355,11 +457,17 @@ macro_rules! export_fmi2_cosimulation {
                 h: Fmi2Real,
                 no_prior: Fmi2Boolean,
             ) -> Fmi2Status {
-                x::do_step::<M>(c, t, h, no_prior)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::do_step::<M>(c, t, h, no_prior) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2CancelStep(c: Fmi2Component) -> Fmi2Status {
-                x::unsupported::<M>(c, "fmi2CancelStep", "fmi2DoStep never returns fmi2Pending")
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi2CancelStep", "fmi2DoStep never returns fmi2Pending")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetStatus(
@@ -367,7 +475,11 @@ macro_rules! export_fmi2_cosimulation {
                 _k: Fmi2StatusKind,
                 _v: *mut Fmi2Status,
             ) -> Fmi2Status {
-                x::unsupported::<M>(c, "fmi2GetStatus", "fmi2DoStep never returns fmi2Pending")
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi2GetStatus", "fmi2DoStep never returns fmi2Pending")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetRealStatus(
@@ -375,7 +487,9 @@ macro_rules! export_fmi2_cosimulation {
                 k: Fmi2StatusKind,
                 v: *mut Fmi2Real,
             ) -> Fmi2Status {
-                x::get_real_status::<M>(c, k, v)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::get_real_status::<M>(c, k, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetIntegerStatus(
@@ -383,11 +497,15 @@ macro_rules! export_fmi2_cosimulation {
                 _k: Fmi2StatusKind,
                 _v: *mut Fmi2Integer,
             ) -> Fmi2Status {
-                x::unsupported::<M>(
-                    c,
-                    "fmi2GetIntegerStatus",
-                    "there is no Integer status in FMI 2.0",
-                )
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2GetIntegerStatus",
+                        "there is no Integer status in FMI 2.0",
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetBooleanStatus(
@@ -395,7 +513,9 @@ macro_rules! export_fmi2_cosimulation {
                 k: Fmi2StatusKind,
                 v: *mut Fmi2Boolean,
             ) -> Fmi2Status {
-                x::get_boolean_status::<M>(c, k, v)
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe { x::get_boolean_status::<M>(c, k, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetStringStatus(
@@ -403,11 +523,15 @@ macro_rules! export_fmi2_cosimulation {
                 _k: Fmi2StatusKind,
                 _v: *mut Fmi2String,
             ) -> Fmi2Status {
-                x::unsupported::<M>(
-                    c,
-                    "fmi2GetStringStatus",
-                    "fmi2DoStep never returns fmi2Pending",
-                )
+                // SAFETY: the importer keeps the FMI 2.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2GetStringStatus",
+                        "fmi2DoStep never returns fmi2Pending",
+                    )
+                }
             }
         }
     };

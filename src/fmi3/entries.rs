@@ -166,17 +166,20 @@ pub unsafe fn instantiate_co_simulation<M: FmuModel>(
     let refusal = event_mode_used.then_some(
         "eventModeUsed = true, but this FMU has no event mode (hasEventMode = false): the model has no events",
     );
-    instantiate::<M>(
-        "fmi3InstantiateCoSimulation",
-        Interface::CoSimulation,
-        refusal,
-        instance_name,
-        token,
-        resource_path,
-        logging_on,
-        environment,
-        log_message,
-    )
+    // SAFETY: the strings are NULL or NUL-terminated, by this function's contract.
+    unsafe {
+        instantiate::<M>(
+            "fmi3InstantiateCoSimulation",
+            Interface::CoSimulation,
+            refusal,
+            instance_name,
+            token,
+            resource_path,
+            logging_on,
+            environment,
+            log_message,
+        )
+    }
 }
 
 /// `fmi3InstantiateModelExchange`.
@@ -191,17 +194,20 @@ pub unsafe fn instantiate_model_exchange<M: FmuModel>(
     environment: Fmi3InstanceEnvironment,
     log_message: Fmi3LogMessageCallback,
 ) -> Fmi3Instance {
-    instantiate::<M>(
-        "fmi3InstantiateModelExchange",
-        Interface::ModelExchange,
-        None,
-        instance_name,
-        token,
-        resource_path,
-        logging_on,
-        environment,
-        log_message,
-    )
+    // SAFETY: the strings are NULL or NUL-terminated, by this function's contract.
+    unsafe {
+        instantiate::<M>(
+            "fmi3InstantiateModelExchange",
+            Interface::ModelExchange,
+            None,
+            instance_name,
+            token,
+            resource_path,
+            logging_on,
+            environment,
+            log_message,
+        )
+    }
 }
 
 /// # Safety

@@ -17,7 +17,9 @@ macro_rules! __fmi3_no_such_type {
             _v: *mut $t,
             _nv: usize,
         ) -> Fmi3Status {
-            x::no_such_type::<M>(table(), c, stringify!($get), $name, vr, nvr)
+            // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+            // the contract of the entry point it forwards to.
+            unsafe { x::no_such_type::<M>(table(), c, stringify!($get), $name, vr, nvr) }
         }
         #[no_mangle]
         pub unsafe extern "C" fn $set(
@@ -27,7 +29,9 @@ macro_rules! __fmi3_no_such_type {
             _v: *const $t,
             _nv: usize,
         ) -> Fmi3Status {
-            x::no_such_type::<M>(table(), c, stringify!($set), $name, vr, nvr)
+            // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+            // the contract of the entry point it forwards to.
+            unsafe { x::no_such_type::<M>(table(), c, stringify!($set), $name, vr, nvr) }
         }
     };
 }
@@ -40,7 +44,11 @@ macro_rules! __fmi3_unsupported {
     ($why:literal, $name:ident, $($arg:ty),*) => {
         #[no_mangle]
         pub unsafe extern "C" fn $name(c: Fmi3Instance, $(_: $arg),*) -> Fmi3Status {
-            x::unsupported::<M>(c, stringify!($name), $why)
+            // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+            // the contract of the entry point it forwards to.
+            unsafe {
+                x::unsupported::<M>(c, stringify!($name), $why)
+            }
         }
     };
 }
@@ -88,7 +96,11 @@ macro_rules! export_fmi3 {
                 n: usize,
                 cats: *const Fmi3String,
             ) -> Fmi3Status {
-                x::set_debug_logging::<M>(c, truthy(on), n, cats)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_debug_logging::<M>(c, truthy(on), n, cats)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
@@ -105,15 +117,19 @@ macro_rules! export_fmi3 {
                 log: Fmi3LogMessageCallback,
                 _intermediate: Fmi3IntermediateUpdateCallback,
             ) -> Fmi3Instance {
-                x::instantiate_co_simulation::<M>(
-                    name,
-                    token,
-                    resources,
-                    truthy(logging_on),
-                    truthy(event_mode_used),
-                    env,
-                    log,
-                )
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::instantiate_co_simulation::<M>(
+                        name,
+                        token,
+                        resources,
+                        truthy(logging_on),
+                        truthy(event_mode_used),
+                        env,
+                        log,
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateModelExchange(
@@ -125,7 +141,11 @@ macro_rules! export_fmi3 {
                 env: Fmi3InstanceEnvironment,
                 log: Fmi3LogMessageCallback,
             ) -> Fmi3Instance {
-                x::instantiate_model_exchange::<M>(name, token, resources, truthy(logging_on), env, log)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::instantiate_model_exchange::<M>(name, token, resources, truthy(logging_on), env, log)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
@@ -140,11 +160,19 @@ macro_rules! export_fmi3 {
                 _lock: Fmi3PreemptionCallback,
                 _unlock: Fmi3PreemptionCallback,
             ) -> Fmi3Instance {
-                x::refuse_instantiation::<M>(name, env, log, "fmi3InstantiateScheduledExecution: this FMU does not offer scheduled execution")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::refuse_instantiation::<M>(name, env, log, "fmi3InstantiateScheduledExecution: this FMU does not offer scheduled execution")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
-                x::free_instance::<M>(c)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::free_instance::<M>(c)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterInitializationMode(
@@ -155,47 +183,79 @@ macro_rules! export_fmi3 {
                 stop_defined: Fmi3Boolean,
                 stop: f64,
             ) -> Fmi3Status {
-                x::enter_initialization_mode::<M>(c, truthy(tol_defined), tol, start, truthy(stop_defined), stop)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::enter_initialization_mode::<M>(c, truthy(tol_defined), tol, start, truthy(stop_defined), stop)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ExitInitializationMode(c: Fmi3Instance) -> Fmi3Status {
-                x::simple_call::<M>(
-                    c,
-                    "fmi3ExitInitializationMode",
-                    |i| i.exit_initialization_mode(),
-                )
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(
+                        c,
+                        "fmi3ExitInitializationMode",
+                        |i| i.exit_initialization_mode(),
+                    )
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3Terminate(c: Fmi3Instance) -> Fmi3Status {
-                x::simple_call::<M>(c, "fmi3Terminate", |i| {
-                    i.terminate()
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(c, "fmi3Terminate", |i| {
+                        i.terminate()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3Reset(c: Fmi3Instance) -> Fmi3Status {
-                x::simple_call::<M>(c, "fmi3Reset", |i| {
-                    i.reset()
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(c, "fmi3Reset", |i| {
+                        i.reset()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterEventMode(c: Fmi3Instance) -> Fmi3Status {
-                // Model Exchange has an event mode (after initialisation); co-simulation with
-                // eventModeUsed = false has none, and the shared core refuses it there.
-                x::simple_call::<M>(c, "fmi3EnterEventMode", |i| {
-                    i.enter_event_mode()
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    // Model Exchange has an event mode (after initialisation); co-simulation with
+                    // eventModeUsed = false has none, and the shared core refuses it there.
+                    x::simple_call::<M>(c, "fmi3EnterEventMode", |i| {
+                        i.enter_event_mode()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterStepMode(c: Fmi3Instance) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3EnterStepMode", "only for eventModeUsed = true, which this FMU refuses")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3EnterStepMode", "only for eventModeUsed = true, which this FMU refuses")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterConfigurationMode(c: Fmi3Instance) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3EnterConfigurationMode", "the FMU has no structural parameters")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3EnterConfigurationMode", "the FMU has no structural parameters")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ExitConfigurationMode(c: Fmi3Instance) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3ExitConfigurationMode", "the FMU has no structural parameters")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3ExitConfigurationMode", "the FMU has no structural parameters")
+                }
             }
 
             #[no_mangle]
@@ -206,10 +266,14 @@ macro_rules! export_fmi3 {
                 v: *mut f64,
                 nv: usize,
             ) -> Fmi3Status {
-                x::get_values::<M, f64>(table(), c, "fmi3GetFloat64", "Float64", vr, nvr, v, nv, |v| match v {
-                    Value::Real(x) => *x,
-                    _ => 0.0,
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, f64>(table(), c, "fmi3GetFloat64", "Float64", vr, nvr, v, nv, |v| match v {
+                        Value::Real(x) => *x,
+                        _ => 0.0,
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetFloat64(
@@ -219,7 +283,11 @@ macro_rules! export_fmi3 {
                 v: *const f64,
                 nv: usize,
             ) -> Fmi3Status {
-                x::set_values::<M, f64>(table(), c, "fmi3SetFloat64", "Float64", vr, nvr, v, nv, Value::Real)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, f64>(table(), c, "fmi3SetFloat64", "Float64", vr, nvr, v, nv, Value::Real)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetInt32(
@@ -229,10 +297,14 @@ macro_rules! export_fmi3 {
                 v: *mut i32,
                 nv: usize,
             ) -> Fmi3Status {
-                x::get_values::<M, i32>(table(), c, "fmi3GetInt32", "Int32", vr, nvr, v, nv, |v| match v {
-                    Value::Integer(x) => *x,
-                    _ => 0,
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, i32>(table(), c, "fmi3GetInt32", "Int32", vr, nvr, v, nv, |v| match v {
+                        Value::Integer(x) => *x,
+                        _ => 0,
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetInt32(
@@ -242,7 +314,11 @@ macro_rules! export_fmi3 {
                 v: *const i32,
                 nv: usize,
             ) -> Fmi3Status {
-                x::set_values::<M, i32>(table(), c, "fmi3SetInt32", "Int32", vr, nvr, v, nv, Value::Integer)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, i32>(table(), c, "fmi3SetInt32", "Int32", vr, nvr, v, nv, Value::Integer)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetBoolean(
@@ -252,9 +328,13 @@ macro_rules! export_fmi3 {
                 v: *mut u8,
                 nv: usize,
             ) -> Fmi3Status {
-                x::get_values::<M, u8>(table(), c, "fmi3GetBoolean", "Boolean", vr, nvr, v, nv, |v| {
-                    u8::from(matches!(v, Value::Boolean(true)))
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, u8>(table(), c, "fmi3GetBoolean", "Boolean", vr, nvr, v, nv, |v| {
+                        u8::from(matches!(v, Value::Boolean(true)))
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetBoolean(
@@ -264,7 +344,11 @@ macro_rules! export_fmi3 {
                 v: *const u8,
                 nv: usize,
             ) -> Fmi3Status {
-                x::set_values::<M, u8>(table(), c, "fmi3SetBoolean", "Boolean", vr, nvr, v, nv, x::boolean)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, u8>(table(), c, "fmi3SetBoolean", "Boolean", vr, nvr, v, nv, x::boolean)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetString(
@@ -274,7 +358,11 @@ macro_rules! export_fmi3 {
                 v: *mut Fmi3String,
                 nv: usize,
             ) -> Fmi3Status {
-                x::get_string::<M>(table(), c, vr, nvr, v, nv)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_string::<M>(table(), c, vr, nvr, v, nv)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetString(
@@ -284,7 +372,11 @@ macro_rules! export_fmi3 {
                 _v: *const Fmi3String,
                 _nv: usize,
             ) -> Fmi3Status {
-                x::no_such_type::<M>(table(), c, "fmi3SetString", "String", vr, nvr)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::no_such_type::<M>(table(), c, "fmi3SetString", "String", vr, nvr)
+                }
             }
             $crate::__fmi3_no_such_type!(fmi3GetFloat32, fmi3SetFloat32, f32, "Float32");
             $crate::__fmi3_no_such_type!(fmi3GetInt8, fmi3SetInt8, i8, "Int8");
@@ -303,7 +395,11 @@ macro_rules! export_fmi3 {
                 _v: *mut Fmi3Binary,
                 _nv: usize,
             ) -> Fmi3Status {
-                x::no_such_type::<M>(table(), c, "fmi3GetBinary", "Binary", vr, nvr)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::no_such_type::<M>(table(), c, "fmi3GetBinary", "Binary", vr, nvr)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetBinary(
@@ -314,7 +410,11 @@ macro_rules! export_fmi3 {
                 _v: *const Fmi3Binary,
                 _nv: usize,
             ) -> Fmi3Status {
-                x::no_such_type::<M>(table(), c, "fmi3SetBinary", "Binary", vr, nvr)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::no_such_type::<M>(table(), c, "fmi3SetBinary", "Binary", vr, nvr)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetClock(
@@ -323,7 +423,11 @@ macro_rules! export_fmi3 {
                 nvr: usize,
                 _v: *mut Fmi3Clock,
             ) -> Fmi3Status {
-                x::no_such_type::<M>(table(), c, "fmi3GetClock", "Clock", vr, nvr)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::no_such_type::<M>(table(), c, "fmi3GetClock", "Clock", vr, nvr)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetClock(
@@ -332,7 +436,11 @@ macro_rules! export_fmi3 {
                 nvr: usize,
                 _v: *const Fmi3Clock,
             ) -> Fmi3Status {
-                x::no_such_type::<M>(table(), c, "fmi3SetClock", "Clock", vr, nvr)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::no_such_type::<M>(table(), c, "fmi3SetClock", "Clock", vr, nvr)
+                }
             }
 
             #[no_mangle]
@@ -341,7 +449,11 @@ macro_rules! export_fmi3 {
                 _vr: Fmi3ValueReference,
                 _n: *mut usize,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3GetNumberOfVariableDependencies", "the dependencies are in <ModelStructure> of modelDescription.xml")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3GetNumberOfVariableDependencies", "the dependencies are in <ModelStructure> of modelDescription.xml")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetVariableDependencies(
@@ -353,20 +465,36 @@ macro_rules! export_fmi3 {
                 _kinds: *mut Fmi3DependencyKind,
                 _n: usize,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3GetVariableDependencies", "the dependencies are in <ModelStructure> of modelDescription.xml")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3GetVariableDependencies", "the dependencies are in <ModelStructure> of modelDescription.xml")
+                }
             }
 
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetFMUState(c: Fmi3Instance, s: *mut Fmi3FmuState) -> Fmi3Status {
-                x::fmu_state::get::<M>(c, s)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::fmu_state::get::<M>(c, s)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, s: Fmi3FmuState) -> Fmi3Status {
-                x::fmu_state::set::<M>(c, s)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::fmu_state::set::<M>(c, s)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3FreeFMUState(c: Fmi3Instance, s: *mut Fmi3FmuState) -> Fmi3Status {
-                x::fmu_state::free::<M>(c, s)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::fmu_state::free::<M>(c, s)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
@@ -374,7 +502,11 @@ macro_rules! export_fmi3 {
                 s: Fmi3FmuState,
                 size: *mut usize,
             ) -> Fmi3Status {
-                x::fmu_state::serialized_size::<M>(c, s, size)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::fmu_state::serialized_size::<M>(c, s, size)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SerializeFMUState(
@@ -383,7 +515,11 @@ macro_rules! export_fmi3 {
                 bytes: *mut Fmi3Byte,
                 size: usize,
             ) -> Fmi3Status {
-                x::fmu_state::serialize::<M>(c, s, bytes, size)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::fmu_state::serialize::<M>(c, s, bytes, size)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3DeserializeFMUState(
@@ -392,7 +528,11 @@ macro_rules! export_fmi3 {
                 size: usize,
                 s: *mut Fmi3FmuState,
             ) -> Fmi3Status {
-                x::fmu_state::deserialize::<M>(c, bytes, size, s)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::fmu_state::deserialize::<M>(c, bytes, size, s)
+                }
             }
 
             #[no_mangle]
@@ -407,7 +547,11 @@ macro_rules! export_fmi3 {
                 sensitivity: *mut f64,
                 nsens: usize,
             ) -> Fmi3Status {
-                x::partial_derivative::<M>(table(), c, false, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::partial_derivative::<M>(table(), c, false, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetAdjointDerivative(
@@ -421,7 +565,11 @@ macro_rules! export_fmi3 {
                 sensitivity: *mut f64,
                 nsens: usize,
             ) -> Fmi3Status {
-                x::partial_derivative::<M>(table(), c, true, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::partial_derivative::<M>(table(), c, true, unknowns, nu, knowns, nk, seed, ns, sensitivity, nsens)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetOutputDerivatives(
@@ -432,7 +580,11 @@ macro_rules! export_fmi3 {
                 _v: *mut f64,
                 _nv: usize,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3GetOutputDerivatives", "maxOutputDerivativeOrder is 0")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3GetOutputDerivatives", "maxOutputDerivativeOrder is 0")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3DoStep(
@@ -445,7 +597,11 @@ macro_rules! export_fmi3 {
                 early: *mut bool,
                 last: *mut f64,
             ) -> Fmi3Status {
-                x::do_step::<M>(c, t, h, truthy(no_prior), event, terminate, early, last)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::do_step::<M>(c, t, h, truthy(no_prior), event, terminate, early, last)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ActivateModelPartition(
@@ -453,7 +609,11 @@ macro_rules! export_fmi3 {
                 _clock: Fmi3ValueReference,
                 _t: f64,
             ) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3ActivateModelPartition", "the FMU does not offer scheduled execution")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3ActivateModelPartition", "the FMU does not offer scheduled execution")
+                }
             }
 
             $crate::__fmi3_unsupported!("the model has no clocks", fmi3GetIntervalDecimal, *const Fmi3ValueReference, usize, *mut f64, *mut Fmi3IntervalQualifier);
@@ -466,7 +626,11 @@ macro_rules! export_fmi3 {
             $crate::__fmi3_unsupported!("the model has no clocks", fmi3SetShiftFraction, *const Fmi3ValueReference, usize, *const u64, *const u64);
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EvaluateDiscreteStates(c: Fmi3Instance) -> Fmi3Status {
-                x::unsupported::<M>(c, "fmi3EvaluateDiscreteStates", "the model has no discrete states")
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::unsupported::<M>(c, "fmi3EvaluateDiscreteStates", "the model has no discrete states")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
@@ -478,13 +642,21 @@ macro_rules! export_fmi3 {
                 next_defined: *mut bool,
                 next: *mut f64,
             ) -> Fmi3Status {
-                x::update_discrete_states::<M>(c, need_update, terminate, nominals_changed, values_changed, next_defined, next)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::update_discrete_states::<M>(c, need_update, terminate, nominals_changed, values_changed, next_defined, next)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: Fmi3Instance) -> Fmi3Status {
-                x::simple_call::<M>(c, "fmi3EnterContinuousTimeMode", |i| {
-                    i.enter_continuous_time_mode()
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::simple_call::<M>(c, "fmi3EnterContinuousTimeMode", |i| {
+                        i.enter_continuous_time_mode()
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
@@ -493,42 +665,78 @@ macro_rules! export_fmi3 {
                 enter_event_mode: *mut bool,
                 terminate: *mut bool,
             ) -> Fmi3Status {
-                x::completed_integrator_step::<M>(c, enter_event_mode, terminate)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::completed_integrator_step::<M>(c, enter_event_mode, terminate)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetTime(c: Fmi3Instance, time: f64) -> Fmi3Status {
-                x::set_time::<M>(c, time)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_time::<M>(c, time)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetContinuousStates(c: Fmi3Instance, xs: *const f64, n: usize) -> Fmi3Status {
-                x::set_continuous_states::<M>(c, xs, n)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_continuous_states::<M>(c, xs, n)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(c: Fmi3Instance, dx: *mut f64, n: usize) -> Fmi3Status {
-                x::get_state_array::<M>(c, ("fmi3GetContinuousStateDerivatives", "derivatives"), dx, n, |i, a, o| i.derivatives(Operation::GetDerivativesWithInitialization, a, o))
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_state_array::<M>(c, ("fmi3GetContinuousStateDerivatives", "derivatives"), dx, n, |i, a, o| i.derivatives(Operation::GetDerivativesWithInitialization, a, o))
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetContinuousStates(c: Fmi3Instance, xs: *mut f64, n: usize) -> Fmi3Status {
-                x::get_state_array::<M>(c, ("fmi3GetContinuousStates", "continuousStates"), xs, n, |i, a, o| i.continuous_states(a, o))
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_state_array::<M>(c, ("fmi3GetContinuousStates", "continuousStates"), xs, n, |i, a, o| i.continuous_states(a, o))
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(c: Fmi3Instance, xs: *mut f64, n: usize) -> Fmi3Status {
-                x::get_state_array::<M>(c, ("fmi3GetNominalsOfContinuousStates", "nominals"), xs, n, |i, a, o| {
-                    i.nominals_of_continuous_states(a, o)
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_state_array::<M>(c, ("fmi3GetNominalsOfContinuousStates", "nominals"), xs, n, |i, a, o| {
+                        i.nominals_of_continuous_states(a, o)
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetEventIndicators(c: Fmi3Instance, z: *mut f64, n: usize) -> Fmi3Status {
-                x::get_event_indicators::<M>(c, z, n)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_event_indicators::<M>(c, z, n)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(c: Fmi3Instance, n: *mut usize) -> Fmi3Status {
-                let count = <M as $crate::fmu::FmuModel>::continuous_states().len();
-                x::get_number::<M>(c, "fmi3GetNumberOfContinuousStates", n, count)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    let count = <M as $crate::fmu::FmuModel>::continuous_states().len();
+                    x::get_number::<M>(c, "fmi3GetNumberOfContinuousStates", n, count)
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(c: Fmi3Instance, n: *mut usize) -> Fmi3Status {
-                x::get_number::<M>(c, "fmi3GetNumberOfEventIndicators", n, 0)
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_number::<M>(c, "fmi3GetNumberOfEventIndicators", n, 0)
+                }
             }
         }
     };

@@ -58,7 +58,9 @@ impl<S: Serialize + for<'de> Deserialize<'de>> SavedState<S> {
     /// # Safety
     /// `ptr` is non-null and points to at least 8 readable bytes.
     pub unsafe fn is_saved_state(ptr: *const Self) -> bool {
-        std::ptr::addr_of!((*ptr).magic).read_unaligned() == STATE_MAGIC
+        // SAFETY: the caller guarantees 8 readable bytes at `ptr`; `magic` is the first field of
+        // this `repr(C)` struct, read unaligned without a reference to the rest.
+        unsafe { std::ptr::addr_of!((*ptr).magic).read_unaligned() == STATE_MAGIC }
     }
 
     /// Marks the state freed so that a dangling use is caught while the memory is still ours.

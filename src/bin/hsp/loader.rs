@@ -47,7 +47,8 @@ unsafe extern "C" fn logger(
         if p.is_null() {
             String::new()
         } else {
-            CStr::from_ptr(p).to_string_lossy().into_owned()
+            // SAFETY: a non-null string argument of the logger is NUL-terminated (FMI 2.0).
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
         }
     };
     let message = s(format).replace("%%", "%");
@@ -120,11 +121,13 @@ impl Fmu {
         }
         unsafe fn sym<T: Copy>(handle: *mut c_void, name: &str) -> Result<T, String> {
             let c = CString::new(name).map_err(|e| e.to_string())?;
-            let p = libc::dlsym(handle, c.as_ptr());
+            // SAFETY: a handle from dlopen and a NUL-terminated name.
+            let p = unsafe { libc::dlsym(handle, c.as_ptr()) };
             if p.is_null() {
                 return Err(format!("the FMU does not export {name}"));
             }
-            Ok(std::mem::transmute_copy(&p))
+            // SAFETY: the caller names a symbol whose type is `T`, a function pointer.
+            Ok(unsafe { std::mem::transmute_copy(&p) })
         }
         // SAFETY: the symbols are the FMI 2.0 functions with the signatures above.
         unsafe {
@@ -154,6 +157,7 @@ impl Fmu {
         let guid = CString::new(GUID).map_err(|e| e.to_string())?;
         let resources = CString::new(format!("file://{}/resources", self.dir.display()))
             .map_err(|e| e.to_string())?;
+        // SAFETY: fmi2Instantiate of the loaded FMU with NUL-terminated strings and callbacks that outlive the call.
         let c = unsafe {
             (self.instantiate)(
                 name.as_ptr(),
@@ -174,6 +178,7 @@ impl Fmu {
 
 impl Drop for Fmu {
     fn drop(&mut self) {
+        // SAFETY: the handle came from dlopen and no symbol of it is used after the drop.
         unsafe { libc::dlclose(self.handle) };
         let _ = std::fs::remove_dir_all(&self.dir);
     }
@@ -193,6 +198,7 @@ impl Instance<'_> {
             FMI2_FALSE
         };
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe {
                 (self.fmu.setup)(
                     self.c,
@@ -208,17 +214,20 @@ impl Instance<'_> {
     }
     pub fn enter_initialization(&self) -> Result<(), String> {
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.enter_init)(self.c) },
             "fmi2EnterInitializationMode",
         )
     }
     pub fn exit_initialization(&self) -> Result<(), String> {
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.exit_init)(self.c) },
             "fmi2ExitInitializationMode",
         )
     }
     pub fn terminate(&self) -> Result<(), String> {
+        // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
         check(unsafe { (self.fmu.terminate)(self.c) }, "fmi2Terminate")
     }
     pub fn get_reals(&self, vrs: &[u32]) -> Result<Vec<f64>, String> {
@@ -230,12 +239,14 @@ impl Instance<'_> {
     pub fn get_reals_into(&self, vrs: &[u32], out: &mut [f64]) -> Result<(), String> {
         assert_eq!(vrs.len(), out.len(), "one value per reference");
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) },
             "fmi2GetReal",
         )
     }
     pub fn set_real(&self, vr: u32, v: f64) -> Result<(), String> {
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.set_real)(self.c, &vr, 1, &v) },
             "fmi2SetReal",
         )
@@ -243,6 +254,7 @@ impl Instance<'_> {
     pub fn get_integers(&self, vrs: &[u32]) -> Result<Vec<i32>, String> {
         let mut out = vec![0; vrs.len()];
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.get_integer)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) },
             "fmi2GetInteger",
         )?;
@@ -250,6 +262,7 @@ impl Instance<'_> {
     }
     pub fn set_integer(&self, vr: u32, v: i32) -> Result<(), String> {
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.set_integer)(self.c, &vr, 1, &v) },
             "fmi2SetInteger",
         )
@@ -257,6 +270,7 @@ impl Instance<'_> {
     pub fn set_boolean(&self, vr: u32, v: bool) -> Result<(), String> {
         let v = if v { FMI2_TRUE } else { FMI2_FALSE };
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.set_boolean)(self.c, &vr, 1, &v) },
             "fmi2SetBoolean",
         )
@@ -298,6 +312,7 @@ impl Instance<'_> {
 
     pub fn do_step(&self, t: f64, h: f64) -> Result<(), String> {
         check(
+            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
             unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) },
             &format!("fmi2DoStep at t = {t}"),
         )
@@ -306,6 +321,7 @@ impl Instance<'_> {
 
 impl Drop for Instance<'_> {
     fn drop(&mut self) {
+        // SAFETY: an instance of this FMU, freed once, here, on drop.
         unsafe { (self.fmu.free)(self.c) };
     }
 }

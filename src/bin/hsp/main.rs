@@ -18,6 +18,8 @@
 //! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
 //!   copied for the README.
 
+#![deny(unsafe_op_in_unsafe_fn)]
+
 mod binaries;
 mod docpage;
 mod info;

@@ -144,6 +144,7 @@ pub unsafe fn free_instance<M: FmuModel>(c: Handle, function: &'static str) {
             let inst = unsafe { &mut *ptr };
             inst.log_call(|| format!("{function}()"));
             inst.invalidate();
+            // SAFETY: as above: made by `Box::into_raw`, dropped once.
             drop(unsafe { Box::from_raw(ptr) });
         }
     });
