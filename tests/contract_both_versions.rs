@@ -2,14 +2,59 @@
 //! [`Driver`] of `common/driver.rs` and run through the C ABI of each version (`<rule>::fmi2`,
 //! `<rule>::fmi3`): a rule broken in one version fails that version's run only. The defects an
 //! outside fuzzing campaign found (issue 24, N1, N3, N4) are reproduced here as they were
-//! reported.
+//! reported, and so are those of the earlier campaign (issue 11, D1-D7 and the FMU-state
+//! pointer): a bad parameter, a non-finite output, a step that cannot advance time or a hostile
+//! FMU state gets Error or Discard with a log line naming the culprit, never OK and never Fatal.
+//! The rules of one standard alone are in `fmi2_contract.rs` and `fmi3_contract.rs`.
 
 #[path = "common/driver.rs"]
+#[macro_use]
 mod driver;
 
 use driver::{blob, find_key, payload, Driver, Kind, St, V2, V3};
 use hydraulic_slewing_plate::fmu::FmuModel;
 use hydraulic_slewing_plate::model::HydraulicSlewingPlate;
+
+/// A message is short: numbers printed short (1e-300 in 6 characters, not 302), and it names no
+/// function of the other FMI version.
+fn assert_short<D: Driver>(message: &str) {
+    assert!(
+        message.len() < 400,
+        "{} characters: {message}",
+        message.len()
+    );
+    let longest_number = message
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(longest_number <= 24, "{message}");
+    assert!(
+        !message.contains(D::OTHER_PREFIX),
+        "a {} message names {}: {message}",
+        D::PREFIX,
+        D::OTHER_PREFIX
+    );
+}
+
+/// Initialisation with one parameter set fails with Error naming `name`.
+fn init_rejects<D: Driver>(name: &str, value: f64, expect_in_message: &str) {
+    let f = D::new(Kind::CoSimulation);
+    let set = f.set_real(name, value);
+    let status = if set == St::Ok {
+        assert_eq!(f.enter(0.0), St::Ok);
+        f.exit()
+    } else {
+        set
+    };
+    assert_eq!(status, St::Error, "{name} = {value}");
+    let last = f.last();
+    assert!(
+        last.contains(name) && last.contains(expect_in_message),
+        "{name} = {value}: {last}"
+    );
+    assert_short::<D>(&last);
+}
 
 /// Reads every Real: none may come back OK and non-finite. Returns how many came back Discard,
 /// with the message of the first.
@@ -179,5 +224,323 @@ both_versions!(
         assert!(m.contains("is not its step size h"), "{m}");
         f.free_state(edited);
         f.free_state(saved);
+    }
+);
+
+both_versions!(
+    absurd_plate_density_is_rejected_by_name_without_a_panic,
+    /// D1.
+    fn rule<D: Driver>() {
+        for rho in [1e-300, 5e-324] {
+            init_rejects::<D>("plate.rho", rho, "physically absurd");
+        }
+    }
+);
+
+both_versions!(
+    derived_plate_quantities_are_checked,
+    /// D1: each value lies within the window for the parameter itself; the derived quantity
+    /// does not.
+    fn rule<D: Driver>() {
+        init_rejects::<D>("plate.rho", 1e-49, "the plate's mass");
+        init_rejects::<D>("plate.E", 1e-49, "flexural rigidity");
+    }
+);
+
+both_versions!(
+    errors_name_the_parameter_and_print_numbers_short,
+    /// D7.
+    fn rule<D: Driver>() {
+        init_rejects::<D>("servo_valve.p_supply", 1e300, "physically absurd");
+        init_rejects::<D>("plate.a", 1e300, "physically absurd");
+        // Inside the window but still absurd: named through the derived quantity.
+        init_rejects::<D>("servo_valve.p_supply", 1e40, "hydraulic energy");
+        init_rejects::<D>("plate.a", 1e40, "the hub's total inertia");
+    }
+);
+
+both_versions!(
+    a_state_taken_before_initialisation_restores_as_such,
+    /// D2.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        let (s, early) = f.get_state();
+        assert_eq!(s, St::Ok);
+        assert_eq!(f.init(0.0), St::Ok);
+        assert_eq!(f.step(0.0, 1e-3), St::Ok);
+        assert_eq!(f.set_state(early), St::Ok);
+        // Back in the instantiated state: stepping is an illegal call, not a discarded step.
+        assert_eq!(f.step(0.0, 1e-3), St::Error);
+        let m = f.last();
+        assert!(m.contains("illegal call sequence"), "{m}");
+        assert!(m.starts_with(&format!("{}DoStep", D::PREFIX)), "{m}");
+        // And there is no last successful time to report.
+        if D::GET_REAL_STATUS {
+            assert_eq!(f.last_successful_time().0, St::Error);
+        }
+        assert_eq!(f.free_state(early), St::Ok);
+    }
+);
+
+both_versions!(
+    a_state_taken_in_the_error_state_is_refused,
+    /// D2.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.init(0.0), St::Ok);
+        assert_eq!(f.step(0.0, 1e-3), St::Ok);
+        let (_, good) = f.get_state();
+        assert_eq!(f.step(5.0, 1e-3), St::Error); // wrong communication point
+        let (s, bad) = f.get_state();
+        assert_eq!(s, St::Ok);
+        assert_eq!(f.set_state(good), St::Ok);
+        assert_eq!(f.set_state(bad), St::Error);
+        let m = f.last();
+        assert!(m.contains("taken in state 'error'"), "{m}");
+        let function = format!("{}Set{}", D::PREFIX, D::FMU_STATE);
+        assert!(m.starts_with(&function), "{m}");
+        // The good state still restores and continues.
+        assert_eq!(f.set_state(good), St::Ok);
+        assert_eq!(f.step(1e-3, 1e-3), St::Ok);
+        f.free_state(good);
+        f.free_state(bad);
+    }
+);
+
+both_versions!(
+    a_tiny_step_does_not_spoil_the_next,
+    /// D3.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.init(0.0), St::Ok);
+        // The shortest step the FMU takes, its solver's minimum step (a shorter one is refused
+        // up front, issue 24 N4: see a_step_below_the_minimum_step_is_refused_with_its_size).
+        assert_eq!(f.step(0.0, 1e-14), St::Ok);
+        assert_eq!(f.step(1e-14, 1e-3), St::Ok, "{}", f.last());
+        assert_eq!(f.last_successful_time(), (St::Ok, 1e-14 + 1e-3));
+    }
+);
+
+/// With one input or parameter set, the FMU never returns OK with a non-finite output: the step
+/// is refused (Error) or discarded at its start (Discard), with a log line naming `name`.
+fn never_ok_with_non_finite<D: Driver>(name: &str, value: f64, hydraulics: i32) {
+    let f = D::new(Kind::CoSimulation);
+    assert_eq!(f.set_integer("hydraulics.model", hydraulics), St::Ok);
+    // Without the amplifier's output limit, which would clip a huge r to its 12 V (with it the
+    // outputs stay finite and OK is right: see
+    // with_the_amplifier_limit_a_huge_r_drives_at_the_limit_with_finite_outputs).
+    assert_eq!(f.set_boolean("controller.saturation", false), St::Ok);
+    assert_eq!(f.set_real(name, value), St::Ok);
+    assert_eq!(f.enter(0.0), St::Ok);
+    let mut status = f.exit();
+    let mut t = 0.0;
+    while status == St::Ok && t < 0.05 {
+        for out in ["energy", "y_pot", "w_tip", "theta_hub"] {
+            assert!(f.get_real(out).1.is_finite(), "{name} = {value}: {out}");
+        }
+        status = f.step(t, 1e-3);
+        t += 1e-3;
+    }
+    assert!(
+        matches!(status, St::Error | St::Discard),
+        "{name} = {value}: {status:?}"
+    );
+    let last = f.last();
+    assert!(last.contains(name), "{name} = {value}: {last}");
+    assert_short::<D>(&last);
+    if status == St::Discard {
+        // The last good state is kept: its outputs are finite, at the last successful time.
+        let (s, t_ok) = f.last_successful_time();
+        assert_eq!(s, St::Ok);
+        assert!(t_ok < t, "{t_ok} {t}");
+        assert!(f.get_real("energy").1.is_finite());
+    }
+}
+
+both_versions!(
+    huge_inputs_give_no_ok_with_infinite_outputs,
+    /// D4.
+    fn rule<D: Driver>() {
+        never_ok_with_non_finite::<D>("F1", 1e300, 1);
+        never_ok_with_non_finite::<D>("r", 1e300, 1);
+    }
+);
+
+both_versions!(
+    with_the_amplifier_limit_a_huge_r_drives_at_the_limit_with_finite_outputs,
+    /// D4: the defaults (the complete system) limit the power amplifier: r = 1e300 asks for an
+    /// infinite drive and gets e_max, so the steps are OK and every output stays finite.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.set_real("r", 1e300), St::Ok);
+        assert_eq!(f.init(0.0), St::Ok);
+        for k in 0..20 {
+            assert_eq!(f.step(k as f64 * 1e-3, 1e-3), St::Ok, "{}", f.last());
+            for out in ["energy", "y_pot", "w_tip", "theta_hub", "controller.e_out"] {
+                assert!(f.get_real(out).1.is_finite(), "{out}");
+            }
+        }
+        let (_, e_max) = f.get_real("controller.e_max");
+        assert!((f.get_real("controller.e_out").1 - e_max).abs() <= 1e-12 * e_max);
+    }
+);
+
+both_versions!(
+    absurd_hydraulic_parameters_are_rejected,
+    /// D4.
+    fn rule<D: Driver>() {
+        for (name, value) in [
+            ("servo_valve.beta", 1e-300),
+            ("servo_valve.V_H", 1e300),
+            ("servo_valve.V_1", 1e300),
+        ] {
+            // Whichever hydraulic model is chosen: a parameter is checked whether it is used or
+            // not.
+            for hydraulics in [1, 2] {
+                never_ok_with_non_finite::<D>(name, value, hydraulics);
+            }
+        }
+    }
+);
+
+both_versions!(
+    edited_states_are_validated_not_trusted,
+    /// D5.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.set_integer("hydraulics.model", 1), St::Ok);
+        assert_eq!(f.init(0.0), St::Ok);
+        for k in 0..50 {
+            assert_eq!(f.step(k as f64 * 1e-3, 1e-3), St::Ok);
+        }
+        let (_, s) = f.get_state();
+        let good = payload(&f.serialize(s));
+        f.free_state(s);
+        type Edit = fn(&mut serde_json::Value);
+        let edits: [(&str, Edit, &str); 8] = [
+            (
+                "atol one short",
+                |p| {
+                    p["model"]["integrator"]["options"]["atol"]["Vector"]
+                        .as_array_mut()
+                        .unwrap()
+                        .pop();
+                },
+                "solver options differ",
+            ),
+            (
+                "a Real stored as an Integer",
+                |p| p["values"]["values"][0] = serde_json::json!({"Integer": 3}),
+                "r is a Real, not a Integer",
+            ),
+            (
+                "rtol = 0",
+                |p| p["model"]["integrator"]["options"]["rtol"] = 0.0.into(),
+                "solver options differ",
+            ),
+            (
+                "initial_step = -1",
+                |p| p["model"]["integrator"]["options"]["initial_step"] = (-1.0).into(),
+                "solver options differ",
+            ),
+            (
+                "max_steps = u64::MAX with min_step = 0",
+                |p| {
+                    let o = &mut p["model"]["integrator"]["options"];
+                    o["max_steps"] = u64::MAX.into();
+                    o["min_step"] = 0.0.into();
+                },
+                "solver options differ",
+            ),
+            (
+                "a saved Fatal state",
+                |p| p["state"] = "Fatal".into(),
+                "taken in state 'fatal'",
+            ),
+            (
+                "integrator time -5 against FMU time 0.05",
+                |p| p["model"]["integrator"]["t"] = (-5.0).into(),
+                "its integrator is at t = -5, the FMU at t = 0.05",
+            ),
+            (
+                "a negative step size",
+                |p| p["model"]["integrator"]["h"] = (-1e-3).into(),
+                "h = -0.001",
+            ),
+        ];
+        for (what, edit, expected) in edits {
+            let mut p = good.clone();
+            edit(&mut p);
+            let (s, state) = f.deserialize(&blob(&p));
+            assert_eq!(s, St::Ok, "{what}: the checksum was recomputed");
+            assert_eq!(f.set_state(state), St::Error, "{what}");
+            assert!(f.last().contains(expected), "{what}: {}", f.last());
+            assert_short::<D>(&f.last());
+            // Nothing to step on: an illegal call, never Fatal.
+            assert_eq!(f.step(0.05, 1e-3), St::Error, "{what}");
+            f.free_state(state);
+        }
+        // The unedited state restores and continues.
+        let (_, state) = f.deserialize(&blob(&good));
+        assert_eq!(f.set_state(state), St::Ok);
+        assert_eq!(f.step(0.05, 1e-3), St::Ok);
+        f.free_state(state);
+    }
+);
+
+both_versions!(
+    a_step_that_cannot_advance_time_is_an_error,
+    /// D6.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.init(1e15), St::Ok);
+        assert_eq!(f.step(1e15, 1e-3), St::Error);
+        let last = f.last();
+        assert!(last.contains("cannot advance the time 1e15"), "{last}");
+        assert_short::<D>(&last);
+    }
+);
+
+both_versions!(
+    fmu_state_pointers_are_checked,
+    /// An instance pointer and a junk buffer are not FMU states.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        let other = D::new(Kind::CoSimulation);
+        assert_eq!(f.init(0.0), St::Ok);
+        let mut junk = vec![0u8; 4096];
+        let junk = junk.as_mut_ptr() as *mut std::ffi::c_void;
+        let argument = format!("'{}'", D::FMU_STATE);
+        for bad in [other.instance(), junk] {
+            assert_eq!(f.set_state(bad), St::Error);
+            assert!(f.last().contains("not an FMU state"), "{}", f.last());
+            assert_eq!(f.free_state(bad), St::Error);
+            assert_eq!(f.serialized_size(bad).0, St::Error);
+            let mut buf = [0u8; 16];
+            assert_eq!(f.serialize_into(bad, &mut buf), St::Error);
+            assert!(f.last().contains(&argument), "{}", f.last());
+            // Back to a usable instance.
+            assert_eq!(f.reset(), St::Ok);
+            assert_eq!(f.init(0.0), St::Ok);
+        }
+        // A state freed once is not freed twice (its memory is gone; the pointer is kept in a
+        // copy only to show that FreeFMUState sets the caller's pointer to NULL).
+        let (_, mut s) = f.get_state();
+        assert_eq!(f.free_state_at(&mut s), St::Ok);
+        assert!(s.is_null());
+    }
+);
+
+both_versions!(
+    calls_in_the_error_state_are_refused_with_a_log_line,
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.step(0.0, 1e-3), St::Error);
+        let n = f.log_len();
+        assert_eq!(f.enter_initialization_mode(), St::Error);
+        assert!(f.log_len() > n);
+        let m = f.last();
+        let function = format!("{}EnterInitializationMode", D::PREFIX);
+        assert!(m.starts_with(&function), "{m}");
     }
 );

@@ -7,120 +7,13 @@
 use std::ffi::{c_char, c_void, CStr};
 use std::sync::Mutex;
 
+#[path = "common/decay.rs"]
+mod decay;
+
+use decay::Decay;
 use hydraulic_slewing_plate::fmi2::entries as x;
 use hydraulic_slewing_plate::fmi2::ffi::*;
-use hydraulic_slewing_plate::fmu::{
-    Causality, Experiment, FmuModel, Kind, StepFailure, StepLog, Value, Values, Variability,
-    Variable,
-};
-
-/// dx/dt = -k x from x(0) = 1, integrated exactly. `mode` 1 makes do_step fail at
-/// t_start + (t_end - t_start)/2; mode 2 makes it panic.
-struct Decay {
-    x: f64,
-    t: f64,
-}
-
-const VARS: [Variable; 3] = [
-    Variable {
-        name: "k",
-        value_reference: 1,
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        kind: Kind::Real {
-            start: Some(2.0),
-            min: Some(0.0),
-            max: None,
-        },
-        unit: None,
-        description: "rate",
-    },
-    Variable {
-        name: "mode",
-        value_reference: 2,
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        kind: Kind::Integer {
-            start: Some(0),
-            min: Some(0),
-            max: Some(2),
-        },
-        unit: None,
-        description: "0 normal, 1 fail, 2 panic",
-    },
-    Variable {
-        name: "x",
-        value_reference: 3,
-        causality: Causality::Output,
-        variability: Variability::Continuous,
-        kind: Kind::Real {
-            start: None,
-            min: None,
-            max: None,
-        },
-        unit: None,
-        description: "state",
-    },
-];
-
-impl FmuModel for Decay {
-    type State = (f64, f64);
-    const MODEL_IDENTIFIER: &'static str = "Decay";
-    const GUID: &'static str = "{decay}";
-
-    fn variables() -> &'static [Variable] {
-        &VARS
-    }
-    fn index_of(vr: u32) -> Option<usize> {
-        VARS.iter().position(|v| v.value_reference == vr)
-    }
-    fn new() -> Self {
-        Decay { x: 1.0, t: 0.0 }
-    }
-    fn initialize(&mut self, values: &mut Values, e: &Experiment) -> Result<(), String> {
-        self.x = 1.0;
-        self.t = e.start_time;
-        values.set_real(2, self.x);
-        Ok(())
-    }
-    fn do_step(
-        &mut self,
-        values: &mut Values,
-        t0: f64,
-        t1: f64,
-        _log: &mut StepLog,
-    ) -> Result<(), StepFailure> {
-        let k = values.real(0);
-        let end = match values.integer(1) {
-            0 => t1,
-            1 => t0 + (t1 - t0) / 2.0,
-            _ => panic!("deliberate panic in do_step"),
-        };
-        self.x *= (-k * (end - self.t)).exp();
-        self.t = end;
-        values.set_real(2, self.x);
-        if end < t1 {
-            return Err(StepFailure {
-                last_successful_time: end,
-                message: "deliberate failure".into(),
-            });
-        }
-        Ok(())
-    }
-    fn save_state(&self) -> (f64, f64) {
-        (self.x, self.t)
-    }
-    fn restore_state(
-        &mut self,
-        s: &(f64, f64),
-        _: &Values,
-        _: &Experiment,
-        _: Option<f64>,
-    ) -> Result<(), String> {
-        (self.x, self.t) = *s;
-        Ok(())
-    }
-}
+use hydraulic_slewing_plate::fmu::Value;
 
 /// Log lines of all instances of this test binary: (status, message).
 static LOG: Mutex<Vec<(Fmi2Status, String)>> = Mutex::new(Vec::new());
@@ -217,7 +110,7 @@ fn a_panic_becomes_fatal_and_stays_inside() {
     assert_eq!(status, Fmi2Status::Fatal);
     // The message and its place go to the FMU's logger.
     assert!(logged(
-        "fmi2DoStep: internal error: deliberate panic in do_step (at tests/fmi2_layer.rs:"
+        "fmi2DoStep: internal error: deliberate panic in do_step (at tests/common/decay.rs:"
     ));
     // After fmi2Fatal nothing but fmi2FreeInstance: every call is refused.
     assert_eq!(get_x(c).0, Fmi2Status::Error);
@@ -322,22 +215,8 @@ fn null_and_foreign_pointers_are_refused() {
 /// binary so that its stderr can be read: the panic hook keeps "panicked at" off the host's stderr.
 #[test]
 fn a_panic_prints_nothing_to_stderr() {
-    if std::env::var_os("FMI2_LAYER_CHILD").is_some() {
-        return;
-    }
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args([
-            "--exact",
-            "a_panic_becomes_fatal_and_stays_inside",
-            "--nocapture",
-        ])
-        .env("FMI2_LAYER_CHILD", "1")
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("1 passed"), "{stdout}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert!(!stderr.contains("deliberate panic"), "{stderr}");
+    decay::passes_with_nothing_on_stderr(
+        "a_panic_becomes_fatal_and_stays_inside",
+        "FMI2_LAYER_CHILD",
+    );
 }

@@ -1,112 +1,42 @@
-//! A thin driver over the library's exported `fmi2*` entry points, called in-process exactly as an
-//! importer that has loaded the library would, with a log of its own per instance.
+//! The FMI 2.0 driver of `driver.rs` ([`V2`], over the library's exported `fmi2*` entry points,
+//! called in-process exactly as an importer that has loaded the library would, with a log of its
+//! own per instance) answering in `Fmi2Status`, with what FMI 2.0 alone has.
 
 #![allow(dead_code)]
 
-use std::ffi::{c_void, CStr, CString};
-use std::os::raw::c_char;
-use std::sync::Mutex;
-
 use hydraulic_slewing_plate::fmi2::ffi::*;
 use hydraulic_slewing_plate::fmi2_exports::*;
-use hydraulic_slewing_plate::model::variables::{GUID, VARIABLES};
 
-#[path = "state_blob.rs"]
-mod state_blob;
+#[path = "driver.rs"]
+mod driver;
 #[allow(unused_imports)]
-pub use state_blob::{blob, find_key, payload};
+pub use driver::{blob, find_key, payload};
+use driver::{Driver, Kind, Native, V2};
 
 /// One log line: status and message.
 pub type Line = (Fmi2Status, String);
 
-unsafe extern "C" fn logger(
-    env: *mut c_void,
-    _name: *const c_char,
-    status: Fmi2Status,
-    _category: *const c_char,
-    message: *const c_char,
-) {
-    let log = &*(env as *const Mutex<Vec<Line>>);
-    let m = CStr::from_ptr(message).to_string_lossy().replace("%%", "%");
-    log.lock().unwrap().push((status, m));
-}
-
 /// An instance with its log; freed on drop.
-pub struct Fmu {
-    pub c: Fmi2Component,
-    log: Box<Mutex<Vec<Line>>>,
-}
+pub type Fmu = Native<V2>;
 
-impl Fmu {
+impl Native<V2> {
     pub fn new() -> Fmu {
-        Fmu::of_type(FMI2_CO_SIMULATION)
+        Native(V2::new(Kind::CoSimulation))
     }
 
     /// An instance for Model Exchange.
     pub fn model_exchange() -> Fmu {
-        Fmu::of_type(FMI2_MODEL_EXCHANGE)
+        Native(V2::new(Kind::ModelExchange))
     }
 
     pub fn of_type(fmu_type: Fmi2Type) -> Fmu {
-        let log = Box::new(Mutex::new(Vec::new()));
-        let env = &*log as *const Mutex<Vec<Line>> as *mut c_void;
-        let callbacks = Fmi2CallbackFunctions::with_plain_logger(logger, env);
-        let guid = CString::new(GUID).unwrap();
-        let c = unsafe {
-            fmi2Instantiate(
-                c"contract".as_ptr(),
-                fmu_type,
-                guid.as_ptr(),
-                std::ptr::null(),
-                &callbacks,
-                FMI2_FALSE,
-                FMI2_FALSE,
-            )
-        };
-        assert!(!c.is_null());
-        Fmu { c, log }
+        Native(V2::of_type(fmu_type))
     }
 
     /// The log lines so far.
     pub fn log(&self) -> Vec<Line> {
-        self.log.lock().unwrap().clone()
-    }
-
-    /// The number of log lines so far.
-    pub fn log_len(&self) -> usize {
-        self.log.lock().unwrap().len()
-    }
-
-    /// The last log line, or "" when there is none.
-    pub fn last(&self) -> String {
-        self.log().last().map(|l| l.1.clone()).unwrap_or_default()
-    }
-
-    pub fn vr(name: &str) -> u32 {
-        VARIABLES
-            .iter()
-            .find(|v| v.name == name)
-            .unwrap_or_else(|| panic!("no variable {name}"))
-            .value_reference
-    }
-
-    pub fn set_real(&self, name: &str, v: f64) -> Fmi2Status {
-        unsafe { fmi2SetReal(self.c, &Self::vr(name), 1, &v) }
-    }
-
-    pub fn set_integer(&self, name: &str, v: i32) -> Fmi2Status {
-        unsafe { fmi2SetInteger(self.c, &Self::vr(name), 1, &v) }
-    }
-
-    pub fn set_boolean(&self, name: &str, v: bool) -> Fmi2Status {
-        let v = Fmi2Boolean::from(v);
-        unsafe { fmi2SetBoolean(self.c, &Self::vr(name), 1, &v) }
-    }
-
-    pub fn get_real(&self, name: &str) -> (Fmi2Status, f64) {
-        let mut v = f64::NAN;
-        let s = unsafe { fmi2GetReal(self.c, &Self::vr(name), 1, &mut v) };
-        (s, v)
+        let lines = self.0.log().into_iter();
+        lines.map(|(s, m)| (s.into(), m)).collect()
     }
 
     pub fn get_integer(&self, name: &str) -> (Fmi2Status, i32) {
@@ -119,78 +49,14 @@ impl Fmu {
         unsafe { fmi2SetupExperiment(self.c, FMI2_FALSE, 0.0, start, FMI2_FALSE, 0.0) }
     }
 
+    /// `fmi2EnterInitializationMode` (after [`Fmu::setup`]).
     pub fn enter(&self) -> Fmi2Status {
-        unsafe { fmi2EnterInitializationMode(self.c) }
-    }
-
-    pub fn exit(&self) -> Fmi2Status {
-        unsafe { fmi2ExitInitializationMode(self.c) }
-    }
-
-    /// Setup at `start`, enter and exit initialisation mode; the status of the last.
-    pub fn init(&self, start: f64) -> Fmi2Status {
-        assert_eq!(self.setup(start), Fmi2Status::Ok);
-        assert_eq!(self.enter(), Fmi2Status::Ok);
-        self.exit()
-    }
-
-    pub fn step(&self, t: f64, h: f64) -> Fmi2Status {
-        unsafe { fmi2DoStep(self.c, t, h, FMI2_TRUE) }
+        self.0.enter_initialization_mode().into()
     }
 
     pub fn last_successful_time(&self) -> (Fmi2Status, f64) {
-        let mut t = f64::NAN;
-        let s = unsafe { fmi2GetRealStatus(self.c, FMI2_LAST_SUCCESSFUL_TIME, &mut t) };
-        (s, t)
-    }
-
-    pub fn get_state(&self) -> (Fmi2Status, Fmi2FmuState) {
-        let mut s: Fmi2FmuState = std::ptr::null_mut();
-        let status = unsafe { fmi2GetFMUstate(self.c, &mut s) };
-        (status, s)
-    }
-
-    pub fn set_state(&self, s: Fmi2FmuState) -> Fmi2Status {
-        unsafe { fmi2SetFMUstate(self.c, s) }
-    }
-
-    pub fn free_state(&self, mut s: Fmi2FmuState) -> Fmi2Status {
-        unsafe { fmi2FreeFMUstate(self.c, &mut s) }
-    }
-
-    pub fn serialize(&self, s: Fmi2FmuState) -> Vec<u8> {
-        let mut size = 0usize;
-        unsafe {
-            assert_eq!(
-                fmi2SerializedFMUstateSize(self.c, s, &mut size),
-                Fmi2Status::Ok
-            );
-            let mut bytes = vec![0u8; size];
-            assert_eq!(
-                fmi2SerializeFMUstate(self.c, s, bytes.as_mut_ptr() as *mut Fmi2Byte, size),
-                Fmi2Status::Ok
-            );
-            bytes
-        }
-    }
-
-    pub fn deserialize(&self, bytes: &[u8]) -> (Fmi2Status, Fmi2FmuState) {
-        let mut s: Fmi2FmuState = std::ptr::null_mut();
-        let status = unsafe {
-            fmi2DeSerializeFMUstate(
-                self.c,
-                bytes.as_ptr() as *const Fmi2Byte,
-                bytes.len(),
-                &mut s,
-            )
-        };
-        (status, s)
-    }
-}
-
-impl Drop for Fmu {
-    fn drop(&mut self) {
-        unsafe { fmi2FreeInstance(self.c) };
+        let (s, t) = self.0.last_successful_time();
+        (s.into(), t)
     }
 }
 
