@@ -11,6 +11,9 @@
 #[path = "src/fnv1a.rs"]
 #[allow(dead_code)]
 mod fnv1a;
+// The hash of the library's sources, written into the library (see the file).
+#[path = "tools/source_hash.rs"]
+mod source_hash;
 // The one reader of the XML, shared with `hsp`'s documentation page.
 #[path = "tools/model_description.rs"]
 #[allow(dead_code)]
@@ -33,6 +36,26 @@ fn main() {
         std::fs::read_to_string(XML).unwrap_or_else(|e| fail(&format!("cannot read {XML}: {e}")));
     let code = generate(&text).unwrap_or_else(|e| fail(&e));
     let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("variables.rs");
+    std::fs::write(&out, code)
+        .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display())));
+    write_source_hash();
+}
+
+/// Writes `$OUT_DIR/source_hash.rs` (included by `src/lib.rs`): the hash of the library's
+/// sources and the marker the binary carries, rerun whenever one of those sources changes.
+fn write_source_hash() {
+    for dir in ["src", "tools", "Cargo.toml", "Cargo.lock"] {
+        println!("cargo:rerun-if-changed={dir}");
+    }
+    let hash = source_hash::source_hash(Path::new("."));
+    let code = format!(
+        "/// The hash of the sources this library was built from (`tools/source_hash.rs`).\n\
+         pub const SOURCE_HASH: &str = \"{hash}\";\n\
+         /// `SOURCE_HASH` as the binary carries it (in the instantiation log line), for a test to\n\
+         /// find in a packaged FMU's binary.\n\
+         pub const SOURCE_MARKER: &str = \"hsp-source-hash:{hash}\";\n"
+    );
+    let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR")).join("source_hash.rs");
     std::fs::write(&out, code)
         .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display())));
 }

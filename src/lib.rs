@@ -30,6 +30,10 @@ pub mod fragments;
 pub mod model;
 pub mod solver;
 
+// The hash of the sources this library is built from (`SOURCE_HASH`, `SOURCE_MARKER`), written by
+// build.rs (tools/source_hash.rs): a test tells a stale packaged FMU by it.
+include!(concat!(env!("OUT_DIR"), "/source_hash.rs"));
+
 // The FMI 2.0 C API (Co-Simulation and Model Exchange) of the shipped FMU.
 export_fmi2_cosimulation!(crate::model::HydraulicSlewingPlate);
 // The FMI 3.0 C API of the same model, for the FMI 3.0 FMU (the same binary).

@@ -20,6 +20,9 @@
 //! crate a copy of the FMU whose XML differs in exactly these (checked below); fmpy's validation
 //! of the unchanged FMU (tests/python/test_fmi3.py) answers for the original.
 
+#[path = "common/packaged.rs"]
+mod packaged;
+
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -35,30 +38,9 @@ use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARI
 /// Communication step [s].
 const H: f64 = 1e-3;
 
+/// The packaged FMU, built from these sources (rebuilt by `hsp package` when missing or stale).
 fn fmu_path() -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let fmu = root
-        .join("fmu")
-        .join("fmi3")
-        .join(format!("{MODEL_IDENTIFIER}.fmu"));
-    if !fmu.exists() {
-        let status = Command::new(env!("CARGO"))
-            .args([
-                "run",
-                "--release",
-                "--quiet",
-                "--bin",
-                "hsp",
-                "--",
-                "package",
-            ])
-            .current_dir(&root)
-            .status()
-            .expect("cannot run cargo to build the FMUs");
-        assert!(status.success(), "hsp package failed: {status}");
-    }
-    assert!(fmu.exists(), "{} was not built", fmu.display());
-    fmu
+    packaged::fresh_fmu(packaged::Version::Fmi3)
 }
 
 /// The FMI 3.0 XML as fmi-schema 0.8 reads it: `A=` of `<BaseUnit>` as `a=`, and `unit="..."`

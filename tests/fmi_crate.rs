@@ -10,6 +10,9 @@
 //! * `fmi2GetFMUstate`/`fmi2SetFMUstate` and serialisation through the crate restore the FMU
 //!   exactly: repeating steps from a restored state gives bit-identical outputs.
 
+#[path = "common/packaged.rs"]
+mod packaged;
+
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -40,29 +43,9 @@ const INTEGER_OUTPUTS: [u32; 5] = [
     vr::SOLVER_LU,
 ];
 
-/// The FMU archive, built with `hsp package` if it is not there yet (as `tests/run_all.sh` does
-/// before `cargo test`).
+/// The packaged FMU, built from these sources (rebuilt by `hsp package` when missing or stale).
 fn fmu_path() -> PathBuf {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let fmu = root.join("fmu").join(format!("{MODEL_IDENTIFIER}.fmu"));
-    if !fmu.exists() {
-        let status = Command::new(env!("CARGO"))
-            .args([
-                "run",
-                "--release",
-                "--quiet",
-                "--bin",
-                "hsp",
-                "--",
-                "package",
-            ])
-            .current_dir(&root)
-            .status()
-            .expect("cannot run cargo to build the FMU");
-        assert!(status.success(), "hsp package failed: {status}");
-    }
-    assert!(fmu.exists(), "{} was not built", fmu.display());
-    fmu
+    packaged::fresh_fmu(packaged::Version::Fmi2)
 }
 
 /// Closed-loop step response `y(t)` of `T(s) = K / (s^3 + 818 s^2 + 48945 s + K)`, `K = 2.25e6`,

@@ -117,7 +117,12 @@ pub fn instantiate<M: FmuModel>(
     make: impl FnOnce() -> Result<Instance<M>, (Logger, String)>,
 ) -> Handle {
     let result = guarded(|| match make() {
-        Ok(inst) => Box::into_raw(Box::new(inst)) as Handle,
+        Ok(inst) => {
+            // Under logCalls: which sources the binary was built from (the marker is also how a
+            // test tells a stale packaged binary, see tools/source_hash.rs).
+            inst.log_call(|| format!("built from {}", crate::SOURCE_MARKER));
+            Box::into_raw(Box::new(inst)) as Handle
+        }
         Err((logger, message)) => {
             logger.log(Status::Error, LogCategory::StatusError, &message);
             std::ptr::null_mut()

@@ -1,0 +1,87 @@
+//! The packaged FMUs, checked to be built from the sources these tests were built from: each
+//! binary carries the marker `hsp-source-hash:<hash>` of its sources (`tools/source_hash.rs`),
+//! and a test that loads a packaged FMU first looks for this build's marker in the FMU's Linux
+//! binary. A missing or stale FMU is rebuilt with `hsp package` (as `tests/run_all.sh` does before
+//! `cargo test`); one still stale after that fails the test, naming both hashes.
+
+#![allow(dead_code)]
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
+use hydraulic_slewing_plate::SOURCE_MARKER;
+
+/// The FMI version of a packaged FMU: its path in `fmu/` and its Linux binary's path inside.
+#[derive(Clone, Copy, Debug)]
+pub enum Version {
+    Fmi2,
+    Fmi3,
+}
+
+impl Version {
+    fn archive(self) -> PathBuf {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fmu");
+        let dir = match self {
+            Version::Fmi2 => root,
+            Version::Fmi3 => root.join("fmi3"),
+        };
+        dir.join(format!("{MODEL_IDENTIFIER}.fmu"))
+    }
+
+    fn binary(self) -> String {
+        let platform = match self {
+            Version::Fmi2 => "linux64",
+            Version::Fmi3 => "x86_64-linux",
+        };
+        format!("binaries/{platform}/{MODEL_IDENTIFIER}.so")
+    }
+}
+
+/// The source hash the packaged FMU's Linux binary carries, `None` if there is no FMU, no binary
+/// or no marker.
+pub fn packaged_hash(version: Version) -> Option<String> {
+    let file = std::fs::File::open(version.archive()).ok()?;
+    let mut zip = zip::ZipArchive::new(file).ok()?;
+    let mut binary = Vec::new();
+    zip.by_name(&version.binary())
+        .ok()?
+        .read_to_end(&mut binary)
+        .ok()?;
+    let prefix = b"hsp-source-hash:";
+    let at = binary.windows(prefix.len()).position(|w| w == prefix)?;
+    let hash = binary.get(at + prefix.len()..at + prefix.len() + 16)?;
+    Some(String::from_utf8_lossy(hash).into_owned())
+}
+
+/// The packaged FMU of `version`, built from this build's sources: rebuilt with `hsp package`
+/// when missing or stale.
+pub fn fresh_fmu(version: Version) -> PathBuf {
+    let this = SOURCE_MARKER.trim_start_matches("hsp-source-hash:");
+    if packaged_hash(version).as_deref() != Some(this) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let status = Command::new(env!("CARGO"))
+            .args([
+                "run",
+                "--release",
+                "--quiet",
+                "--bin",
+                "hsp",
+                "--",
+                "package",
+            ])
+            .current_dir(root)
+            .status()
+            .expect("cannot run cargo to build the FMUs");
+        assert!(status.success(), "hsp package failed: {status}");
+    }
+    let packaged = packaged_hash(version);
+    assert_eq!(
+        packaged.as_deref(),
+        Some(this),
+        "{} is not built from these sources even after hsp package",
+        version.archive().display()
+    );
+    version.archive()
+}

@@ -1,0 +1,44 @@
+//! The default experiment of the README (`hsp run`: the complete system, the 30 deg
+//! minimum-jerk move over 2 s, 6 s at 5 ms communication steps, through the packaged FMU's C
+//! ABI) gives the same CSV to the byte as the committed reference
+//! `tests/reference/default_experiment.csv`.
+//!
+//! The reference is a regression value, not an independent one: the CSV of the day the FMU core
+//! was restructured (issue 24), kept so that a refactoring that changes any result by one bit is
+//! seen. A change to the model or solver that changes results on purpose regenerates it with
+//! `hsp run --no-plot --csv tests/reference/default_experiment.csv` and says why in the commit.
+
+#[path = "common/packaged.rs"]
+mod packaged;
+
+use std::process::Command;
+
+#[test]
+fn the_default_experiment_is_byte_identical_to_the_reference() {
+    let fmu = packaged::fresh_fmu(packaged::Version::Fmi2);
+    let csv = std::env::temp_dir().join(format!("default-experiment-{}.csv", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
+        .args(["run", "--no-build", "--no-plot", "--fmu"])
+        .arg(&fmu)
+        .arg("--csv")
+        .arg(&csv)
+        .output()
+        .expect("cannot run hsp");
+    assert!(
+        out.status.success(),
+        "hsp run failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got = std::fs::read(&csv).unwrap();
+    let _ = std::fs::remove_file(&csv);
+    let reference = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/reference/default_experiment.csv"),
+    )
+    .unwrap();
+    assert_eq!(got.len(), reference.len(), "the CSV's length differs");
+    if let Some(at) = got.iter().zip(&reference).position(|(a, b)| a != b) {
+        let line = reference[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        panic!("the CSV differs from the reference first at byte {at}, line {line}");
+    }
+}
