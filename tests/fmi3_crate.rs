@@ -24,7 +24,6 @@
 mod packaged;
 
 use std::path::PathBuf;
-use std::process::Command;
 
 use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};

@@ -14,7 +14,6 @@
 mod packaged;
 
 use std::path::PathBuf;
-use std::process::Command;
 
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
