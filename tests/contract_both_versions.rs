@@ -5,7 +5,7 @@
 //! reported, and so are those of the earlier campaign (issue 11, D1-D7 and the FMU-state
 //! pointer): a bad parameter, a non-finite output, a step that cannot advance time or a hostile
 //! FMU state gets Error or Discard with a log line naming the culprit, never OK and never Fatal.
-//! The rules of one standard alone are in `fmi2_contract.rs` and `fmi3_contract.rs`.
+//! The rules of FMI 3.0 alone are in `fmi3_contract.rs` (FMI 2.0 has none of its own left).
 
 #[path = "common/driver.rs"]
 #[macro_use]
