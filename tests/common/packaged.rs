@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
-use hydraulic_slewing_plate::SOURCE_MARKER;
+use hydraulic_slewing_plate::SOURCE_HASH;
 
 /// The FMI version of a packaged FMU: its path in `fmu/` and its Linux binary's path inside.
 #[derive(Clone, Copy, Debug)]
@@ -58,7 +58,7 @@ pub fn packaged_hash(version: Version) -> Option<String> {
 /// The packaged FMU of `version`, built from this build's sources: rebuilt with `hsp package`
 /// when missing or stale.
 pub fn fresh_fmu(version: Version) -> PathBuf {
-    let this = SOURCE_MARKER.trim_start_matches("hsp-source-hash:");
+    let this = SOURCE_HASH;
     if packaged_hash(version).as_deref() != Some(this) {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let status = Command::new(env!("CARGO"))
