@@ -14,7 +14,9 @@ What changes from FMI 2.0 to 3.0:
   start="n"/>` and the value reference of `base[1]` (the accelerometers `acc`, the plate
   frequencies `plate.f`). The FMI 3.0 layer (src/fmi3/variables.rs) groups the same way, and the
   test suite checks that it finds exactly these arrays.
-- Real becomes Float64, Integer Int32; an `independent` variable `time` is added with value
+- Real becomes Float64, Integer Int32, an Enumeration stays one (with its declaredType; the
+  importer reaches it through fmi3GetInt64/fmi3SetInt64), and each <SimpleType> with an
+  <Enumeration> of <TypeDefinitions> becomes an <EnumerationType> with the same items; an `independent` variable `time` is added with value
   reference 0 (FMI 3.0 requires one; 0 is free in the FMI 2.0 table).
 - `<ModelStructure>` refers to value references, not indices: Output, ContinuousStateDerivative
   and InitialUnknown elements, with the dependencies of an array the union over its elements.
@@ -31,7 +33,7 @@ HERE = pathlib.Path(__file__).parent
 FMI2 = HERE / "modelDescription.xml"
 FMI3 = HERE / "fmi3" / "modelDescription.xml"
 
-TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
+TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String", "Enumeration": "Enumeration"}
 TIME_VR = 0
 
 # An array's description: its elements describe themselves one by one in FMI 2.0.
@@ -153,6 +155,19 @@ def generate(text):
             inner = "".join(f"<{c.tag}{attrs(c.attrib.items())}/>" for c in u)
             out.append(f'    <Unit name="{esc(u.get("name"))}">{inner}</Unit>' if inner else f'    <Unit name="{esc(u.get("name"))}"/>')
         out.append("  </UnitDefinitions>")
+        out.append("")
+    types = root.find("TypeDefinitions")
+    if types is not None:
+        out.append("  <TypeDefinitions>")
+        for t in types.findall("SimpleType"):
+            e = t.find("Enumeration")
+            if e is None:
+                raise SystemExit(f"type {t.get('name')}: only Enumeration types are translated")
+            out.append(f"    <EnumerationType{attrs([('name', t.get('name')), ('description', t.get('description'))] + list(e.attrib.items()))}>")
+            for item in e.findall("Item"):
+                out.append(f"      <Item{attrs(item.attrib.items())}/>")
+            out.append("    </EnumerationType>")
+        out.append("  </TypeDefinitions>")
         out.append("")
     cats = root.find("LogCategories")
     if cats is not None:

@@ -18,7 +18,9 @@ states depend on its structural parameters. model_structure.json, written by
 tests/model_structure.rs from the compiled model, lists the union of the states of every
 configuration with at most `plate_modes` plate modes, and the structural dependencies of each
 derivative (on states and inputs) and of each output (on states). A state a configuration does not
-have keeps its value with derivative 0.
+have keeps its value with derivative 0. Each state carries the nominal value
+model_structure.json gives it: what fmi2GetNominalsOfContinuousStates returns with the default
+parameters (1 for a state the default configuration does not have).
 
 Dependencies: an output depends directly on an input only where FEEDTHROUGH says so: the plate's
 accelerations on the shaker forces (Newton's law: a force changes the acceleration at once), and
@@ -69,10 +71,18 @@ def state_variables(structure):
         lines.append(
             f'    <ScalarVariable name="x.{state}" valueReference="{STATE_VR + k}" variability="continuous" initial="calculated"\n'
             f'      description="{description}">\n'
-            f"      <Real/>\n"
+            f"      <Real{nominal(structure, state)}/>\n"
             f"    </ScalarVariable>\n"
         )
     return lines
+
+
+def nominal(structure, state):
+    """The state's nominal attribute, its value the shortest text that reads back as the same
+    double; none while model_structure.json has no nominal for it (tests/state_nominals.rs fails
+    then)."""
+    value = structure.get("nominals", {}).get(state)
+    return "" if value is None else f' nominal="{float(value)!r}"'
 
 
 def derivative_variables(structure, position):

@@ -42,8 +42,9 @@ fn fmu_path() -> PathBuf {
     packaged::fresh_fmu(packaged::Version::Fmi3)
 }
 
-/// The FMI 3.0 XML as fmi-schema 0.8 reads it: `A=` of `<BaseUnit>` as `a=`, and `unit="..."`
-/// and `displayUnit="..."` left out of `<Float64>` (see the module doc).
+/// The FMI 3.0 XML as fmi-schema 0.8 reads it: `A=` of `<BaseUnit>` as `a=`, and `unit="..."`,
+/// `displayUnit="..."` and `nominal="..."` (valid FMI 3.0 the crate does not know) left out of
+/// `<Float64>` (see the module doc).
 fn crate_dialect(xml: &str) -> String {
     // Every attribute named A is BaseUnit's, which is all the renaming may touch.
     let places: Vec<usize> = xml.match_indices(" A=\"").map(|(i, _)| i).collect();
@@ -62,7 +63,7 @@ fn crate_dialect(xml: &str) -> String {
     for line in xml.replace(" A=\"", " a=\"").lines() {
         let mut line = line.to_string();
         if line.trim_start().starts_with("<Float64 ") {
-            for attribute in [" unit=\"", " displayUnit=\""] {
+            for attribute in [" unit=\"", " displayUnit=\"", " nominal=\""] {
                 if let Some(start) = line.find(attribute) {
                     let end = start
                         + attribute.len()
@@ -112,6 +113,8 @@ fn value_reference(name: &str) -> u32 {
 enum Setting {
     Boolean(bool),
     Int32(i32),
+    /// An Enumeration: FMI 3.0 sets it through fmi3SetInt64.
+    Int64(i64),
     Float64(f64),
 }
 
@@ -126,6 +129,7 @@ fn preset_settings(name: &str) -> Vec<(u32, Setting)> {
             let value = match var.kind {
                 Kind::Boolean { .. } => Setting::Boolean(*v == "true"),
                 Kind::Integer { .. } => Setting::Int32(v.parse().unwrap()),
+                Kind::Enumeration { .. } => Setting::Int64(v.parse().unwrap()),
                 _ => Setting::Float64(v.parse().unwrap()),
             };
             (value_reference(n), value)
@@ -147,6 +151,7 @@ fn run_fmi3(import: &Fmi3Import, preset: &str, r: f64, steps: usize) -> Trace {
         match value {
             Setting::Boolean(b) => inst.set_boolean(&[vr], &[b]),
             Setting::Int32(i) => inst.set_int32(&[vr], &[i]),
+            Setting::Int64(i) => inst.set_int64(&[vr], &[i]),
             Setting::Float64(x) => inst.set_float64(&[vr], &[x]),
         }
         .unwrap_or_else(|e| panic!("setting vr {vr}: {e:?}"));
@@ -217,6 +222,7 @@ fn run_fmi2(preset: &str, r: f64, steps: usize) -> Trace {
             let s = match value {
                 Setting::Boolean(b) => f2::fmi2SetBoolean(c, &vr, 1, &i32::from(b)),
                 Setting::Int32(i) => f2::fmi2SetInteger(c, &vr, 1, &i),
+                Setting::Int64(i) => f2::fmi2SetInteger(c, &vr, 1, &(i as i32)),
                 Setting::Float64(x) => f2::fmi2SetReal(c, &vr, 1, &x),
             };
             assert_eq!(s, Fmi2Status::Ok);

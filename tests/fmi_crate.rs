@@ -183,7 +183,9 @@ fn fmi_crate_imports_steps_and_restores_the_fmu() {
         let vr = var.value_reference;
         match var.kind {
             Kind::Boolean { .. } => inst.set_boolean(&[vr], &[i32::from(*value == "true")]),
-            Kind::Integer { .. } => inst.set_integer(&[vr], &[value.parse().unwrap()]),
+            Kind::Integer { .. } | Kind::Enumeration { .. } => {
+                inst.set_integer(&[vr], &[value.parse().unwrap()])
+            }
             _ => inst.set_real(&[vr], &[value.parse().unwrap()]),
         }
         .unwrap_or_else(|e| panic!("setting {name}: {e:?}"));

@@ -8,7 +8,10 @@
 //! depends on the union of what it depends on in those configurations. This test computes that
 //! union from the compiled models and compares it with `modelDescription/model_structure.json`,
 //! which `modelDescription/update.py` turns into the XML's state variables and dependencies; it
-//! also reads the XML back. After a change to the model:
+//! also reads the XML back. The file also holds each state's nominal value in the default
+//! configuration (1 for the states it does not have: what `fmi2GetNominalsOfContinuousStates`
+//! returns for them), which update.py writes into the XML's `nominal` attributes
+//! (tests/state_nominals.rs checks them against the FMU's functions). After a change to the model:
 //!
 //! ```text
 //! HSP_WRITE_MODEL_STRUCTURE=1 cargo test --release --test model_structure
@@ -123,8 +126,21 @@ fn structure() -> Value {
         let energy = outputs.entry("energy".into()).or_default();
         energy.extend(c.storage_states().into_iter().map(|i| sn[i].clone()));
     }
+    // The nominals of the default configuration, 1 for the states it lacks.
+    let p =
+        Parameters::from_values(&Values::from_start(&VARIABLES), &Experiment::default()).unwrap();
+    let default = Assembled::new(&p).unwrap();
+    let c = default.compiled();
+    let nominals: BTreeMap<&String, f64> = states
+        .iter()
+        .map(|s| {
+            let k = c.state_names().iter().position(|n| n == s);
+            (s, k.map_or(1.0, |k| default.nominal()[k]))
+        })
+        .collect();
     json!({
         "plate_modes": PLATE_MODES,
+        "nominals": nominals,
         "states": states,
         "derivatives": derivatives,
         "outputs": outputs,

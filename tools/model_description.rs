@@ -31,6 +31,12 @@ pub struct ModelDescription {
     pub default_experiment: Option<Attributes>,
     /// `<UnitDefinitions>`, in order.
     pub units: Vec<Unit>,
+    /// The enumeration types of `<TypeDefinitions>` (`<SimpleType>` with `<Enumeration>`), in
+    /// order.
+    pub enumerations: Vec<EnumerationType>,
+    /// The `<Tool>` elements of `<VendorAnnotations>`, by their `name`, with their child
+    /// elements' tag names and attributes.
+    pub vendor_annotations: Vec<(String, Vec<(String, Attributes)>)>,
     /// `<ModelVariables>`: the scalar variables in order (position `i` is FMI's index `i + 1`).
     pub variables: Vec<ScalarVariable>,
     /// `<ModelStructure>`.
@@ -44,6 +50,22 @@ pub struct Unit {
     /// The attributes of its `<BaseUnit>` (exponents `kg`, `m`, ..., `factor`, `offset`), if any.
     pub base_unit: Option<Attributes>,
     pub display_units: Vec<DisplayUnit>,
+}
+
+/// A `<SimpleType>` whose type element is `<Enumeration>`.
+#[derive(Debug)]
+pub struct EnumerationType {
+    pub name: String,
+    pub description: Option<String>,
+    pub items: Vec<Item>,
+}
+
+/// An `<Item>` of an `<Enumeration>` type (its `value` as text, as the other numbers here).
+#[derive(Debug)]
+pub struct Item {
+    pub name: String,
+    pub value: String,
+    pub description: Option<String>,
 }
 
 /// A `<DisplayUnit>`: a value in it is `factor * value + offset`, the value in the unit.
@@ -75,6 +97,10 @@ pub struct ScalarVariable {
     pub max: Option<String>,
     pub unit: Option<String>,
     pub display_unit: Option<String>,
+    /// `declaredType`: the name of a `<SimpleType>` (an Enumeration variable's type).
+    pub declared_type: Option<String>,
+    /// `nominal` (Real variables).
+    pub nominal: Option<String>,
     /// `derivative`: the 1-based index of the variable this one is the derivative of.
     pub derivative: Option<String>,
 }
@@ -110,6 +136,29 @@ impl ModelDescription {
                 units.push(unit(u)?);
             }
         }
+        let mut enumerations = Vec::new();
+        if let Some(defs) = child("TypeDefinitions") {
+            for t in defs.children().filter(|n| n.has_tag_name("SimpleType")) {
+                if let Some(e) = t.children().find(|n| n.has_tag_name("Enumeration")) {
+                    enumerations.push(enumeration(t, e)?);
+                }
+            }
+        }
+        let vendor_annotations = child("VendorAnnotations")
+            .map(|v| {
+                v.children()
+                    .filter(|n| n.has_tag_name("Tool"))
+                    .map(|tool| {
+                        let content = tool
+                            .children()
+                            .filter(|n| n.is_element())
+                            .map(|n| (n.tag_name().name().to_string(), attributes(n)))
+                            .collect();
+                        (tool.attribute("name").unwrap_or("").to_string(), content)
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
         let variables = child("ModelVariables")
             .ok_or("no <ModelVariables>")?
             .children()
@@ -134,6 +183,8 @@ impl ModelDescription {
             model_exchange: child("ModelExchange").map(attributes),
             default_experiment: child("DefaultExperiment").map(attributes),
             units,
+            enumerations,
+            vendor_annotations,
             variables,
             structure: ModelStructure {
                 outputs: list("Outputs")?,
@@ -146,6 +197,11 @@ impl ModelDescription {
     /// The value of the root's attribute `name`.
     pub fn attribute(&self, name: &str) -> Option<&str> {
         get(&self.attributes, name)
+    }
+
+    /// The enumeration type named `name`.
+    pub fn enumeration(&self, name: &str) -> Option<&EnumerationType> {
+        self.enumerations.iter().find(|t| t.name == name)
     }
 
     /// The unit named `name`.
@@ -192,6 +248,32 @@ fn unit(u: roxmltree::Node) -> Result<Unit, String> {
     })
 }
 
+fn enumeration(t: roxmltree::Node, e: roxmltree::Node) -> Result<EnumerationType, String> {
+    let name = t.attribute("name").ok_or("a SimpleType has no name")?;
+    let items = e
+        .children()
+        .filter(|n| n.has_tag_name("Item"))
+        .map(|i| {
+            Ok(Item {
+                name: i
+                    .attribute("name")
+                    .ok_or(format!("type '{name}': an Item has no name"))?
+                    .to_string(),
+                value: i
+                    .attribute("value")
+                    .ok_or(format!("type '{name}': an Item has no value"))?
+                    .to_string(),
+                description: i.attribute("description").map(str::to_string),
+            })
+        })
+        .collect::<Result<_, String>>()?;
+    Ok(EnumerationType {
+        name: name.to_string(),
+        description: t.attribute("description").map(str::to_string),
+        items,
+    })
+}
+
 fn variable(position: usize, sv: roxmltree::Node) -> Result<ScalarVariable, String> {
     let name = sv
         .attribute("name")
@@ -220,6 +302,8 @@ fn variable(position: usize, sv: roxmltree::Node) -> Result<ScalarVariable, Stri
         max: typed("max"),
         unit: typed("unit"),
         display_unit: typed("displayUnit"),
+        declared_type: typed("declaredType"),
+        nominal: typed("nominal"),
         derivative: typed("derivative"),
     })
 }

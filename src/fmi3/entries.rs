@@ -8,7 +8,7 @@
 
 use super::ffi::*;
 use super::logger::{Fmi3Sink, VOCABULARY};
-use super::variables::{fmi3_type_name, Fmi3Table, TIME_VALUE_REFERENCE};
+use super::variables::{fmi3_reaches, fmi3_type_name, Fmi3Table, TIME_VALUE_REFERENCE};
 use crate::fmu::boundary::{
     self as core, c_str, instantiate as make, slice, slice_mut, with_instance,
 };
@@ -64,7 +64,7 @@ fn expand<M: FmuModel>(
         };
         let first = &variables[v.first];
         let found = fmi3_type_name(&first.kind);
-        if found != type_name {
+        if !fmi3_reaches(type_name, &first.kind) {
             return Err(format!(
                 "{function}: value reference {vr} is '{}', a {found}, not a {type_name}",
                 v.name
@@ -141,7 +141,8 @@ unsafe fn instantiate<M: FmuModel>(
 fn table_type_name(fmi3: &str) -> &'static str {
     match fmi3 {
         "Float64" => "Real",
-        "Int32" => "Integer",
+        // An Enumeration's values are Integers (reached through Int64, or Int32).
+        "Int32" | "Int64" => "Integer",
         "Boolean" => "Boolean",
         "String" => "String",
         _ => "",
@@ -269,7 +270,8 @@ pub unsafe fn set_debug_logging<M: FmuModel>(
     status.into()
 }
 
-/// The getters for the types the model has: `fmi3GetFloat64`, `fmi3GetInt32`, `fmi3GetBoolean`.
+/// The getters for the types the model has: `fmi3GetFloat64`, `fmi3GetInt32`, `fmi3GetInt64`
+/// (Enumerations), `fmi3GetBoolean`.
 ///
 /// # Safety
 /// As `fmi3GetFloat64`: `vrs` holds `n_vrs` elements, `values` `n_values`.
@@ -316,7 +318,7 @@ pub unsafe fn get_values<M: FmuModel, T: Copy + Default>(
     .into()
 }
 
-/// The setters: `fmi3SetFloat64`, `fmi3SetInt32`, `fmi3SetBoolean`.
+/// The setters: `fmi3SetFloat64`, `fmi3SetInt32`, `fmi3SetInt64` (Enumerations), `fmi3SetBoolean`.
 ///
 /// # Safety
 /// As `fmi3SetFloat64`: `vrs` holds `n_vrs` elements, `values` `n_values`.

@@ -384,7 +384,33 @@ macro_rules! export_fmi3 {
             $crate::__fmi3_no_such_type!(fmi3GetInt16, fmi3SetInt16, i16, "Int16");
             $crate::__fmi3_no_such_type!(fmi3GetUInt16, fmi3SetUInt16, u16, "UInt16");
             $crate::__fmi3_no_such_type!(fmi3GetUInt32, fmi3SetUInt32, u32, "UInt32");
-            $crate::__fmi3_no_such_type!(fmi3GetInt64, fmi3SetInt64, i64, "Int64");
+            // Enumerations (FMI 3.0 reaches them through Int64; values outside i32 are no item,
+            // and saturate into a value the item check refuses).
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetInt64(
+                c: Fmi3Instance,
+                vr: *const Fmi3ValueReference,
+                nvr: usize,
+                v: *mut i64,
+                nv: usize,
+            ) -> Fmi3Status {
+                x::get_values::<M, i64>(table(), c, "fmi3GetInt64", "Int64", vr, nvr, v, nv, |v| match v {
+                    Value::Integer(x) => i64::from(*x),
+                    _ => 0,
+                })
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetInt64(
+                c: Fmi3Instance,
+                vr: *const Fmi3ValueReference,
+                nvr: usize,
+                v: *const i64,
+                nv: usize,
+            ) -> Fmi3Status {
+                x::set_values::<M, i64>(table(), c, "fmi3SetInt64", "Int64", vr, nvr, v, nv, |v| {
+                    Value::Integer(v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+                })
+            }
             $crate::__fmi3_no_such_type!(fmi3GetUInt64, fmi3SetUInt64, u64, "UInt64");
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetBinary(

@@ -27,13 +27,25 @@ pub struct Fmi3Variable {
     pub len: usize,
 }
 
-/// The FMI 3.0 type name of an FMI 2.0 kind.
+/// The FMI 3.0 type name (the XML's element) of an FMI 2.0 kind.
 pub fn fmi3_type_name(kind: &Kind) -> &'static str {
     match kind {
         Kind::Real { .. } => "Float64",
         Kind::Integer { .. } => "Int32",
         Kind::Boolean { .. } => "Boolean",
         Kind::String { .. } => "String",
+        Kind::Enumeration { .. } => "Enumeration",
+    }
+}
+
+/// Whether the getter and setter of FMI 3.0 type `abi` (`fmi3GetInt64`: "Int64") reach a
+/// variable of `kind`: its own type's, and for an Enumeration `fmi3GetInt64`/`fmi3SetInt64`
+/// (FMI 3.0, 2.4.7) and, for importers written against the earlier Integer switches, the Int32
+/// pair (the values are 32-bit integers either way).
+pub fn fmi3_reaches(abi: &str, kind: &Kind) -> bool {
+    match kind {
+        Kind::Enumeration { .. } => matches!(abi, "Int64" | "Int32"),
+        other => fmi3_type_name(other) == abi,
     }
 }
 
@@ -42,6 +54,14 @@ fn family(name: &str) -> Option<(&str, usize)> {
     let open = name.rfind('[')?;
     let index = name.strip_suffix(']')?.get(open + 1..)?.parse().ok()?;
     Some((&name[..open], index))
+}
+
+/// The declared type of an Enumeration.
+fn declared(k: &Kind) -> Option<&'static str> {
+    match k {
+        Kind::Enumeration { declared, .. } => Some(declared.name),
+        _ => None,
+    }
 }
 
 /// Whether two variables may be elements of one array: everything but the start value and the
@@ -60,6 +80,7 @@ fn same_signature(a: &Variable, b: &Variable) -> bool {
         && a.variability == b.variability
         && a.unit == b.unit
         && bounds(&a.kind) == bounds(&b.kind)
+        && declared(&a.kind) == declared(&b.kind)
 }
 
 /// The FMI 3.0 variables of a model, looked up by value reference.

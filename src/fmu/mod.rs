@@ -34,7 +34,7 @@ pub mod variables;
 pub use calls::Interface;
 use serde::{de::DeserializeOwned, Serialize};
 pub use status::Status;
-pub use variables::{Causality, Kind, Value, Values, Variability, Variable};
+pub use variables::{Causality, EnumerationType, Item, Kind, Value, Values, Variability, Variable};
 
 /// The experiment the importer sets up (FMI 2.0 `fmi2SetupExperiment`, FMI 3.0
 /// `fmi3EnterInitializationMode`).

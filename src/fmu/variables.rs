@@ -25,6 +25,44 @@ pub enum Variability {
     Continuous,
 }
 
+/// An enumeration type of `<TypeDefinitions>` (`<SimpleType>` with `<Enumeration>`): the
+/// values a variable of it may take, each with a name.
+#[derive(Debug, PartialEq, Eq)]
+pub struct EnumerationType {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub items: &'static [Item],
+}
+
+/// One `<Item>` of an enumeration type.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Item {
+    pub name: &'static str,
+    pub value: i32,
+    pub description: &'static str,
+}
+
+impl EnumerationType {
+    /// The item of value `value`, if there is one.
+    pub fn item(&self, value: i32) -> Option<&'static Item> {
+        self.items.iter().find(|i| i.value == value)
+    }
+
+    /// The items as `1 = Loes, 2 = ServoValve`, for messages.
+    pub fn listing(&self) -> String {
+        self.items
+            .iter()
+            .map(|i| format!("{} = {}", i.value, i.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// The error for a value that is no item: `3 is not a HydraulicsModel (1 = Loes, ...)`.
+    pub fn not_an_item(&self, value: i32) -> String {
+        format!("{value} is not a {} ({})", self.name, self.listing())
+    }
+}
+
 /// The base type of a ScalarVariable, with its start value where the XML gives one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Kind {
@@ -44,6 +82,12 @@ pub enum Kind {
     String {
         start: Option<&'static str>,
     },
+    /// An Integer restricted to the items of its declared type; its values are
+    /// [`Value::Integer`], got and set as Integers.
+    Enumeration {
+        start: Option<i32>,
+        declared: &'static EnumerationType,
+    },
 }
 
 impl Kind {
@@ -54,6 +98,16 @@ impl Kind {
             Kind::Integer { .. } => "Integer",
             Kind::Boolean { .. } => "Boolean",
             Kind::String { .. } => "String",
+            Kind::Enumeration { .. } => "Enumeration",
+        }
+    }
+
+    /// The type of the values, and so of the getters and setters that reach them: an
+    /// Enumeration's values are Integers; every other kind is its own.
+    pub fn value_type(&self) -> &'static str {
+        match self {
+            Kind::Enumeration { .. } => "Integer",
+            other => other.type_name(),
         }
     }
 }
@@ -125,6 +179,9 @@ impl Values {
                 Kind::Integer { start, .. } => Value::Integer(start.unwrap_or(0)),
                 Kind::Boolean { start } => Value::Boolean(start.unwrap_or(false)),
                 Kind::String { start } => Value::String(start.unwrap_or("").to_string()),
+                Kind::Enumeration { start, declared } => {
+                    Value::Integer(start.unwrap_or(declared.items[0].value))
+                }
             })
             .collect();
         Values {
@@ -242,13 +299,17 @@ pub fn check_value(var: &Variable, value: &Value) -> Result<(), String> {
             check_range(var.name, *v, min, max)
         }
         (Kind::Integer { min, max, .. }, Value::Integer(v)) => check_range(var.name, *v, min, max),
+        (Kind::Enumeration { declared, .. }, Value::Integer(v)) => match declared.item(*v) {
+            Some(_) => Ok(()),
+            None => Err(format!("{}: {}", var.name, declared.not_an_item(*v))),
+        },
         (Kind::Boolean { .. }, Value::Boolean(_)) | (Kind::String { .. }, Value::String(_)) => {
             Ok(())
         }
         (kind, value) => Err(format!(
             "{} is a {}, not a {}",
             var.name,
-            kind.type_name(),
+            kind.value_type(),
             match value {
                 Value::Real(_) => "Real",
                 Value::Integer(_) => "Integer",

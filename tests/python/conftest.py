@@ -67,7 +67,8 @@ def apply_preset(slave, md, name):
     kinds = {v.name: (v.type, v.valueReference) for v in md.modelVariables}
     for var, value in _presets()[name].items():
         kind, ref = kinds[var]
-        {"Real": slave.setReal, "Integer": slave.setInteger, "Boolean": slave.setBoolean}[kind]([ref], [value])
+        {"Real": slave.setReal, "Integer": slave.setInteger, "Enumeration": slave.setInteger,
+         "Boolean": slave.setBoolean}[kind]([ref], [value])
 
 
 class Recorder:

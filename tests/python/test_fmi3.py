@@ -123,7 +123,7 @@ def test_serialized_state_continues_in_another_process_bit_for_bit(fmu3_path, tm
     s = FMU3Slave(guid=md.instantiationToken, unzipDirectory=extract(fmu3_path),
                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="parent")
     s.instantiate()
-    s.setInt32([vr["hydraulics.model"]], [2])
+    s.setInt64([vr["hydraulics.model"]], [2])
     s.enterInitializationMode(startTime=0.0)
     s.setFloat64([vr["r"]], [1.0])
     s.exitInitializationMode()

@@ -290,6 +290,21 @@ impl Instance<'_> {
         match var.kind {
             Kind::Real { .. } => self.set_real(vr, text.parse().map_err(|_| bad())?),
             Kind::Integer { .. } => self.set_integer(vr, text.parse().map_err(|_| bad())?),
+            // An item by its value or its name (`plate.root=2` or `plate.root=Locked`).
+            Kind::Enumeration { declared, .. } => {
+                let value = text.parse().ok().or_else(|| {
+                    let item = declared.items.iter().find(|i| i.name == text);
+                    item.map(|i| i.value)
+                });
+                let bad = || {
+                    format!(
+                        "--set {name}: '{text}' is not a {} ({})",
+                        declared.name,
+                        declared.listing()
+                    )
+                };
+                self.set_integer(vr, value.ok_or_else(bad)?)
+            }
             Kind::Boolean { .. } => match text {
                 "true" | "1" => self.set_boolean(vr, true),
                 "false" | "0" => self.set_boolean(vr, false),

@@ -24,11 +24,11 @@ impl<M: FmuModel> Instance<M> {
             return Err(self.refuse(&format!("unknown value reference {vr}")));
         };
         let var = &M::variables()[index];
-        if var.kind.type_name() != type_name {
+        if var.kind.value_type() != type_name {
             return Err(self.refuse(&format!(
                 "value reference {vr} is '{}', a {}, not a {type_name}",
                 var.name,
-                var.kind.type_name()
+                var.kind.value_type()
             )));
         }
         Ok(index)

@@ -26,20 +26,6 @@ pub enum CoilDrive {
     Current,
 }
 
-impl CoilDrive {
-    /// The drive of the FMU's integer code (1 = voltage, 2 = current), or an error naming
-    /// `servo_valve.drive`.
-    pub fn from_code(code: i32) -> Result<Self, String> {
-        match code {
-            1 => Ok(CoilDrive::Voltage),
-            2 => Ok(CoilDrive::Current),
-            other => Err(format!(
-                "servo_valve.drive: {other} is not a coil drive (1 = voltage, 2 = current feedback)"
-            )),
-        }
-    }
-}
-
 /// Every physical constant of the full servo valve and actuator (SI units). The FMU names are
 /// `servo_valve.<name>` with the names in brackets. Ranges quoted are those of two-stage
 /// flapper-nozzle valves with mechanical feedback (README, "The full servo valve").

@@ -97,12 +97,29 @@ fn variable_table(md: &ModelDescription, causalities: &[&str], s: &mut String) {
             _ => String::new(),
         };
         let opt = |o: &Option<String>| o.as_deref().map(short_text).unwrap_or_default();
+        // An Enumeration's type with its items: `Enumeration PlateRoot (1 = Hub, 2 = Locked)`.
+        let kind = match v.declared_type.as_deref().and_then(|t| md.enumeration(t)) {
+            Some(t) => {
+                let items: Vec<String> = t
+                    .items
+                    .iter()
+                    .map(|i| format!("{} = {}", i.value, i.name))
+                    .collect();
+                format!(
+                    "{} {} ({})",
+                    v.kind,
+                    escape(&t.name),
+                    escape(&items.join(", "))
+                )
+            }
+            None => v.kind.clone(),
+        };
         writeln!(
             s,
             "<tr><td><code>{}</code></td><td>{}</td><td>{} / {}</td><td>{}</td><td>{}</td>\
              <td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             escape(&v.name),
-            v.kind,
+            kind,
             v.causality,
             v.variability,
             settable(v),
