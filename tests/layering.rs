@@ -21,6 +21,13 @@ fn sources(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
+/// `line` up to its comment: the first `//` outside a string literal (a URI, say).
+fn without_comment(line: &str) -> &str {
+    line.match_indices("//")
+        .find(|(at, _)| line[..*at].matches('"').count() % 2 == 0)
+        .map_or(line, |(at, _)| &line[..at])
+}
+
 /// The code of a file without its comments (line comments and doc comments; the crate uses no
 /// block comments), with line numbers.
 fn code_lines(path: &Path) -> Vec<(usize, String)> {
@@ -28,11 +35,7 @@ fn code_lines(path: &Path) -> Vec<(usize, String)> {
     text.lines()
         .enumerate()
         .filter_map(|(i, line)| {
-            // The first `//` outside a string literal (a URI, say) starts the comment.
-            let code = line
-                .match_indices("//")
-                .find(|(at, _)| line[..*at].matches('"').count() % 2 == 0)
-                .map_or(line, |(at, _)| &line[..at]);
+            let code = without_comment(line);
             (!code.trim().is_empty()).then(|| (i + 1, code.to_string()))
         })
         .collect()
@@ -106,7 +109,7 @@ fn every_unsafe_block_says_why_it_is_sound() {
         let text = std::fs::read_to_string(&path).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         for (i, line) in lines.iter().enumerate() {
-            let code = line.split("//").next().unwrap_or("");
+            let code = without_comment(line);
             let block = code.contains("unsafe {") || code.contains("unsafe impl");
             if block
                 && !lines[i.saturating_sub(4)..=i]

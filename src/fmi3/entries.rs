@@ -744,16 +744,11 @@ pub unsafe fn partial_derivative<M: FmuModel>(
 }
 
 /// Logs why an instantiation is refused and returns NULL.
-///
-/// # Safety
-/// `name` is NULL or NUL-terminated; `log` NULL or a valid callback.
-pub unsafe fn refuse_instantiation<M: FmuModel>(
-    name: Fmi3String,
+pub fn refuse_instantiation<M: FmuModel>(
     environment: Fmi3InstanceEnvironment,
     log_message: Fmi3LogMessageCallback,
     message: &str,
 ) -> Fmi3Instance {
-    let _ = name;
     make::<M>(|| {
         let sink = Box::new(Fmi3Sink {
             environment,
@@ -769,7 +764,7 @@ pub const VERSION: &std::ffi::CStr = c"3.0";
 /// Reads a one-byte C `bool` without assuming it holds 0 or 1 (any other byte would be undefined
 /// behaviour as a Rust `bool`).
 pub fn boolean(byte: u8) -> Value {
-    Value::Boolean(byte != 0)
+    Value::Boolean(super::ffi::truthy(byte))
 }
 
 /// A call with no arguments but the instance.

@@ -149,7 +149,7 @@ macro_rules! export_fmi3 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
-                name: Fmi3String,
+                _name: Fmi3String,
                 _token: Fmi3String,
                 _resources: Fmi3String,
                 _visible: Fmi3Boolean,
@@ -160,11 +160,7 @@ macro_rules! export_fmi3 {
                 _lock: Fmi3PreemptionCallback,
                 _unlock: Fmi3PreemptionCallback,
             ) -> Fmi3Instance {
-                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
-                // the contract of the entry point it forwards to.
-                unsafe {
-                    x::refuse_instantiation::<M>(name, env, log, "fmi3InstantiateScheduledExecution: this FMU does not offer scheduled execution")
-                }
+                x::refuse_instantiation::<M>(env, log, "fmi3InstantiateScheduledExecution: this FMU does not offer scheduled execution")
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
@@ -394,10 +390,14 @@ macro_rules! export_fmi3 {
                 v: *mut i64,
                 nv: usize,
             ) -> Fmi3Status {
-                x::get_values::<M, i64>(table(), c, "fmi3GetInt64", "Int64", vr, nvr, v, nv, |v| match v {
-                    Value::Integer(x) => i64::from(*x),
-                    _ => 0,
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::get_values::<M, i64>(table(), c, "fmi3GetInt64", "Int64", vr, nvr, v, nv, |v| match v {
+                        Value::Integer(x) => i64::from(*x),
+                        _ => 0,
+                    })
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetInt64(
@@ -407,9 +407,13 @@ macro_rules! export_fmi3 {
                 v: *const i64,
                 nv: usize,
             ) -> Fmi3Status {
-                x::set_values::<M, i64>(table(), c, "fmi3SetInt64", "Int64", vr, nvr, v, nv, |v| {
-                    Value::Integer(v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
-                })
+                // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
+                // the contract of the entry point it forwards to.
+                unsafe {
+                    x::set_values::<M, i64>(table(), c, "fmi3SetInt64", "Int64", vr, nvr, v, nv, |v| {
+                        Value::Integer(v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+                    })
+                }
             }
             $crate::__fmi3_no_such_type!(fmi3GetUInt64, fmi3SetUInt64, u64, "UInt64");
             #[no_mangle]

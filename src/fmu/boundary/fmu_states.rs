@@ -47,6 +47,22 @@ unsafe fn checked_state<'a, M: FmuModel>(
     unsafe { fmu_state(inst, state) }
 }
 
+/// What [`get`] and [`free`] check before they touch `*state`: the slot is not NULL and the
+/// instance may use FMU states now; then the call is logged.
+fn open_slot<M: FmuModel>(
+    inst: &mut Instance<M>,
+    function: &'static str,
+    state: *mut Handle,
+) -> Result<(), Status> {
+    if state.is_null() {
+        let argument = inst.vocabulary().fmu_state;
+        return Err(inst.refuse(&format!("argument '{argument}' is NULL")));
+    }
+    inst.check_fmu_state_call()?;
+    inst.log_call(|| format!("{function}()"));
+    Ok(())
+}
+
 /// Saves the instance into a new FMU state at `*state`, or into the one `*state` holds (handed
 /// back to be overwritten, FMI 2.0.4 2.1.8).
 ///
@@ -57,14 +73,9 @@ pub unsafe fn get<M: FmuModel>(c: Handle, function: &'static str, state: *mut Ha
     // SAFETY: as this function's contract.
     unsafe {
         with_instance::<M>(c, function, |inst| {
-            if state.is_null() {
-                let argument = inst.vocabulary().fmu_state;
-                return inst.refuse(&format!("argument '{argument}' is NULL"));
-            }
-            if let Err(s) = inst.check_fmu_state_call() {
+            if let Err(s) = open_slot(inst, function, state) {
                 return s;
             }
-            inst.log_call(|| format!("{function}()"));
             if (*state).is_null() {
                 *state = Box::into_raw(Box::new(inst.save())) as Handle;
             } else {
@@ -105,14 +116,9 @@ pub unsafe fn free<M: FmuModel>(c: Handle, function: &'static str, state: *mut H
     // SAFETY: as this function's contract.
     unsafe {
         with_instance::<M>(c, function, |inst| {
-            if state.is_null() {
-                let argument = inst.vocabulary().fmu_state;
-                return inst.refuse(&format!("argument '{argument}' is NULL"));
-            }
-            if let Err(s) = inst.check_fmu_state_call() {
+            if let Err(s) = open_slot(inst, function, state) {
                 return s;
             }
-            inst.log_call(|| format!("{function}()"));
             if !(*state).is_null() {
                 match fmu_state(inst, *state) {
                     Ok(saved) => {
