@@ -24,7 +24,7 @@ fn sources(dir: &Path) -> Vec<PathBuf> {
 /// `line` up to its comment: the first `//` outside a string literal (a URI, say).
 fn without_comment(line: &str) -> &str {
     line.match_indices("//")
-        .find(|(at, _)| line[..*at].matches('"').count() % 2 == 0)
+        .find(|(at, _)| line[..*at].matches('"').count().is_multiple_of(2))
         .map_or(line, |(at, _)| &line[..at])
 }
 
