@@ -11,6 +11,7 @@ import pathlib
 import shutil
 import subprocess
 import tempfile
+import zipfile
 
 import numpy as np
 import pytest
@@ -23,12 +24,36 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 FMU = ROOT / "fmu" / "HydraulicSlewingPlate.fmu"
 
 
+def hsp(*args):
+    """Runs `hsp` built from the checkout's sources (cargo rebuilds it when they changed)."""
+    return subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", *args],
+                          cwd=ROOT, capture_output=True, text=True, check=True).stdout
+
+
+def packaged_source_hash(path, platform="linux64"):
+    """The source hash the FMU's Linux binary carries (`hsp-source-hash:<hash>`, written by
+    build.rs; `hsp source-hash` prints the checkout's), or None. `platform` is the binaries folder:
+    linux64 in FMI 2.0, x86_64-linux in FMI 3.0."""
+    try:
+        with zipfile.ZipFile(path) as z:
+            binary = z.read(f"binaries/{platform}/HydraulicSlewingPlate.so")
+    except (OSError, KeyError, zipfile.BadZipFile):
+        return None
+    prefix = b"hsp-source-hash:"
+    at = binary.find(prefix)
+    return None if at < 0 else binary[at + len(prefix):at + len(prefix) + 16].decode()
+
+
 @pytest.fixture(scope="session")
 def fmu_path():
-    """The packaged FMU (built by the test command before pytest runs; built here if missing)."""
-    if not FMU.exists():
-        subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", "package"],
-                       cwd=ROOT, check=True)
+    """The packaged FMU, built from the checkout's sources: the test command builds it before
+    pytest runs; a missing or stale one (its binary's source hash differs from the checkout's)
+    is rebuilt here with `hsp package`."""
+    this = hsp("source-hash").strip()
+    if packaged_source_hash(FMU) != this:
+        hsp("package")
+    found = packaged_source_hash(FMU)
+    assert found == this, f"{FMU} carries source hash {found}, the checkout {this}"
     return str(FMU)
 
 
@@ -51,9 +76,7 @@ def vr(md):
 
 @functools.lru_cache(maxsize=None)
 def _presets():
-    out = subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", "presets", "--json"],
-                         cwd=ROOT, capture_output=True, text=True, check=True)
-    return {p["name"]: p["settings"] for p in json.loads(out.stdout)}
+    return {p["name"]: p["settings"] for p in json.loads(hsp("presets", "--json"))}
 
 
 def preset(name, **extra):

@@ -14,17 +14,16 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
-from conftest import ROOT, closed_loop_step, preset
+from conftest import ROOT, closed_loop_step, packaged_source_hash, preset
 
 FMU3 = ROOT / "fmu" / "fmi3" / "HydraulicSlewingPlate.fmu"
 
 
 @pytest.fixture(scope="session")
 def fmu3_path(fmu_path):
-    """Written by `hsp package` beside the FMI 2.0 FMU (the fmu_path fixture builds both)."""
-    if not FMU3.exists():
-        subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", "package"],
-                       cwd=ROOT, check=True)
+    """Written by `hsp package` beside the FMI 2.0 FMU (the fmu_path fixture builds both from the
+    checkout's sources); checked to carry the same source hash."""
+    assert packaged_source_hash(FMU3, "x86_64-linux") == packaged_source_hash(fmu_path), FMU3
     return str(FMU3)
 
 

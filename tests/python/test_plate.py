@@ -2,16 +2,13 @@
 
 import json
 import math
-import pathlib
-import subprocess
 
 import numpy as np
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import preset
+from conftest import hsp, preset
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
 ACC = [f"acc[{k}]" for k in range(1, 13)]
 OUTPUTS = ["y_pot", "theta_motor", "theta_hub", "omega_hub", "torsion_bar.torque", "w_tip", "acc_tip", "energy"] + ACC
 
@@ -66,9 +63,7 @@ def test_forcing_f1_on_the_locked_plate(fmu_path):
 
 
 def test_hsp_modes_json():
-    out = subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", "modes", "--json",
-                          "--set", "plate.formulation=2"], cwd=ROOT, capture_output=True, text=True, check=True)
-    d = json.loads(out.stdout)
+    d = json.loads(hsp("modes", "--json", "--set", "plate.formulation=2"))
     assert len(d["f_hz"]) == len(d["labels"]) == 15
     assert d["f_hz"] == sorted(d["f_hz"])
     assert all(lbl.startswith("(") and lbl.endswith(")") for lbl in d["labels"])

@@ -1,18 +1,10 @@
 """The plots of `hsp`: `hsp run` writes PNG and SVG beside its CSV (not with --no-plot), `hsp frf
 --plot` a Bode plot; the files are real, non-trivial pictures."""
 
-import pathlib
-import subprocess
 import xml.etree.ElementTree as ET
 
+from conftest import hsp
 from figures import assert_png, assert_svg, png_size
-
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-
-
-def hsp(*args):
-    return subprocess.run(["cargo", "run", "--release", "--quiet", "--bin", "hsp", "--", *args],
-                          cwd=ROOT, check=True, capture_output=True, text=True).stdout
 
 
 def test_run_writes_png_and_svg_beside_the_csv(fmu_path, tmp_path):

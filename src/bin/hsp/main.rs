@@ -91,6 +91,9 @@ enum Command {
     },
     /// Run the default experiment (a slewing manoeuvre) through the FMU's C ABI and summarise it
     Run(run::RunArgs),
+    /// Print the hash of the sources this build is made from; a packaged FMU's binary carries it
+    /// as `hsp-source-hash:<hash>`, so a test can tell a stale FMU from a fresh one
+    SourceHash,
     /// List the named parameter sets (the paper's configurations) for --preset
     Presets {
         /// Print JSON: [{"name", "paper", "description", "settings": {NAME: value}}]
@@ -320,6 +323,10 @@ fn main() -> ExitCode {
                     println!("wrote {}", p.display());
                 }
             })
+        }
+        Command::SourceHash => {
+            println!("{}", hydraulic_slewing_plate::SOURCE_HASH);
+            Ok(())
         }
         Command::Presets { json } => {
             println!("{}", presets_text(json));
