@@ -3,7 +3,11 @@
 continuous states and their derivatives (the last variables, from model_structure.json),
 <ModelStructure> (Outputs, Derivatives and InitialUnknowns, by 1-based position, with their
 dependencies) and the GUID (a hash of the file with the GUID left out). build.rs stays the judge:
-it fails the build if any is stale. Usage: python3 modelDescription/update.py (needs rustc)
+it fails the build if any is stale. Usage: python3 modelDescription/update.py [--structure]
+(needs rustc). With --structure it also rewrites model_structure.json from the compiled model
+(the states and the dependencies, through tests/model_structure.rs, with cargo) and then the XML
+again: the one command after adding an output or a state, or changing which states a
+configuration has.
 
 One source per rule: the XML is read through reader.py (ElementTree), the reader fmi3.py uses too;
 regular expressions here only rewrite text (the state block, <ModelStructure>, the guid value), so
@@ -190,5 +194,20 @@ def main():
     fmi3.main()
 
 
+def write_structure():
+    """Rewrites model_structure.json from the compiled model (tests/model_structure.rs). The XML
+    must be current first: the crate's build refuses a stale GUID."""
+    import os
+
+    root = pathlib.Path(__file__).resolve().parent.parent
+    env = {**os.environ, "HSP_WRITE_MODEL_STRUCTURE": "1"}
+    subprocess.run(["cargo", "test", "--release", "--quiet", "--test", "model_structure"], cwd=root, env=env, check=True)
+
+
 if __name__ == "__main__":
+    import sys
+
     main()
+    if "--structure" in sys.argv[1:]:
+        write_structure()
+        main()

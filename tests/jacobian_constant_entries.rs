@@ -5,10 +5,10 @@
 
 use hydraulic_slewing_plate::bond_graph::CompiledModel;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
-use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};
 use hydraulic_slewing_plate::model::parameters::Parameters;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
+use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
 use nalgebra::DMatrix;
 
 fn parameters(preset: &str) -> Parameters {

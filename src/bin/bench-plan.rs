@@ -11,10 +11,10 @@ use hydraulic_slewing_plate::bond_graph::{BondGraph, CompiledModel};
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::{self, LoesParameters};
-use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};
 use hydraulic_slewing_plate::model::parameters::Parameters;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
+use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
 use nalgebra::DMatrix;
 
 /// A chain of `n` masses and springs driven by a force: 2n states.

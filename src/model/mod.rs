@@ -5,14 +5,16 @@
 //! - [`variables`]: the generated variable table (positions and value references by name).
 //! - [`parameters`]: the typed parameter set read from the FMU's values, and `--set NAME=VALUE`.
 //! - [`presets`]: the paper's configurations as named parameter sets (`hsp run --preset NAME`).
-//! - [`assembly`]: which fragments make up the model for a parameter set, and the resulting
-//!   [`OdeSystem`].
+//! - [`compose`]: which fragments make up the model for a parameter set, as one bond graph.
+//! - [`assembly`]: that graph compiled, with its inputs, outputs and states placed among the FMU's
+//!   variables: the [`OdeSystem`] the integrator advances.
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`validity`]: the warnings of the validity monitors at the communication points.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
 mod affine;
 pub mod assembly;
+pub mod compose;
 pub mod frf;
 pub mod parameters;
 pub mod presets;
@@ -124,7 +126,7 @@ impl HydraulicSlewingPlate {
             return Err("the model was not built".into());
         };
         system.set_inputs(values);
-        assembly::write_plate_frequencies(parameters, values)?;
+        compose::write_plate_frequencies(parameters, values)?;
         let integrator = Integrator::new(
             parameters.solver_options(system),
             experiment.start_time,

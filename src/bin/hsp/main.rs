@@ -39,7 +39,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
-use hydraulic_slewing_plate::model::assembly::{bond_graph, plate_modes, Assembled};
+use hydraulic_slewing_plate::model::assembly::Assembled;
+use hydraulic_slewing_plate::model::compose::{bond_graph, plate_modes};
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;

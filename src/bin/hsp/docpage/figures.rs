@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
-use hydraulic_slewing_plate::model::assembly::{bond_graph, Assembled};
 use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
+use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
 
 use crate::plot;
 
