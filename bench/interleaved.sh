@@ -4,6 +4,7 @@
 # alike); compare the median of the rounds.
 #
 #   bash bench/interleaved.sh OLD.fmu NEW.fmu [ROUNDS]      (after cargo build --release)
+#   ROUNDS=5 bash bench/interleaved.sh FMU                  (one FMU alone: its median and range)
 #
 # OLD_BENCH=path/to/old/bench-fmu runs the old FMU with the old build's own bench binary (whose
 # configuration names set only variables that FMU knows); PAIRS lists "old name|new name" when
@@ -13,9 +14,11 @@
 # rounds and their range.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-old=$1
-new=$2
-rounds=${3:-3}
+if [ $# -eq 1 ]; then
+  old="" new=$1 rounds=${ROUNDS:-5}
+else
+  old=$1 new=$2 rounds=${3:-3}
+fi
 old_bench=${OLD_BENCH:-./target/release/bench-fmu}
 default_pairs=(
   "LOES motor alone (preset loes-motor)|LOES motor alone (preset loes-motor)"
@@ -35,6 +38,7 @@ for round in $(seq "$rounds"); do
   for pair in "${pairs[@]}"; do
     for which in old new; do
       if [ "$which" = old ]; then
+        [ -n "$old" ] || continue
         fmu=$old bench=$old_bench config=${pair%%|*}
       else
         fmu=$new bench=./target/release/bench-fmu config=${pair##*|}
