@@ -44,8 +44,11 @@ for round in $(seq "$rounds"); do
         fmu=$new bench=./target/release/bench-fmu config=${pair##*|}
       fi
       [ -n "$config" ] || continue
+      label=$which
+      [ -n "$old" ] || label=fmu
       "$bench" --fmu "$fmu" --only "$config" --no-scipy --out /dev/null 2>&1 |
-        grep '^| [A-Za-z]' | grep -v '^| configuration' | sed "s/^/$round $which /" | tee -a "$rows"
+        grep '^| [A-Za-z]' | grep -v '^| configuration' | sed "s/^/$round $label /" |
+        tee -a "$rows"
     done
   done
 done
