@@ -280,11 +280,11 @@ def main(argv=None):
     # The analog loop is e_in = A1 A2 (reference - y_pot): its poles from the same linearisation.
     gain = float(start["controller.A1"]) * float(start["controller.A2"])
     analog_poles = np.linalg.eigvals(lqg["A"] - gain * np.outer(lqg["b_full"], lqg["c_pot"]))
-    slow = lambda ev: sorted((e for e in ev if 0.1 < abs(e) < 30 and e.imag > 0), key=abs)
+    slow = lambda ev: sorted((e for e in ev if 0.1 < abs(e) < 50 and e.imag > 0), key=abs)
     print(f"reduced model: {lqg['k']} of {lqg['n']} states (modes slower than {CUT:g} 1/s); "
           f"k_v = {lqg['kv']:.4f} rad/s per V; communication step {H * 1e3:g} ms")
     for label, poles in [("analog loop", analog_poles), ("LQR (state feedback)", lqg["closed"])]:
-        print(f"poles below 30 1/s, {label}: " + ", ".join(
+        print(f"poles below 50 1/s, {label}: " + ", ".join(
             f"{e.real:.3f}{e.imag:+.3f}j (zeta {-e.real / abs(e):.3f})" for e in slow(poles)))
 
     stop = a.stop or float(md.defaultExperiment.stopTime)

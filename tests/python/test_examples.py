@@ -62,8 +62,8 @@ def test_own_controller_damps_the_residual_vibration(fmu_path, tool_output, tmp_
     assert "validity warnings, analog loop: 0" in out
     assert "validity warnings, LQG (Python): 0" in out
     # The design: the state feedback damps the slow pair (from the same linearisation).
-    analog = find(r"analog loop: " + NUMBER + NUMBER + r"j \(zeta " + NUMBER, out)
-    lqr = find(r"LQR \(state feedback\): " + NUMBER + NUMBER + r"j \(zeta " + NUMBER, out)
+    analog = find(r"50 1/s, analog loop: " + NUMBER + NUMBER + r"j \(zeta " + NUMBER, out)
+    lqr = find(r"50 1/s, LQR \(state feedback\): " + NUMBER + NUMBER + r"j \(zeta " + NUMBER, out)
     assert lqr[2] > 5 * analog[2], (lqr, analog)
     for name in ["own_controller.png", "own_controller.csv"]:
         assert (tmp_path / name).stat().st_size > 0
