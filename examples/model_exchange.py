@@ -132,7 +132,7 @@ def euler(inst, h, t_end, limit=1e6):
     return np.array(times), np.array(size), np.array(incr)
 
 
-def cvode(fmu, unzipped, md, rtol, stop, interval, unit_nominals=False):
+def cvode(unzipped, md, rtol, stop, interval, unit_nominals=False):
     """The default experiment with fmpy's CVode on the Model Exchange interface."""
     inst = instantiate_fmu(unzipped, md, "ModelExchange")
     if unit_nominals:
@@ -175,6 +175,18 @@ def main(argv=None):
     print(f"explicit Euler at h = {EULER_H:g} s: |1 + h lambda_max| = {growth_predicted:.4g} per step")
 
     md = read_model_description(a.fmu)
+    # Which states the fastest modes live in: eigenvectors of A in states scaled by their nominals.
+    nominal = {d.variable.derivative.name: float(d.variable.derivative.nominal) for d in md.derivatives}
+    scale = np.array([nominal["x." + name] for name in lin["states"]])
+    lam_s, vec = np.linalg.eig(np.array(lin["A"], dtype=float) * scale[None, :] / scale[:, None])
+    shown = []
+    for i in np.argsort(-np.abs(lam_s)):
+        if lam_s[i].imag < 0 or len(shown) == 4:
+            continue
+        shown.append(i)
+        v = np.abs(vec[:, i]) / np.abs(vec[:, i]).max()
+        top = ", ".join(f"{lin['states'][j]} {v[j]:.2f}" for j in np.argsort(-v)[:3])
+        print(f"  mode {lam_s[i].real:.4g}{lam_s[i].imag:+.4g}j 1/s: largest scaled components {top}")
     stop = a.stop or float(md.defaultExperiment.stopTime)
     interval = float(md.defaultExperiment.stepSize)
     unzipped = extract(a.fmu)
@@ -184,8 +196,8 @@ def main(argv=None):
         cs = simulate_fmu(unzipped, fmi_type="CoSimulation", stop_time=stop, relative_tolerance=a.rtol,
                           output_interval=interval, output=OUTPUTS, model_description=md)
         wall_cs = time.perf_counter() - started
-        me, wall_me = cvode(a.fmu, unzipped, md, a.rtol, stop, interval)
-        me1, wall_me1 = cvode(a.fmu, unzipped, md, a.rtol, stop, interval, unit_nominals=True)
+        me, wall_me = cvode(unzipped, md, a.rtol, stop, interval)
+        me1, wall_me1 = cvode(unzipped, md, a.rtol, stop, interval, unit_nominals=True)
         print(f"\ndefault experiment, {stop:g} s, output every {interval:g} s, rtol {a.rtol:g}: "
               f"CS {wall_cs:.2f} s, CVode {wall_me:.2f} s, CVode without nominals {wall_me1:.2f} s (wall)")
         print(f"{'output':12s}{'range':>12s}{'CVode-CS':>14s}{'(no nominals)':>16s}   (max |ME - CS| / range)")

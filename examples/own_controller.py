@@ -167,7 +167,7 @@ class Controller:
         return e
 
 
-def run(fmu, unzipped, md, stop, controller=None):
+def run(unzipped, md, stop, controller=None):
     """One run of the default experiment; the analog loop when `controller` is None."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
     start = {v.name: v.start for v in md.modelVariables}
@@ -215,7 +215,10 @@ def summary(data, move):
     angle, t0, duration = move
     t, hub, w = data["time"], data["theta_hub"], data["w_tip"]
     outside = np.nonzero(np.abs(hub - angle) > BAND * abs(angle))[0]
-    settling = np.nan if outside[-1] + 1 >= len(t) else t[outside[-1] + 1] - t0
+    if not len(outside):
+        settling = 0.0
+    else:
+        settling = np.nan if outside[-1] + 1 >= len(t) else t[outside[-1] + 1] - t0
     after = t >= t0 + duration
     big = np.nonzero(np.abs(w) > RING)[0]
     ring = t[big[-1] + 1] - (t0 + duration) if len(big) and big[-1] + 1 < len(t) else np.nan
@@ -290,8 +293,8 @@ def main(argv=None):
     stop = a.stop or float(md.defaultExperiment.stopTime)
     unzipped = extract(a.fmu)
     try:
-        results = {"analog loop": run(a.fmu, unzipped, md, stop),
-                   "LQG (Python)": run(a.fmu, unzipped, md, stop, Controller(lqg))}
+        results = {"analog loop": run(unzipped, md, stop),
+                   "LQG (Python)": run(unzipped, md, stop, Controller(lqg))}
     finally:
         shutil.rmtree(unzipped, ignore_errors=True)
     move = tuple(float(start[f"reference.{p}"]) for p in ["angle", "t_start", "duration"])

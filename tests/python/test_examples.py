@@ -76,8 +76,10 @@ def test_model_exchange_needs_an_implicit_solver(fmu_path, tool_output, tmp_path
     re_, im_ = find(r"fastest eigenvalue " + NUMBER + r" " + NUMBER + "j", out)
     h_euler, h_rk45 = find(r"explicit Euler " + NUMBER + r" s, RK45 \(Dormand-Prince\) " + NUMBER, out)
     # Explicit Euler's bound for a complex pair is 2 |Re| / |lambda|^2 (the disc |1 + z| <= 1):
-    # the script's bisection must agree with the closed form for the pair that binds.
-    assert h_euler <= 2 * abs(re_) / (re_ ** 2 + im_ ** 2) * (1 + 1e-9)
+    # the script's bisection over all eigenvalues must agree with the closed form for the fastest
+    # pair, to the 4 digits printed.
+    closed_form = 2 * abs(re_) / (re_ ** 2 + im_ ** 2)
+    assert abs(h_euler - closed_form) < 1e-3 * closed_form, (h_euler, closed_form)
     assert h_euler < h_rk45 < 1e-3
     # CVode (BDF, atol = rtol x nominals) reproduces co-simulation at rtol 1e-6 to 1e-4 of each
     # output's range (tests/python/test_model_exchange.py: 1e-6 at rtol 1e-9); without the
