@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT, hsp
+from conftest import ROOT, hsp, packaged_source_hash
 
 EXAMPLES = ROOT / "examples"
 FMU3 = ROOT / "fmu" / "fmi3" / "HydraulicSlewingPlate.fmu"
@@ -117,7 +117,8 @@ def test_sweep_dask_runs_the_grid_on_workers(fmu_path, tmp_path):
 
 
 def test_fmi3_arrays(fmu_path, tool_output, tmp_path):
-    assert FMU3.exists()
+    # Written by `hsp package` beside the FMI 2.0 FMU (the fmu_path fixture builds both).
+    assert packaged_source_hash(FMU3, "x86_64-linux") == packaged_source_hash(fmu_path), FMU3
     out = run("fmi3_arrays.py", "--fmu", FMU3, "--out", tmp_path, "--modes", tool_output["modes"], "--stop", 3)
     assert "array acc[12]: Float64, causality output" in out
     assert "array plate.f[20]: Float64, causality calculatedParameter" in out
