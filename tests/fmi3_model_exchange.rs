@@ -443,3 +443,44 @@ unsafe fn me2_in_initialization_mode() -> *mut c_void {
     assert_eq!(f2::fmi2EnterInitializationMode(c), Fmi2Status::Ok);
     c
 }
+
+/// The Model Exchange entry points' scalar Booleans are bytes too (see `fmi3_contract.rs`
+/// `scalar_boolean_arguments_take_any_nonzero_byte_as_true` for Co-Simulation): any nonzero
+/// `loggingOn` logs, and `noSetFMUStatePriorToCurrentPoint` of `fmi3CompletedIntegratorStep` is
+/// read without undefined behaviour and without effect.
+#[test]
+fn model_exchange_scalar_booleans_take_any_nonzero_byte_as_true() {
+    for b in [0u8, 1, 2, 255] {
+        let truth = b != 0;
+        let f = Fmu3::model_exchange_bytes(b).expect("instantiated");
+        let c = f.0.c;
+        unsafe {
+            assert_eq!(
+                fmi3EnterInitializationMode(c, 0, 0.0, 0.0, 0, 0.0),
+                Fmi3Status::Ok
+            );
+            assert_eq!(fmi3ExitInitializationMode(c), Fmi3Status::Ok);
+            let mut flags = [true; 5];
+            let mut next = 0.0;
+            let [d, e, g, h, k] = &mut flags;
+            assert_eq!(
+                fmi3UpdateDiscreteStates(c, d, e, g, h, k, &mut next),
+                Fmi3Status::Ok
+            );
+            assert_eq!(fmi3EnterContinuousTimeMode(c), Fmi3Status::Ok);
+            let (mut event, mut terminate) = (true, true);
+            assert_eq!(
+                fmi3CompletedIntegratorStep(c, b, &mut event, &mut terminate),
+                Fmi3Status::Ok,
+                "noSetFMUStatePriorToCurrentPoint byte {b}"
+            );
+            assert!(!event && !terminate, "byte {b}");
+        }
+        assert_eq!(
+            !f.log().is_empty(),
+            truth,
+            "loggingOn byte {b}: {:?}",
+            f.log()
+        );
+    }
+}

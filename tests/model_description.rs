@@ -5,6 +5,10 @@
 use hydraulic_slewing_plate::fmu::{Causality, Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::LoesParameters;
+use hydraulic_slewing_plate::fragments::plate::PlateParameters;
+use hydraulic_slewing_plate::fragments::reference::MoveParameters;
+use hydraulic_slewing_plate::fragments::servo_valve::ServoValveParameters;
+use hydraulic_slewing_plate::fragments::validity::Limits;
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;
@@ -32,12 +36,19 @@ fn with_preset(name: &str) -> Parameters {
     Parameters::from_values(&values, &Experiment::default()).unwrap()
 }
 
+/// Every fragment's Rust default is the XML's start values, bit for bit, so that a library user
+/// (the fragments alone) and an FMU user start from the same model: the LOES (the
+/// G(s)-consistent set with all its digits), the servo valve, the controller, the move, the
+/// material limits and the plate with its hub. A parameter added to one side only fails here.
 #[test]
 fn xml_start_values_are_the_documented_defaults() {
     let p = defaults();
-    // Bit-for-bit: the XML carries the G(s)-consistent set with all its digits.
     assert_eq!(p.loes, LoesParameters::default());
+    assert_eq!(p.servo_valve, ServoValveParameters::default());
     assert_eq!(p.controller, ControllerParameters::default());
+    assert_eq!(p.reference, MoveParameters::default());
+    assert_eq!(p.limits, Limits::default());
+    assert_eq!(p.plate, PlateParameters::default());
 }
 
 #[test]

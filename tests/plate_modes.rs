@@ -25,7 +25,10 @@ fn paper_formulation_reproduces_eq16() {
     // 0.1 % (the issue's); the paper prints 3-4 digits and the values below agree to every one of
     // them. The paper's 56.8 Hz is not an eq. 21 frequency (docs/model-notes.md, item 2) and is not
     // asserted here.
-    let p = PlateParameters::default();
+    let p = PlateParameters {
+        formulation: Formulation::Paper,
+        ..PlateParameters::default()
+    };
     let model = PlateModel::new(&p).unwrap();
     let modes = natural_modes(&model).unwrap();
     for m in &modes {

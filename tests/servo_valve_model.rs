@@ -367,12 +367,6 @@ fn fmu_parameters(sets: &[(&str, &str)]) -> Parameters {
 }
 
 #[test]
-fn fmu_start_values_are_the_documented_defaults() {
-    let p = fmu_parameters(&[]);
-    assert_eq!(p.servo_valve, ServoValveParameters::default());
-}
-
-#[test]
 fn flow_reversal_and_zero_pressure_drop_stay_finite() {
     // A square wave of +-0.5 V at 2 Hz, a 10 bar supply and a heavy, nearly frictionless rotor (3.5 kg m^2, the
     // hub inertia I_H; b_m = 0.01 N m s/rad): when the command reverses, the coasting rotor

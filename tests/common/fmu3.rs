@@ -45,6 +45,14 @@ impl Native<V3> {
         }
     }
 
+    /// A Model Exchange instance, with `loggingOn` passed as the byte given.
+    pub fn model_exchange_bytes(logging_on: u8) -> Result<Fmu3, Vec<Line>> {
+        match V3::instantiate(Kind::ModelExchange, logging_on, 0) {
+            Ok(v) => Ok(Native(v)),
+            Err(lines) => Err(native(lines)),
+        }
+    }
+
     pub fn log(&self) -> Vec<Line> {
         native(self.0.lines())
     }

@@ -83,7 +83,9 @@ pub struct PlateParameters {
     pub h: f64,
     /// Poisson's ratio (not in the paper; 0.3 reproduces eq. 16, docs/model-notes.md, item 1).
     pub nu: f64,
-    /// Modal damping ratio (not in the paper; 1 %).
+    /// Structural damping ratio (not in the paper; 2 %, a bolted assembly: docs/model-notes.md,
+    /// items 14 and 25): of every mode of hub, bar and plate with the motor clamped in the
+    /// consistent formulation, of each plate mode in the paper's.
     pub zeta: f64,
     /// Hub inertia `I_H` \[kg m^2\] (paper: 3.5).
     pub i_h: f64,
@@ -98,10 +100,12 @@ pub struct PlateParameters {
     pub y2: f64,
 }
 
+/// The FMU's start values (`plate.*`, `hub.I_H`): the paper's plate, 3 x 5 modes, in the
+/// consistent formulation on its hub (`tests/model_description.rs` checks that they agree).
 impl Default for PlateParameters {
     fn default() -> Self {
         PlateParameters {
-            formulation: Formulation::Paper,
+            formulation: Formulation::Consistent,
             root: Root::Hub,
             n: 3,
             m: 5,
@@ -111,7 +115,7 @@ impl Default for PlateParameters {
             b: 0.4685,
             h: 2.65e-3,
             nu: 0.3,
-            zeta: 0.01,
+            zeta: 0.02,
             i_h: 3.5,
             cd: 1.2,
             rho_air: 1.2,
