@@ -102,7 +102,7 @@ fn assert_stable(model: &str, formulation: &str, root: &str) -> Vec<Complex<f64>
 
 #[test]
 fn loes_coupled_loop_is_stable() {
-    // Slowest pair -0.0069 +- 0.826j (0.13 Hz, README "The heavy hub in the loop").
+    // Slowest pair -0.0069 +- 0.826j (0.13 Hz, docs/model-notes.md, item 11).
     assert_stable("1", "1", "1");
 }
 

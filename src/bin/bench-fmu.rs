@@ -1,4 +1,4 @@
-//! Speed benchmark of the FMU through its C ABI (issue 10). Not a test.
+//! Speed benchmark of the FMU through its C ABI. Not a test.
 //!
 //! ```text
 //! cargo run --release --bin hsp -- package           # build fmu/HydraulicSlewingPlate.fmu
@@ -149,7 +149,7 @@ const CONFIGS: &[Config] = &[
         scipy: false,
     },
     Config {
-        name: "servo valve coupled, the plant before issue 23",
+        name: "servo valve coupled, identified motor (D_m 8.04e-5)",
         sets: &[
             "hydraulics.model=2",
             "hydraulics.motor_coupled=true",
@@ -482,7 +482,7 @@ fn main() {
     let mut md = String::new();
     writeln!(
         md,
-        "# FMU speed (issue 10)\n\n`cargo run --release --bin bench-fmu`: {STOP} s at {STEP} s \
+        "# FMU speed\n\n`cargo run --release --bin bench-fmu`: {STOP} s at {STEP} s \
          communication steps (10 000 `fmi2DoStep` calls through the C ABI), rtol {RTOL:e} (atol \
          1e-8 of each state's nominal value), unit step of `r` at t = 0. RTF = real-time factor \
          (median of 3 runs if a run is under 2 s); µs/step = wall time per `fmi2DoStep` and the \

@@ -39,7 +39,7 @@
 //!   move the spool by 0.4 mm, its full stroke, and pass 29 L/min without load, the LOES's `k_sv`).
 //!
 //! The damping of the LOES (`1/(R7 C3)`) has no counterpart here: with the oil spring far above
-//! the band nothing in the band needs it. The README ("The full servo valve") has the table of
+//! the band nothing in the band needs it. docs/model.md ("The full servo valve") has the table of
 //! every constant with its reason, the fit and the coupled eigenvalues.
 
 pub mod g_est;

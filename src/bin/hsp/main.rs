@@ -80,7 +80,8 @@ impl ModelArgs {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Build the release library and package fmu/HydraulicSlewingPlate.fmu
+    /// Build the release library and package the FMI 2.0 FMU fmu/HydraulicSlewingPlate.fmu and
+    /// the FMI 3.0 FMU fmu/fmi3/HydraulicSlewingPlate.fmu
     Package {
         /// Where to write the FMU
         #[arg(long, default_value = package::DEFAULT_FMU)]

@@ -28,7 +28,7 @@ pub enum CoilDrive {
 
 /// Every physical constant of the full servo valve and actuator (SI units). The FMU names are
 /// `servo_valve.<name>` with the names in brackets. Ranges quoted are those of two-stage
-/// flapper-nozzle valves with mechanical feedback (README, "The full servo valve").
+/// flapper-nozzle valves with mechanical feedback (docs/model.md, "The full servo valve").
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ServoValveParameters {
     /// Supply pressure \[Pa\] (`p_supply`): 140 bar, middle of the 70-210 bar range.
