@@ -1,7 +1,10 @@
 //! `hsp`: the project's command-line tool.
 //!
-//! - `hsp package`: builds the release library and writes `fmu/HydraulicSlewingPlate.fmu` (FMI 2.0)
-//!   and `fmu/fmi3/HydraulicSlewingPlate.fmu` (FMI 3.0).
+//! - `hsp package`: builds the release library and writes `fmu/HydraulicSlewingPlate.fmu` (FMI 2.0),
+//!   `fmu/fmi3/HydraulicSlewingPlate.fmu` (FMI 3.0) and the example SSP system
+//!   `fmu/HydraulicSlewingPlate.ssp`.
+//! - `hsp ssp [--out ssp]`: the presets as SSP 1.0 parameter sets and the example system's
+//!   `SystemStructure.ssd`, the repository's `ssp/` (docs/ecosystem.md).
 //! - `hsp run [--preset NAME]`: builds the FMU if needed, loads it through its C ABI, runs the
 //!   default experiment (a slewing manoeuvre of the complete system: a step in the reference `r`),
 //!   prints a summary and writes the results as CSV.
@@ -22,6 +25,7 @@
 
 mod binaries;
 mod docpage;
+mod ecosystem;
 mod info;
 mod loader;
 // The one reader of modelDescription.xml, shared with build.rs.
@@ -90,6 +94,13 @@ enum Command {
         /// it, a missing toolchain gives a warning and a binary for this machine only)
         #[arg(long)]
         require_portable: bool,
+    },
+    /// Write the presets as SSP 1.0 parameter sets (resources/*.ssv) and the example system
+    /// (SystemStructure.ssd) into a folder, the repository's ssp/
+    Ssp {
+        /// Where to write them
+        #[arg(long, default_value = "ssp")]
+        out: String,
     },
     /// Run the default experiment (a slewing manoeuvre) through the FMU's C ABI and summarise it
     Run(run::RunArgs),
@@ -318,6 +329,11 @@ fn main() -> ExitCode {
             }
         }),
         Command::Run(args) => run::run(&args),
+        Command::Ssp { out } => ecosystem::ssp::write(&package::root().join(out)).map(|paths| {
+            for p in paths {
+                println!("wrote {}", p.display());
+            }
+        }),
         Command::DocFigures { fmu, out } => {
             let root = package::root();
             docpage::copy_figures(&root.join(fmu), &root.join(out)).map(|paths| {

@@ -1,17 +1,22 @@
 //! `hsp package`: builds the release cdylib and writes the FMU archive: `modelDescription.xml`
 //! (verbatim from `modelDescription/`), `binaries/linux64/HydraulicSlewingPlate.so` (glibc 2.17),
 //! `binaries/win64/HydraulicSlewingPlate.dll` (where the binaries come from: [`binaries`]) and
-//! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU).
+//! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU), and the
+//! ecosystem's formats ([`ecosystem`]): `extra/org.fmi-standard.fmi-ls-ref/` (the default
+//! experiment's result, the presets as SSP parameter sets) and the icon `model.png`.
 //!
 //! Beside it, in `fmi3/` of the same folder, the FMI 3.0 FMU: the same binaries (they export the
 //! `fmi3*` functions too) under FMI 3.0's platform names (`x86_64-linux`, `x86_64-windows`), the
-//! FMI 3.0 `modelDescription.xml` written by `modelDescription/fmi3.py`, and the same
-//! documentation.
+//! FMI 3.0 `modelDescription.xml` written by `modelDescription/fmi3.py`, the same documentation
+//! and `extra/`, and `terminalsAndIcons/` (the icon and the terminals) in place of `model.png`.
+//!
+//! Beside them, `HydraulicSlewingPlate.ssp`: the example SSP system with the FMI 2.0 FMU (see
+//! [`ecosystem::ssp`]).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{binaries, docpage};
+use super::{binaries, docpage, ecosystem};
 use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
 
 pub const DEFAULT_FMU: &str = "fmu/HydraulicSlewingPlate.fmu";
@@ -24,7 +29,7 @@ pub fn root() -> PathBuf {
 /// Builds and writes the FMUs with every binary the installed toolchains allow; returns the FMI 2.0
 /// one's path.
 pub fn package(output: &str) -> Result<String, String> {
-    package_with(output, false).map(|[fmi2, _]| fmi2)
+    package_with(output, false).map(|[fmi2, _, _]| fmi2)
 }
 
 /// FMI 3.0's name of an FMI 2.0 platform folder.
@@ -43,10 +48,16 @@ pub fn fmi3_path(fmi2: &Path) -> PathBuf {
     fmi2.with_file_name("fmi3").join(name)
 }
 
-/// Builds and writes the FMI 2.0 FMU at `output` and the FMI 3.0 FMU beside it (see
-/// [`fmi3_path`]); with `require_portable`, fails unless both the glibc-2.17 Linux binary and the
-/// Windows binary are built (see [`binaries`]). Returns both paths.
-pub fn package_with(output: &str, require_portable: bool) -> Result<[String; 2], String> {
+/// Where the example SSP system goes: beside the FMI 2.0 FMU, with the extension `.ssp`.
+pub fn ssp_path(fmi2: &Path) -> PathBuf {
+    fmi2.with_extension("ssp")
+}
+
+/// Builds and writes the FMI 2.0 FMU at `output`, the FMI 3.0 FMU beside it (see
+/// [`fmi3_path`]) and the example SSP system (see [`ssp_path`]); with `require_portable`, fails
+/// unless both the glibc-2.17 Linux binary and the Windows binary are built (see [`binaries`]).
+/// Returns the three paths.
+pub fn package_with(output: &str, require_portable: bool) -> Result<[String; 3], String> {
     let binaries = binaries::build(require_portable)?;
     let xml_path = root().join("modelDescription/modelDescription.xml");
     let xml = std::fs::read(&xml_path).map_err(|e| format!("{}: {e}", xml_path.display()))?;
@@ -75,14 +86,16 @@ pub fn package_with(output: &str, require_portable: bool) -> Result<[String; 2],
     let platforms = platforms(&entries);
     let docs = docpage::documentation(&tmp, &xml_text, &platforms)?;
     entries.extend(
-        docs.into_iter()
+        docs.files
+            .into_iter()
             .map(|(name, bytes)| (format!("documentation/{name}"), bytes)),
     );
-    write_archive(&tmp, &entries)?;
+    entries.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
 
     // FMI 3.0: the same entries but the model description, under FMI 3.0's platform names.
     let xml3_path = root().join("modelDescription/fmi3/modelDescription.xml");
     let xml3 = std::fs::read(&xml3_path).map_err(|e| format!("{}: {e}", xml3_path.display()))?;
+    let terminals_and_icons = ecosystem::fmi3_only(&String::from_utf8_lossy(&xml3))?;
     let entries3: Vec<(String, Vec<u8>)> = std::iter::once(("modelDescription.xml".into(), xml3))
         .chain(entries.iter().skip(1).map(|(name, bytes)| {
             let name = match name
@@ -94,16 +107,28 @@ pub fn package_with(output: &str, require_portable: bool) -> Result<[String; 2],
             };
             (name, bytes.clone())
         }))
+        .chain(terminals_and_icons)
         .collect();
+    entries.extend(ecosystem::fmi2_only()?);
+    write_archive(&tmp, &entries)?;
     let out3 = fmi3_path(&out);
     if let Some(dir) = out3.parent() {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
     let tmp3 = out3.with_extension("fmu.partial");
     write_archive(&tmp3, &entries3)?;
+    let fmu2 = std::fs::read(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    let ssp = ssp_path(&out);
+    let tmp_ssp = ssp.with_extension("ssp.partial");
+    write_archive(&tmp_ssp, &ecosystem::ssp::archive(fmu2)?)?;
     std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
     std::fs::rename(&tmp3, &out3).map_err(|e| format!("{}: {e}", out3.display()))?;
-    Ok([out.display().to_string(), out3.display().to_string()])
+    std::fs::rename(&tmp_ssp, &ssp).map_err(|e| format!("{}: {e}", ssp.display()))?;
+    Ok([
+        out.display().to_string(),
+        out3.display().to_string(),
+        ssp.display().to_string(),
+    ])
 }
 
 /// The platform folders under `binaries/` of an archive's entries.

@@ -86,9 +86,12 @@ fn power_part(dot: &str) -> String {
     out
 }
 
-/// Runs `hsp run` with its defaults (no `--set`) on the FMU in a child process: its summary and
-/// the figure files.
-pub fn default_experiment(fmu: &Path, work: &Path) -> Result<(String, Vec<PathBuf>), String> {
+/// Runs `hsp run` with its defaults (no `--set`) on the FMU in a child process: its summary, the
+/// figure files and the CSV's bytes.
+pub fn default_experiment(
+    fmu: &Path,
+    work: &Path,
+) -> Result<(String, Vec<PathBuf>, Vec<u8>), String> {
     let exe = std::env::current_exe().map_err(|e| format!("hsp's own path: {e}"))?;
     let csv = work.join("default_experiment.csv");
     let out = Command::new(&exe)
@@ -111,7 +114,8 @@ pub fn default_experiment(fmu: &Path, work: &Path) -> Result<(String, Vec<PathBu
         .collect::<Vec<_>>()
         .join("\n");
     let paths = plot::experiment(&csv, "Default experiment (hsp run)")?;
-    Ok((summary, paths))
+    let bytes = std::fs::read(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
+    Ok((summary, paths, bytes))
 }
 
 /// The Bode plot's files and its caption.

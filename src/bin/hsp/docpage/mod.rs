@@ -21,7 +21,7 @@
 mod figures;
 mod page;
 mod tables;
-mod text;
+pub mod text;
 
 use std::path::Path;
 
@@ -30,10 +30,17 @@ use crate::model_description::ModelDescription;
 /// A file of the documentation folder: its name inside `documentation/` and its bytes.
 pub type DocFile = (String, Vec<u8>);
 
-/// Everything of `documentation/`: the page and its figures. `fmu` is the packaged FMU without
-/// documentation (the default experiment is run on it), `xml` its model description,
-/// `platforms` the `binaries/` folders it carries.
-pub fn documentation(fmu: &Path, xml: &str, platforms: &[String]) -> Result<Vec<DocFile>, String> {
+/// What [`documentation`] makes.
+pub struct Documentation {
+    /// Everything of `documentation/`: the page and its figures.
+    pub files: Vec<DocFile>,
+    /// The CSV of the default experiment run for the figure (`hsp run`'s, on this FMU).
+    pub default_experiment_csv: Vec<u8>,
+}
+
+/// The documentation of the packaged FMU `fmu` (without documentation: the default experiment is
+/// run on it), `xml` its model description, `platforms` the `binaries/` folders it carries.
+pub fn documentation(fmu: &Path, xml: &str, platforms: &[String]) -> Result<Documentation, String> {
     let work = std::env::temp_dir().join(format!("hsp-doc-{}", std::process::id()));
     std::fs::create_dir_all(&work).map_err(|e| format!("{}: {e}", work.display()))?;
     let result = make(fmu, xml, platforms, &work);
@@ -41,7 +48,7 @@ pub fn documentation(fmu: &Path, xml: &str, platforms: &[String]) -> Result<Vec<
     result
 }
 
-fn make(fmu: &Path, xml: &str, platforms: &[String], work: &Path) -> Result<Vec<DocFile>, String> {
+fn make(fmu: &Path, xml: &str, platforms: &[String], work: &Path) -> Result<Documentation, String> {
     let md = ModelDescription::parse(xml)?;
     let mut files: Vec<DocFile> = vec![
         ("sketch.svg".into(), figures::SKETCH.as_bytes().to_vec()),
@@ -50,7 +57,7 @@ fn make(fmu: &Path, xml: &str, platforms: &[String], work: &Path) -> Result<Vec<
             figures::bond_graph_svg()?.into_bytes(),
         ),
     ];
-    let (summary, experiment) = figures::default_experiment(fmu, work)?;
+    let (summary, experiment, csv) = figures::default_experiment(fmu, work)?;
     let bode = figures::bode(work)?;
     for path in experiment.iter().chain(&bode.paths) {
         let name = path
@@ -63,7 +70,10 @@ fn make(fmu: &Path, xml: &str, platforms: &[String], work: &Path) -> Result<Vec<
     }
     let page = page::page(&md, platforms, &summary, &bode.caption)?;
     files.insert(0, ("index.html".into(), page.into_bytes()));
-    Ok(files)
+    Ok(Documentation {
+        files,
+        default_experiment_csv: csv,
+    })
 }
 
 /// The figures of a packaged FMU's `documentation/` copied into `dir` (`hsp doc-figures`, which

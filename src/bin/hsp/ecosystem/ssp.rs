@@ -1,0 +1,226 @@
+//! The presets as SSP 1.0 parameter sets, and an example SSP system.
+//!
+//! - `<preset>.ssv`: one `<ssv:ParameterSet>` per preset of `src/model/presets.rs` (the one
+//!   definition), each setting typed as its FMU variable: `ssv:Real`, `ssv:Boolean`, and
+//!   `ssv:Integer` for the Integers and for the Enumerations (FMI 2.0 sets an Enumeration as an
+//!   Integer; libcosim cannot read `ssv:Enumeration`), with the item's name in a comment.
+//! - `SystemStructure.ssd`: a system of one component, the FMU, with the parameter set of
+//!   [`EXAMPLE`] bound to it, its inputs and main outputs as connectors, and a default
+//!   experiment whose fixed communication step libcosim reads from its OSP annotation.
+//! - `HydraulicSlewingPlate.ssp` (by `hsp package`, beside the FMUs): the `.ssd` with the FMI
+//!   2.0 FMU and the parameter set under `resources/`.
+//!
+//! `hsp ssp` writes the `.ssd` and the `.ssv` files into `ssp/` of the repository (as the
+//! archive lays them out: `ssp/SystemStructure.ssd`, `ssp/resources/*.ssv`);
+//! `tests/ssp_files.rs` checks that the committed files are what it writes.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use hydraulic_slewing_plate::fmu::Kind;
+use hydraulic_slewing_plate::model::presets::{Preset, PRESETS};
+use hydraulic_slewing_plate::model::variables::{MODEL_IDENTIFIER, VARIABLES};
+
+use super::Entry;
+pub use crate::docpage::text::escape;
+
+/// The preset the example system binds. Its switches (the Enumerations) are the FMU's defaults:
+/// libcosim skips FMI 2.0 Enumeration variables (it warns that it does not support them), so an
+/// SSP imported there applies the Real, Integer and Boolean settings only.
+pub const EXAMPLE: &str = "servo-valve-motor";
+
+/// The example system's communication step and stop time, s.
+const EXAMPLE_STEP: f64 = 0.01;
+const EXAMPLE_STOP: f64 = 2.0;
+
+/// The connectors of the example's component: (name, kind).
+const CONNECTORS: &[(&str, &str)] = &[
+    ("r", "input"),
+    ("e_in", "input"),
+    ("F1", "input"),
+    ("F2", "input"),
+    ("y_pot", "output"),
+    ("theta_motor", "output"),
+    ("p_load", "output"),
+    ("theta_hub", "output"),
+    ("acc_tip", "output"),
+];
+
+/// The file name of a preset's parameter set.
+pub fn file_name(p: &Preset) -> String {
+    format!("{}.ssv", p.name)
+}
+
+/// A preset as an SSP 1.0 parameter set (`.ssv`).
+pub fn parameter_set(p: &Preset) -> Result<String, String> {
+    let mut s = String::new();
+    s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    s.push_str("<!-- Written by hsp ssp from src/model/presets.rs; docs/ecosystem.md -->\n");
+    writeln!(
+        s,
+        "<ssv:ParameterSet version=\"1.0\" name=\"{}\" description=\"{}\"\n    \
+         xmlns:ssv=\"http://ssp-standard.org/SSP1/SystemStructureParameterValues\">",
+        escape(p.name),
+        escape(&format!("{}: {}", p.paper, p.description))
+    )
+    .unwrap();
+    s.push_str("  <ssv:Parameters>\n");
+    for (name, value) in p.settings {
+        let var = VARIABLES
+            .iter()
+            .find(|v| v.name == *name)
+            .ok_or_else(|| format!("preset {}: no variable {name}", p.name))?;
+        let bad = || {
+            format!(
+                "preset {}: {name} = {value} is not a {:?}",
+                p.name, var.kind
+            )
+        };
+        let typed = match var.kind {
+            Kind::Real { .. } => {
+                value.parse::<f64>().map_err(|_| bad())?;
+                format!("<ssv:Real value=\"{value}\"/>")
+            }
+            Kind::Integer { .. } => {
+                value.parse::<i32>().map_err(|_| bad())?;
+                format!("<ssv:Integer value=\"{value}\"/>")
+            }
+            Kind::Enumeration { declared, .. } => {
+                let v = value.parse::<i32>().map_err(|_| bad())?;
+                let item = declared
+                    .items
+                    .iter()
+                    .find(|i| i.value == v)
+                    .ok_or_else(bad)?;
+                format!(
+                    "<ssv:Integer value=\"{value}\"/><!-- {}.{} -->",
+                    declared.name, item.name
+                )
+            }
+            Kind::Boolean { .. } => {
+                value.parse::<bool>().map_err(|_| bad())?;
+                format!("<ssv:Boolean value=\"{value}\"/>")
+            }
+            Kind::String { .. } => format!("<ssv:String value=\"{}\"/>", escape(value)),
+        };
+        writeln!(
+            s,
+            "    <ssv:Parameter name=\"{}\">{typed}</ssv:Parameter>",
+            escape(name)
+        )
+        .unwrap();
+    }
+    s.push_str("  </ssv:Parameters>\n</ssv:ParameterSet>\n");
+    Ok(s)
+}
+
+/// The example system, `SystemStructure.ssd`.
+pub fn system_description() -> Result<String, String> {
+    let p = PRESETS
+        .iter()
+        .find(|p| p.name == EXAMPLE)
+        .ok_or_else(|| format!("no preset {EXAMPLE}"))?;
+    let mut s = String::new();
+    s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    s.push_str("<!-- Written by hsp ssp (src/bin/hsp/ecosystem/ssp.rs); docs/ecosystem.md -->\n");
+    writeln!(
+        s,
+        "<ssd:SystemStructureDescription version=\"1.0\" name=\"{MODEL_IDENTIFIER}-{EXAMPLE}\"\n    \
+         xmlns:ssd=\"http://ssp-standard.org/SSP1/SystemStructureDescription\"\n    \
+         xmlns:ssc=\"http://ssp-standard.org/SSP1/SystemStructureCommon\"\n    \
+         xmlns:osp=\"http://opensimulationplatform.com/SSP/OSPAnnotations\">"
+    )
+    .unwrap();
+    writeln!(
+        s,
+        "  <ssd:System name=\"rig\" description=\"{}\">",
+        escape(&format!(
+            "The hydraulic slewing plate with the parameter set {EXAMPLE} ({}: {})",
+            p.paper, p.description
+        ))
+    )
+    .unwrap();
+    s.push_str("    <ssd:Elements>\n");
+    writeln!(
+        s,
+        "      <ssd:Component name=\"plate\" type=\"application/x-fmu-sharedlibrary\" \
+         source=\"resources/{MODEL_IDENTIFIER}.fmu\">"
+    )
+    .unwrap();
+    s.push_str("        <ssd:Connectors>\n");
+    for (name, kind) in CONNECTORS {
+        if !VARIABLES.iter().any(|v| v.name == *name) {
+            return Err(format!("no variable {name}"));
+        }
+        writeln!(
+            s,
+            "          <ssd:Connector name=\"{name}\" kind=\"{kind}\"><ssc:Real/></ssd:Connector>"
+        )
+        .unwrap();
+    }
+    s.push_str("        </ssd:Connectors>\n");
+    s.push_str("        <ssd:ParameterBindings>\n");
+    writeln!(
+        s,
+        "          <ssd:ParameterBinding type=\"application/x-ssp-parameter-set\" \
+         source=\"resources/{}\"/>",
+        file_name(p)
+    )
+    .unwrap();
+    s.push_str("        </ssd:ParameterBindings>\n      </ssd:Component>\n");
+    s.push_str("    </ssd:Elements>\n  </ssd:System>\n");
+    writeln!(
+        s,
+        "  <ssd:DefaultExperiment startTime=\"0\" stopTime=\"{EXAMPLE_STOP}\">\n    \
+         <ssd:Annotations>\n      \
+         <ssc:Annotation type=\"com.opensimulationplatform\">\n        \
+         <osp:Algorithm><osp:FixedStepAlgorithm baseStepSize=\"{EXAMPLE_STEP}\"/></osp:Algorithm>\n      \
+         </ssc:Annotation>\n    </ssd:Annotations>\n  </ssd:DefaultExperiment>"
+    )
+    .unwrap();
+    s.push_str("</ssd:SystemStructureDescription>\n");
+    Ok(s)
+}
+
+/// The repository's `ssp/` files, by their path inside it (the archive's layout).
+pub fn files() -> Result<Vec<(String, String)>, String> {
+    let mut files = vec![("SystemStructure.ssd".to_string(), system_description()?)];
+    for p in PRESETS {
+        files.push((format!("resources/{}", file_name(p)), parameter_set(p)?));
+    }
+    Ok(files)
+}
+
+/// `hsp ssp`: writes [`files`] into `dir`; returns the paths written.
+pub fn write(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let mut written = Vec::new();
+    for (name, text) in files()? {
+        let path = dir.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+        }
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// The entries of the example `.ssp` archive: the system, the FMU and the example's parameter
+/// set.
+pub fn archive(fmu: Vec<u8>) -> Result<Vec<Entry>, String> {
+    let p = PRESETS
+        .iter()
+        .find(|p| p.name == EXAMPLE)
+        .ok_or_else(|| format!("no preset {EXAMPLE}"))?;
+    Ok(vec![
+        (
+            "SystemStructure.ssd".into(),
+            system_description()?.into_bytes(),
+        ),
+        (format!("resources/{MODEL_IDENTIFIER}.fmu"), fmu),
+        (
+            format!("resources/{}", file_name(p)),
+            parameter_set(p)?.into_bytes(),
+        ),
+    ])
+}
