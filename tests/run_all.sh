@@ -2,17 +2,36 @@
 # The project's test command: installs what is missing (tests/setup.sh), builds the FMU with its
 # portable binaries (glibc-2.17 Linux and Windows; `--require-portable` makes a missing toolchain
 # an error rather than a warning), then runs the Rust tests (cargo test) and the import-side Python
-# tests (pytest: fmpy, libcosim, fmutool, and the glibc and Wine checks of test_portable.py).
-# Fails if either fails; both always run.
+# tests (pytest: fmpy, libcosim, fmutool, the examples, and the glibc and Wine checks of
+# test_portable.py). Fails if either fails; both always run.
+#
+#   bash tests/run_all.sh           everything (CI runs this)
+#   bash tests/run_all.sh --quick   the contributor's inner loop: the FMU with the Linux binary
+#                                   for this machine only (`hsp package --host-only`, no glibc-2.17
+#                                   or Windows cross build) and every test but the portable ones
+#                                   (test_portable.py, which needs those binaries)
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
+quick=0
+case "${1:-}" in
+    "") ;;
+    --quick) quick=1 ;;
+    *) echo "usage: bash tests/run_all.sh [--quick]" >&2; exit 2 ;;
+esac
+
 bash tests/setup.sh || exit 1
-cargo run --release --quiet --bin hsp -- package --require-portable || exit 1
+if [ "$quick" -eq 1 ]; then
+    cargo run --release --quiet --bin hsp -- package --host-only || exit 1
+    pytest_skip=(--ignore tests/python/test_portable.py)
+else
+    cargo run --release --quiet --bin hsp -- package --require-portable || exit 1
+    pytest_skip=()
+fi
 
 cargo test --release --no-fail-fast
 rust=$?
-.venv/bin/python -m pytest tests/python -q
+.venv/bin/python -m pytest tests/python -q --durations=10 "${pytest_skip[@]}"
 python=$?
 
 echo "cargo test: exit $rust; pytest: exit $python"

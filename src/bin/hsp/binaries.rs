@@ -67,14 +67,31 @@ fn built(path: PathBuf) -> Result<PathBuf, String> {
     }
 }
 
-/// Builds every binary the installed toolchains allow. With `require_portable`, a missing
-/// toolchain for the glibc-2.17 Linux binary or for the Windows binary is an error.
-pub fn build(require_portable: bool) -> Result<Vec<Binary>, String> {
+/// Which binaries `hsp package` builds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Portability {
+    /// The glibc-2.17 Linux binary and the Windows binary, or an error naming the missing
+    /// toolchain (`--require-portable`, the test command's).
+    Required,
+    /// Every binary the installed toolchains allow; a missing toolchain is a warning and the
+    /// Linux binary is then built for this machine's glibc.
+    IfInstalled,
+    /// Only the Linux binary for this machine (`--host-only`: the quick test loop, which skips
+    /// the two cross builds and the tests of their binaries).
+    HostOnly,
+}
+
+/// Builds the binaries `portability` asks for.
+pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
+    let require_portable = portability == Portability::Required;
     let mut binaries = vec![Binary {
         platform: "linux64",
         extension: "so",
-        path: build_linux64(require_portable)?,
+        path: build_linux64(portability)?,
     }];
+    if portability == Portability::HostOnly {
+        return Ok(binaries);
+    }
     if let Some(path) = build_win64(require_portable)? {
         binaries.push(Binary {
             platform: "win64",
@@ -107,9 +124,13 @@ fn zigbuild() -> Option<(PathBuf, std::ffi::OsString)> {
     works.then_some((program, with_venv))
 }
 
-fn build_linux64(require_portable: bool) -> Result<PathBuf, String> {
+fn build_linux64(portability: Portability) -> Result<PathBuf, String> {
     let library = format!("lib{CRATE_LIB}.so");
-    if let Some((program, path)) = zigbuild() {
+    let zig = match portability {
+        Portability::HostOnly => None,
+        _ => zigbuild(),
+    };
+    if let Some((program, path)) = zig {
         let target = format!("{LINUX_TARGET}.{LINUX_GLIBC}");
         let mut command = Command::new(&program);
         command
@@ -129,13 +150,14 @@ fn build_linux64(require_portable: bool) -> Result<PathBuf, String> {
         "cargo-zigbuild (with the ziglang package) is not installed, so binaries/linux64 cannot be \
          built against glibc {LINUX_GLIBC}; `bash tests/setup.sh` installs it into .venv"
     );
-    if require_portable {
-        return Err(missing);
+    match portability {
+        Portability::Required => return Err(missing),
+        Portability::IfInstalled => eprintln!(
+            "warning: {missing}. Building for this machine's glibc instead: the FMU will not load \
+             on systems with an older glibc."
+        ),
+        Portability::HostOnly => {}
     }
-    eprintln!(
-        "warning: {missing}. Building for this machine's glibc instead: the FMU will not load on \
-         systems with an older glibc."
-    );
     let mut command = Command::new(cargo());
     command.args([
         "build",

@@ -94,6 +94,10 @@ enum Command {
         /// it, a missing toolchain gives a warning and a binary for this machine only)
         #[arg(long)]
         require_portable: bool,
+        /// Build only the Linux binary for this machine (no glibc-2.17 or Windows cross build):
+        /// the quick test loop's FMU
+        #[arg(long, conflicts_with = "require_portable")]
+        host_only: bool,
     },
     /// Write the presets as SSP 1.0 parameter sets (resources/*.ssv) and the example system
     /// (SystemStructure.ssd) into a folder, the repository's ssp/
@@ -323,7 +327,16 @@ fn main() -> ExitCode {
         Command::Package {
             output,
             require_portable,
-        } => package::package_with(&output, require_portable).map(|paths| {
+            host_only,
+        } => {
+            let portability = match (require_portable, host_only) {
+                (true, _) => binaries::Portability::Required,
+                (false, true) => binaries::Portability::HostOnly,
+                (false, false) => binaries::Portability::IfInstalled,
+            };
+            package::package_with(&output, portability)
+        }
+        .map(|paths| {
             for path in paths {
                 println!("wrote {path}");
             }

@@ -16,7 +16,8 @@
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{binaries, docpage, ecosystem};
+use super::binaries::{self, Portability};
+use super::{docpage, ecosystem};
 use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
 
 pub const DEFAULT_FMU: &str = "fmu/HydraulicSlewingPlate.fmu";
@@ -29,7 +30,7 @@ pub fn root() -> PathBuf {
 /// Builds and writes the FMUs with every binary the installed toolchains allow; returns the FMI 2.0
 /// one's path.
 pub fn package(output: &str) -> Result<String, String> {
-    package_with(output, false).map(|[fmi2, _, _]| fmi2)
+    package_with(output, Portability::IfInstalled).map(|[fmi2, _, _]| fmi2)
 }
 
 /// FMI 3.0's name of an FMI 2.0 platform folder.
@@ -54,11 +55,11 @@ pub fn ssp_path(fmi2: &Path) -> PathBuf {
 }
 
 /// Builds and writes the FMI 2.0 FMU at `output`, the FMI 3.0 FMU beside it (see
-/// [`fmi3_path`]) and the example SSP system (see [`ssp_path`]); with `require_portable`, fails
-/// unless both the glibc-2.17 Linux binary and the Windows binary are built (see [`binaries`]).
+/// [`fmi3_path`]) and the example SSP system (see [`ssp_path`]), with the binaries `portability`
+/// asks for (see [`binaries`]).
 /// Returns the three paths.
-pub fn package_with(output: &str, require_portable: bool) -> Result<[String; 3], String> {
-    let binaries = binaries::build(require_portable)?;
+pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3], String> {
+    let binaries = binaries::build(portability)?;
     let xml_path = root().join("modelDescription/modelDescription.xml");
     let xml = std::fs::read(&xml_path).map_err(|e| format!("{}: {e}", xml_path.display()))?;
     let mut files = Vec::new();
