@@ -359,17 +359,68 @@ pub struct Bode<'a> {
     pub reference: Option<(&'a str, &'a [f64])>,
 }
 
-fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Result<(), String> {
-    area.fill(&WHITE).map_err(err)?;
-    let area = area.titled(&b.title, (FONT, 22)).map_err(err)?;
-    let (top, bottom) = area.split_vertically((55).percent());
-    let f0 = b.f_hz.first().copied().unwrap_or(1.0);
-    let f1 = b
-        .f_hz
+/// A panel of a Bode plot: a log-frequency axis and a labelled y axis.
+type BodePanel<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, RangedCoordf64>>;
+
+/// A Bode panel over the frequencies `f`; the lower panel carries the frequency axis' label.
+fn bode_panel<'a, DB: DrawingBackend>(
+    on: &'a DrawingArea<DB, Shift>,
+    f: (f64, f64),
+    y: std::ops::Range<f64>,
+    y_desc: &str,
+    lower: bool,
+) -> Result<BodePanel<'a, DB>, String> {
+    let mut chart = ChartBuilder::on(on)
+        .margin(6)
+        .margin_right(20)
+        .x_label_area_size(if lower { 40 } else { 18 })
+        .y_label_area_size(70)
+        .build_cartesian_2d((f.0..f.1).log_scale(), y)
+        .map_err(err)?;
+    let mut mesh = chart.configure_mesh();
+    if lower {
+        mesh.x_desc("frequency [Hz]");
+    }
+    mesh.y_desc(y_desc)
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
+/// The frequency span of a Bode plot's grid (a degenerate grid gets a decade).
+fn frequency_span(f_hz: &[f64]) -> (f64, f64) {
+    let f0 = f_hz.first().copied().unwrap_or(1.0);
+    let f1 = f_hz
         .last()
         .copied()
         .filter(|&f| f > f0)
         .unwrap_or(f0 * 10.0);
+    (f0, f1)
+}
+
+/// The legend of a Bode panel.
+fn legend_box<'a, DB: DrawingBackend + 'a>(
+    chart: &mut BodePanel<'a, DB>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .label_font((FONT, 13))
+        .draw()
+        .map_err(err)
+}
+
+fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Result<(), String> {
+    area.fill(&WHITE).map_err(err)?;
+    let area = area.titled(&b.title, (FONT, 22)).map_err(err)?;
+    let (top, bottom) = area.split_vertically((55).percent());
+    let (f0, f1) = frequency_span(b.f_hz);
     let db: Vec<f64> = b
         .magnitude
         .iter()
@@ -380,20 +431,8 @@ fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Resu
     let (plo, phi) = padded_range(phase.iter());
     let gray = RGBColor(120, 120, 120);
 
-    let mut mag = ChartBuilder::on(&top)
-        .margin(6)
-        .margin_right(20)
-        .x_label_area_size(18)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f0..f1).log_scale(), lo..hi + 0.08 * (hi - lo))
-        .map_err(err)?;
-    mag.configure_mesh()
-        .y_desc("magnitude [dB]")
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(err)?;
+    let top_of_range = hi + 0.08 * (hi - lo);
+    let mut mag = bode_panel(&top, (f0, f1), lo..top_of_range, "magnitude [dB]", false)?;
     if let Some((legend, fs)) = b.reference {
         for (k, &f) in fs.iter().filter(|f| (f0..=f1).contains(*f)).enumerate() {
             let series = mag
@@ -428,29 +467,9 @@ fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Resu
     .map_err(err)?
     .label("resonance peaks")
     .legend(move |(x, y)| Circle::new((x + 9, y), 4, red.filled()));
-    mag.configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .label_font((FONT, 13))
-        .draw()
-        .map_err(err)?;
+    legend_box(&mut mag, SeriesLabelPosition::LowerLeft)?;
 
-    let mut ph = ChartBuilder::on(&bottom)
-        .margin(6)
-        .margin_right(20)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f0..f1).log_scale(), plo..phi)
-        .map_err(err)?;
-    ph.configure_mesh()
-        .x_desc("frequency [Hz]")
-        .y_desc("phase [deg]")
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(err)?;
+    let mut ph = bode_panel(&bottom, (f0, f1), plo..phi, "phase [deg]", true)?;
     ph.draw_series(LineSeries::new(
         b.f_hz.iter().zip(&phase).map(|(f, p)| (*f, *p)),
         COLORS[0].stroke_width(2),
@@ -517,7 +536,7 @@ pub struct BodeComparison<'a> {
 }
 
 fn draw_curve<DB: DrawingBackend>(
-    chart: &mut ChartContext<DB, Cartesian2d<LogCoord<f64>, RangedCoordf64>>,
+    chart: &mut BodePanel<'_, DB>,
     points: Vec<(f64, f64)>,
     color: RGBColor,
     dashed: bool,
@@ -547,13 +566,7 @@ fn draw_bode_comparison<DB: DrawingBackend>(
     area.fill(&WHITE).map_err(err)?;
     let area = area.titled(&b.title, (FONT, 22)).map_err(err)?;
     let (top, bottom) = area.split_vertically((55).percent());
-    let f0 = b.f_hz.first().copied().unwrap_or(1.0);
-    let f1 = b
-        .f_hz
-        .last()
-        .copied()
-        .filter(|&f| f > f0)
-        .unwrap_or(f0 * 10.0);
+    let (f0, f1) = frequency_span(b.f_hz);
     let db: Vec<Vec<f64>> = b
         .curves
         .iter()
@@ -571,20 +584,7 @@ fn draw_bode_comparison<DB: DrawingBackend>(
         .collect();
     let (lo, hi) = padded_range(db.iter().flatten());
     let (plo, phi) = padded_range(phase.iter().flatten());
-    let mut mag = ChartBuilder::on(&top)
-        .margin(6)
-        .margin_right(20)
-        .x_label_area_size(18)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f0..f1).log_scale(), lo..hi)
-        .map_err(err)?;
-    mag.configure_mesh()
-        .y_desc("magnitude [dB]")
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(err)?;
+    let mut mag = bode_panel(&top, (f0, f1), lo..hi, "magnitude [dB]", false)?;
     for (k, (c, m)) in b.curves.iter().zip(&db).enumerate() {
         let points = b.f_hz.iter().copied().zip(m.iter().copied()).collect();
         draw_curve(
@@ -595,28 +595,8 @@ fn draw_bode_comparison<DB: DrawingBackend>(
             Some(&c.name),
         )?;
     }
-    mag.configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .label_font((FONT, 13))
-        .draw()
-        .map_err(err)?;
-    let mut ph = ChartBuilder::on(&bottom)
-        .margin(6)
-        .margin_right(20)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f0..f1).log_scale(), plo..phi)
-        .map_err(err)?;
-    ph.configure_mesh()
-        .x_desc("frequency [Hz]")
-        .y_desc("phase [deg]")
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(err)?;
+    legend_box(&mut mag, SeriesLabelPosition::LowerLeft)?;
+    let mut ph = bode_panel(&bottom, (f0, f1), plo..phi, "phase [deg]", true)?;
     for (k, (c, p)) in b.curves.iter().zip(&phase).enumerate() {
         let points = b.f_hz.iter().copied().zip(p.iter().copied()).collect();
         draw_curve(&mut ph, points, COLORS[k % COLORS.len()], c.dashed, None)?;
