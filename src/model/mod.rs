@@ -16,6 +16,7 @@ mod affine;
 pub mod assembly;
 pub mod compose;
 pub mod frf;
+pub mod paper;
 pub mod parameters;
 pub mod presets;
 pub mod validity;

@@ -18,6 +18,8 @@
 //!   response of the linearised model and its resonance peaks; `--plot FILE` draws its Bode plot.
 //! - `hsp info [--json] [--preset NAME] [--set ...]`: size and structure of the assembled model:
 //!   states, plan, the Jacobian's pattern, its varying entries and passes per evaluation.
+//! - `hsp validate [--check]`: writes docs/validation.md and its figures, the model against the
+//!   paper (`--check` compares instead).
 //! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
 //!   copied for the README.
 
@@ -38,6 +40,7 @@ mod plot;
 mod progress;
 mod results;
 mod run;
+mod validate;
 
 use std::process::ExitCode;
 
@@ -161,6 +164,13 @@ enum Command {
         /// Where to write the figures
         #[arg(long, default_value = "docs/img")]
         out: String,
+    },
+    /// Write docs/validation.md and its figures: the model's numbers against the paper's
+    Validate {
+        /// Write nothing; fail when the committed report or a figure differs from what the
+        /// command writes, or when a row is outside its tolerance
+        #[arg(long)]
+        check: bool,
     },
     /// Frequency response of the linearised model, with its resonance peaks
     Frf {
@@ -355,6 +365,12 @@ fn main() -> ExitCode {
                 }
             })
         }
+        Command::Validate { check } => validate::run(&package::root(), check).map(|paths| {
+            let verb = if check { "checked" } else { "wrote" };
+            paths
+                .iter()
+                .for_each(|p| println!("{verb} {}", p.display()));
+        }),
         Command::SourceHash => {
             println!("{}", hydraulic_slewing_plate::SOURCE_HASH);
             Ok(())

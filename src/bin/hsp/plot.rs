@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use clap::Args;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -23,7 +24,7 @@ pub struct PlotArgs {
 
 /// Table 1 of the paper, second column: the resonance peaks of its FRF from the reference `r` to
 /// the plate tip (Fig. 9b), Hz. Drawn as reference marks on Bode plots from `r` to a plate signal.
-pub const TABLE1_FRF_HZ: [f64; 6] = [4.98, 16.0, 33.3, 66.0, 73.0, 84.0];
+pub use hydraulic_slewing_plate::model::paper::TABLE1_FRF_HZ;
 
 const FONT: &str = "sans-serif";
 const COLORS: [RGBColor; 6] = [
@@ -358,17 +359,68 @@ pub struct Bode<'a> {
     pub reference: Option<(&'a str, &'a [f64])>,
 }
 
-fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Result<(), String> {
-    area.fill(&WHITE).map_err(err)?;
-    let area = area.titled(&b.title, (FONT, 22)).map_err(err)?;
-    let (top, bottom) = area.split_vertically((55).percent());
-    let f0 = b.f_hz.first().copied().unwrap_or(1.0);
-    let f1 = b
-        .f_hz
+/// A panel of a Bode plot: a log-frequency axis and a labelled y axis.
+type BodePanel<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, RangedCoordf64>>;
+
+/// A Bode panel over the frequencies `f`; the lower panel carries the frequency axis' label.
+fn bode_panel<'a, DB: DrawingBackend>(
+    on: &'a DrawingArea<DB, Shift>,
+    f: (f64, f64),
+    y: std::ops::Range<f64>,
+    y_desc: &str,
+    lower: bool,
+) -> Result<BodePanel<'a, DB>, String> {
+    let mut chart = ChartBuilder::on(on)
+        .margin(6)
+        .margin_right(20)
+        .x_label_area_size(if lower { 40 } else { 18 })
+        .y_label_area_size(70)
+        .build_cartesian_2d((f.0..f.1).log_scale(), y)
+        .map_err(err)?;
+    let mut mesh = chart.configure_mesh();
+    if lower {
+        mesh.x_desc("frequency [Hz]");
+    }
+    mesh.y_desc(y_desc)
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
+/// The frequency span of a Bode plot's grid (a degenerate grid gets a decade).
+fn frequency_span(f_hz: &[f64]) -> (f64, f64) {
+    let f0 = f_hz.first().copied().unwrap_or(1.0);
+    let f1 = f_hz
         .last()
         .copied()
         .filter(|&f| f > f0)
         .unwrap_or(f0 * 10.0);
+    (f0, f1)
+}
+
+/// The legend of a Bode panel.
+fn legend_box<'a, DB: DrawingBackend + 'a>(
+    chart: &mut BodePanel<'a, DB>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .label_font((FONT, 13))
+        .draw()
+        .map_err(err)
+}
+
+fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Result<(), String> {
+    area.fill(&WHITE).map_err(err)?;
+    let area = area.titled(&b.title, (FONT, 22)).map_err(err)?;
+    let (top, bottom) = area.split_vertically((55).percent());
+    let (f0, f1) = frequency_span(b.f_hz);
     let db: Vec<f64> = b
         .magnitude
         .iter()
@@ -379,20 +431,8 @@ fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Resu
     let (plo, phi) = padded_range(phase.iter());
     let gray = RGBColor(120, 120, 120);
 
-    let mut mag = ChartBuilder::on(&top)
-        .margin(6)
-        .margin_right(20)
-        .x_label_area_size(18)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f0..f1).log_scale(), lo..hi + 0.08 * (hi - lo))
-        .map_err(err)?;
-    mag.configure_mesh()
-        .y_desc("magnitude [dB]")
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(err)?;
+    let top_of_range = hi + 0.08 * (hi - lo);
+    let mut mag = bode_panel(&top, (f0, f1), lo..top_of_range, "magnitude [dB]", false)?;
     if let Some((legend, fs)) = b.reference {
         for (k, &f) in fs.iter().filter(|f| (f0..=f1).contains(*f)).enumerate() {
             let series = mag
@@ -427,29 +467,9 @@ fn draw_bode<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, b: &Bode) -> Resu
     .map_err(err)?
     .label("resonance peaks")
     .legend(move |(x, y)| Circle::new((x + 9, y), 4, red.filled()));
-    mag.configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(160, 160, 160))
-        .label_font((FONT, 13))
-        .draw()
-        .map_err(err)?;
+    legend_box(&mut mag, SeriesLabelPosition::LowerLeft)?;
 
-    let mut ph = ChartBuilder::on(&bottom)
-        .margin(6)
-        .margin_right(20)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d((f0..f1).log_scale(), plo..phi)
-        .map_err(err)?;
-    ph.configure_mesh()
-        .x_desc("frequency [Hz]")
-        .y_desc("phase [deg]")
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(err)?;
+    let mut ph = bode_panel(&bottom, (f0, f1), plo..phi, "phase [deg]", true)?;
     ph.draw_series(LineSeries::new(
         b.f_hz.iter().zip(&phase).map(|(f, p)| (*f, *p)),
         COLORS[0].stroke_width(2),
@@ -480,6 +500,190 @@ pub fn bode(stem: &Path, b: &Bode) -> Result<Vec<PathBuf>, String> {
         (1000, 700),
         (|a| draw_bode(a, b), |a| draw_bode(a, b)),
     )
+}
+
+/// A figure drawn into an SVG document held in memory (the validation report compares it with
+/// the committed file, so it is written and checked from the same bytes).
+fn svg_string(
+    size: (u32, u32),
+    draw: impl Fn(DrawingArea<SVGBackend, Shift>) -> Result<(), String>,
+) -> Result<String, String> {
+    register_font();
+    let mut out = String::new();
+    draw(SVGBackend::with_string(&mut out, size).into_drawing_area())?;
+    Ok(out)
+}
+
+/// A Bode plot as an SVG document.
+pub fn bode_svg(b: &Bode) -> Result<String, String> {
+    svg_string((1000, 700), |a| draw_bode(a, b))
+}
+
+/// One curve of a comparison Bode plot: `|H|` (linear) and phase \[deg\] on the plot's grid.
+pub struct BodeCurve {
+    pub name: String,
+    pub magnitude: Vec<f64>,
+    pub phase_deg: Vec<f64>,
+    /// Drawn dashed (a reference drawn over a model curve stays visible).
+    pub dashed: bool,
+}
+
+/// Several frequency responses on one Bode plot.
+pub struct BodeComparison<'a> {
+    pub title: String,
+    pub f_hz: &'a [f64],
+    pub curves: Vec<BodeCurve>,
+}
+
+fn draw_curve<DB: DrawingBackend>(
+    chart: &mut BodePanel<'_, DB>,
+    points: Vec<(f64, f64)>,
+    color: RGBColor,
+    dashed: bool,
+    legend: Option<&str>,
+) -> Result<(), String> {
+    let style = color.stroke_width(if dashed { 2 } else { 3 });
+    let anno = if dashed {
+        chart
+            .draw_series(DashedLineSeries::new(points, 8, 5, style))
+            .map_err(err)?
+    } else {
+        chart
+            .draw_series(LineSeries::new(points, style))
+            .map_err(err)?
+    };
+    if let Some(name) = legend {
+        anno.label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+    }
+    Ok(())
+}
+
+fn draw_bode_comparison<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    b: &BodeComparison,
+) -> Result<(), String> {
+    area.fill(&WHITE).map_err(err)?;
+    let area = area.titled(&b.title, (FONT, 22)).map_err(err)?;
+    let (top, bottom) = area.split_vertically((55).percent());
+    let (f0, f1) = frequency_span(b.f_hz);
+    let db: Vec<Vec<f64>> = b
+        .curves
+        .iter()
+        .map(|c| {
+            c.magnitude
+                .iter()
+                .map(|m| 20.0 * m.max(1e-300).log10())
+                .collect()
+        })
+        .collect();
+    let phase: Vec<Vec<f64>> = b
+        .curves
+        .iter()
+        .map(|c| unwrap_degrees(&c.phase_deg))
+        .collect();
+    let (lo, hi) = padded_range(db.iter().flatten());
+    let (plo, phi) = padded_range(phase.iter().flatten());
+    let mut mag = bode_panel(&top, (f0, f1), lo..hi, "magnitude [dB]", false)?;
+    for (k, (c, m)) in b.curves.iter().zip(&db).enumerate() {
+        let points = b.f_hz.iter().copied().zip(m.iter().copied()).collect();
+        draw_curve(
+            &mut mag,
+            points,
+            COLORS[k % COLORS.len()],
+            c.dashed,
+            Some(&c.name),
+        )?;
+    }
+    legend_box(&mut mag, SeriesLabelPosition::LowerLeft)?;
+    let mut ph = bode_panel(&bottom, (f0, f1), plo..phi, "phase [deg]", true)?;
+    for (k, (c, p)) in b.curves.iter().zip(&phase).enumerate() {
+        let points = b.f_hz.iter().copied().zip(p.iter().copied()).collect();
+        draw_curve(&mut ph, points, COLORS[k % COLORS.len()], c.dashed, None)?;
+    }
+    area.present().map_err(err)
+}
+
+/// Several frequency responses on one Bode plot, as an SVG document.
+pub fn bode_comparison_svg(b: &BodeComparison) -> Result<String, String> {
+    svg_string((1000, 700), |a| draw_bode_comparison(a, b))
+}
+
+/// One group of points of an agreement plot: `(paper, model, label)` in Hz.
+pub struct AgreementGroup {
+    pub name: String,
+    pub points: Vec<(f64, f64, String)>,
+}
+
+fn draw_agreement<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    title: &str,
+    groups: &[AgreementGroup],
+) -> Result<(), String> {
+    area.fill(&WHITE).map_err(err)?;
+    let area = area.titled(title, (FONT, 20)).map_err(err)?;
+    let all = || groups.iter().flat_map(|g| g.points.iter());
+    let lo = all().map(|p| p.0.min(p.1)).fold(f64::INFINITY, f64::min) / 1.5;
+    let hi = all().map(|p| p.0.max(p.1)).fold(0.0, f64::max) * 1.5;
+    let (lo, hi) = if lo.is_finite() && hi > lo {
+        (lo, hi)
+    } else {
+        (1.0, 100.0)
+    };
+    let mut chart = ChartBuilder::on(&area)
+        .margin(10)
+        .margin_right(30)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((lo..hi).log_scale(), (lo..hi).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("the paper's value [Hz]")
+        .y_desc("the model's value [Hz]")
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 14))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+    let gray = RGBColor(120, 120, 120);
+    chart
+        .draw_series(DashedLineSeries::new(
+            [(lo, lo), (hi, hi)],
+            6,
+            4,
+            gray.stroke_width(1),
+        ))
+        .map_err(err)?
+        .label("model = paper")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], gray.stroke_width(1)));
+    for (k, g) in groups.iter().enumerate() {
+        let color = COLORS[k % COLORS.len()];
+        chart
+            .draw_series(g.points.iter().map(|(x, y, label)| {
+                EmptyElement::at((*x, *y))
+                    + Circle::new((0, 0), 5, color.filled())
+                    + Text::new(label.clone(), (7, 2 + 14 * k as i32 - 14), (FONT, 12))
+            }))
+            .map_err(err)?
+            .label(g.name.as_str())
+            .legend(move |(x, y)| Circle::new((x + 9, y), 5, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .label_font((FONT, 13))
+        .draw()
+        .map_err(err)?;
+    area.present().map_err(err)
+}
+
+/// The model's values against the paper's on log-log axes (the diagonal is agreement), as an
+/// SVG document.
+pub fn agreement_svg(title: &str, groups: &[AgreementGroup]) -> Result<String, String> {
+    svg_string((900, 800), |a| draw_agreement(a, title, groups))
 }
 
 /// Blue (-1) through white (0) to red (+1).
