@@ -10,11 +10,13 @@ import pathlib
 import re
 import shutil
 import subprocess
+import xml.etree.ElementTree as ET
 import zipfile
 
 import pytest
 from fmpy.validation import validate_fmu
 
+from conftest import hsp
 from figures import assert_png, assert_svg
 
 FIGURES = ["sketch.svg", "bond_graph.svg", "default_experiment.svg", "bode.svg"]
@@ -64,12 +66,30 @@ def test_figures_are_real_pictures(archive):
     assert_png(archive["documentation/bode.png"], min_width=800)
 
 
-def test_bond_graph_shows_the_models_elements(archive):
+def test_bond_graph_shows_the_models_elements(archive, page):
+    """The figure is the model's own graph: every element `hsp graph` prints for the settings the
+    caption names is drawn exactly once (as a node titled with its name), grouped as the paper
+    draws it, and nothing is left outside the groups."""
     svg = archive["documentation/bond_graph.svg"].decode()
-    # The elements of the hub and of the plate modes, named as in the model (the consistent
-    # formulation: hub and modes in one I-field, the structure's modal dashpots).
+    root = ET.fromstring(svg)
+    tag = lambda e: e.tag.split("}")[-1]
+    titles = [e.text for e in root.iter() if tag(e) == "title"]
+    texts = [e.text for e in root.iter() if tag(e) == "text"]
+    caption = page[page.index('<img src="bond_graph.svg"'):]
+    caption = caption[:caption.index("</figcaption>")]
+    settings = re.findall(r"<code>([\w.]+) = ([^<]+)</code>", caption)
+    assert ("hydraulics.model", "2") in settings, settings
+    args = [a for k, v in settings for a in ("--set", f"{k}={v}")]
+    names = re.findall(r'^  e\d+ \[label=.*, tooltip="([^"]*)"\];$', hsp("graph", *args), re.M)
+    assert len(names) > 50, len(names)
+    for name in names:
+        assert titles.count(name) == 1, (name, titles.count(name))
+    for group in ("BG1 ", "BG2 ", "BG3 ", "Torsion bar", "Hub", "Plate modes", "Signal part"):
+        assert any(t.startswith(group) for t in texts), group
+    assert "Other elements" not in texts
+    # The consistent formulation: hub and modes in one I-field, the structure's modal dashpots.
     for name in ("plate.inertia", "plate.C[1]", "plate.damping[1]", "torsion_bar.k"):
-        assert name in svg, name
+        assert name in titles, name
 
 
 def test_page_content(page, md):

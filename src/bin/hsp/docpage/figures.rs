@@ -1,7 +1,6 @@
 //! The figures of the documentation page: the sketch of the rig, the model's bond graph, the
 //! default experiment run on the packaged FMU and the Bode plot of the linearised model.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -11,79 +10,41 @@ use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
 
+use super::bond_graph;
 use crate::plot;
 
 /// The hand-drawn sketch of the rig.
 pub const SKETCH: &str = include_str!("../../../../docs/img/sketch.svg");
 
-/// Settings of the bond-graph figure: the FMU's start values with a two-mode plate, so that the
-/// picture stays readable (each further plate mode adds the same pattern).
-pub const BOND_GRAPH_FIGURE: &[(&str, &str)] =
-    &[("plate.N", "2"), ("plate.M", "1"), ("plate.Cd", "0")];
+/// Settings of the bond-graph figure: the full servo valve (the FMU's start value, pinned here
+/// because the caption says so) with a two-mode plate, so that the picture stays readable (each
+/// further plate mode adds the same pattern).
+pub const BOND_GRAPH_FIGURE: &[(&str, &str)] = &[
+    ("hydraulics.model", "2"),
+    ("plate.N", "2"),
+    ("plate.M", "1"),
+    ("plate.Cd", "0"),
+];
 
-/// The model's bond graph at the FMU's start values (and [`BOND_GRAPH_FIGURE`]), its power part
-/// laid out and drawn as SVG by `layout-rs`.
+/// The model's bond graph at the FMU's start values (and [`BOND_GRAPH_FIGURE`]), grouped as the
+/// paper draws it and laid out by [`bond_graph::svg`], with the causal strokes of the compiled
+/// model.
 pub fn bond_graph_svg() -> Result<String, String> {
-    use layout::backends::svg::SVGWriter;
-    use layout::gv::{DotParser, GraphBuilder};
+    let graph = bond_graph(&figure_parameters(&[])?)?;
+    let compiled = graph
+        .compile()
+        .map_err(|e| format!("bond graph figure: {e}"))?;
+    Ok(bond_graph::svg(&graph, Some(compiled.causal_strokes())))
+}
 
+/// The parameters of the bond-graph figure: the FMU's start values with [`BOND_GRAPH_FIGURE`],
+/// then `more`.
+pub fn figure_parameters(more: &[(&str, &str)]) -> Result<Parameters, String> {
     let mut values = Values::from_start(&VARIABLES);
-    for (name, value) in BOND_GRAPH_FIGURE {
+    for (name, value) in BOND_GRAPH_FIGURE.iter().chain(more) {
         set_by_name(&mut values, name, value)?;
     }
-    let parameters = Parameters::from_values(&values, &Experiment::default())?;
-    let dot = power_part(&bond_graph(&parameters)?.to_dot());
-    let mut parser = DotParser::new(&dot);
-    let graph = parser
-        .process()
-        .map_err(|e| format!("bond graph: layout-rs cannot read the DOT: {e}"))?;
-    let mut builder = GraphBuilder::new();
-    builder.visit_graph(&graph);
-    let mut visual = builder.get();
-    let mut svg = SVGWriter::new();
-    visual.do_it(false, false, false, &mut svg);
-    Ok(svg.finalize())
-}
-
-/// Whether a DOT statement names a signal block (`s12`).
-fn names_signal(statement: &str) -> bool {
-    statement
-        .split(|c: char| c.is_whitespace() || c == '[' || c == ';')
-        .take(3)
-        .any(|w| w.len() > 1 && w.starts_with('s') && w[1..].chars().all(|c| c.is_ascii_digit()))
-}
-
-/// The power part of `hsp graph`'s DOT, restyled for `layout-rs` (which draws plain arrows and
-/// boxes or circles): signal blocks dropped; elements as boxes, junctions as circles; each bond
-/// an arrow in the power direction, black when the causal stroke is at its head (the element
-/// there receives the effort), blue when it is at its tail. The bond names ("a->b") repeat the
-/// element names and are dropped.
-fn power_part(dot: &str) -> String {
-    let mut out = String::new();
-    for l in dot.lines() {
-        let t = l.trim_start();
-        if names_signal(t) || t.starts_with("node ") || t.starts_with("label=") {
-            continue;
-        }
-        if let Some((ends, attrs)) = t.split_once(" [").filter(|(e, _)| e.contains(" -> ")) {
-            let color = if attrs.contains("arrowhead=teelnormal") {
-                "black"
-            } else {
-                "blue"
-            };
-            writeln!(out, "  {ends} [color=\"{color}\"];").unwrap();
-        } else if t.starts_with('e') && t.contains("[label=") {
-            let junction = t.contains("[label=\"0\"") || t.contains("[label=\"1\"");
-            if junction {
-                writeln!(out, "  {t}").unwrap();
-            } else {
-                writeln!(out, "  {}", t.replacen("[label=", "[shape=box, label=", 1)).unwrap();
-            }
-        } else {
-            writeln!(out, "{l}").unwrap();
-        }
-    }
-    out
+    Parameters::from_values(&values, &Experiment::default())
 }
 
 /// Runs `hsp run` with its defaults (no `--set`) on the FMU in a child process: its summary, the
@@ -178,26 +139,4 @@ pub fn bode(work: &Path) -> Result<BodeFigure, String> {
         }
     );
     Ok(BodeFigure { paths, caption })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn power_part_keeps_elements_and_bonds_only() {
-        let dot = "digraph \"g\" {\n  rankdir=LR;\n  node [shape=plaintext];\n  \
-                   e0 [label=\"1\", tooltip=\"j\"];\n  e1 [label=\"I: m\\n2\", tooltip=\"m\"];\n  \
-                   s0 [shape=box, label=\"sensor\"];\n  \
-                   e0 -> e1 [dir=both, arrowhead=teelnormal, arrowtail=none, label=\"j->m\"];\n  \
-                   e1 -> s0 [style=dashed];\n}";
-        let p = power_part(dot);
-        assert!(p.contains("e0 [label=\"1\""), "{p}");
-        assert!(p.contains("e1 [shape=box, label="), "{p}");
-        assert!(p.contains("e0 -> e1 [color=\"black\"];"), "{p}");
-        assert!(
-            !p.contains("s0") && !p.contains("j->m") && !p.contains("plaintext"),
-            "{p}"
-        );
-    }
 }

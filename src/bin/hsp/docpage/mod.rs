@@ -3,8 +3,9 @@
 //! The page stands alone (the reader has neither the paper nor this repository) and loads nothing
 //! from the network: every figure is a file in `documentation/` beside it.
 //! - `sketch.svg`: a hand-drawn sketch of the rig (`docs/img/sketch.svg`, embedded in `hsp`);
-//! - `bond_graph.svg`: the model's own bond graph (the DOT of `hsp graph`) laid out by the
-//!   pure-Rust `layout-rs`, so packaging needs no Graphviz;
+//! - `bond_graph.svg`: the model's own bond graph (its elements, bonds and causal strokes, the
+//!   graph `hsp graph` prints), grouped as the paper draws it and laid out by `bond_graph.rs`, so
+//!   packaging needs no Graphviz;
 //! - `default_experiment.svg`/`.png`: `hsp run` with its defaults on the packaged FMU itself (run
 //!   as a child process of `hsp`, through the FMU's C ABI), its summary printed on the page as the
 //!   expected result;
@@ -15,9 +16,11 @@
 //! truth, read by the project's one reader, `tools/model_description.rs`): causality,
 //! variability, start, min, max, unit and display unit, values printed short.
 //!
-//! One job a file: `figures.rs` makes the figures, `tables.rs` the tables, `page.rs` fills the page
-//! template `page.html` with them; `text.rs` has the number and HTML formatting they share.
+//! One job a file: `figures.rs` makes the figures (`bond_graph.rs` draws the bond graph),
+//! `tables.rs` the tables, `page.rs` fills the page template `page.html` with them; `text.rs` has
+//! the number and HTML formatting they share.
 
+mod bond_graph;
 mod figures;
 mod page;
 mod tables;
