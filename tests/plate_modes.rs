@@ -58,7 +58,10 @@ fn paper_formulation_rounds_to_eq16_as_printed() {
     // Against the paper itself (src/model/paper.rs): each eq. 16 frequency that eq. 21 gives
     // (docs/model-notes.md, item 1) is the model's value rounded to the printed digits. The
     // 56.8 Hz has no mode (item 2).
-    let p = PlateParameters::default();
+    let p = PlateParameters {
+        formulation: Formulation::Paper,
+        ..PlateParameters::default()
+    };
     let mut assigned = 0;
     for f in EQ16 {
         let Some(label) = f.mode else { continue };

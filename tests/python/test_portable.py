@@ -156,7 +156,7 @@ def run_both(fmu_path, unzipped, md, vr, drivers, settings=""):
 def settings_of(md, vr, values):
     """VR:TYPE:VALUE,... for the driver, each value with its variable's type."""
     kinds = {v.name: v.type for v in md.modelVariables}
-    code = {"Real": "r", "Integer": "i", "Boolean": "b"}
+    code = {"Real": "r", "Integer": "i", "Enumeration": "i", "Boolean": "b"}  # FMI 2.0 sets an Enumeration as an Integer
     return ",".join(f"{vr[n]}:{code[kinds[n]]}:{int(x) if code[kinds[n]] != 'r' else repr(x)}"
                     for n, x in values.items())
 
