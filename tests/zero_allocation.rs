@@ -74,7 +74,8 @@ const WARM_UP: usize = 300;
 const MEASURED: usize = 100;
 
 /// Allocations made by `MEASURED` steps after `WARM_UP` steps of the configuration `sets`
-/// (integer and boolean parameters by name) with method `method` (1 Rodas5P, 2 Radau5).
+/// (integer and boolean parameters by name) with method `method` (1 Rodas5P, 2 Radau5, 3 the
+/// real-time fixed-step Rodas5P).
 fn allocations_per_run(sets: &[(&str, i32)], method: i32) -> u64 {
     let fmu = Fmu::new();
     for &(name, v) in sets {
@@ -144,6 +145,21 @@ fn servo_valve_coupled_steps_without_allocating() {
     for method in [1, 2] {
         let n = allocations_per_run(SERVO_VALVE_COUPLED, method);
         assert_eq!(n, 0, "method {method}: {n} allocations in {MEASURED} steps");
+    }
+}
+
+/// The real-time method (`solver.method = 3`) with 4 fixed substeps per communication step: its
+/// step allocates nothing either, for a constant Jacobian and for one refactorised at every step.
+#[test]
+fn real_time_method_steps_without_allocating() {
+    for config in [LOES_COUPLED, SERVO_VALVE_COUPLED] {
+        let sets: Vec<(&str, i32)> = config
+            .iter()
+            .copied()
+            .chain([("solver.substeps", 4)])
+            .collect();
+        let n = allocations_per_run(&sets, 3);
+        assert_eq!(n, 0, "{config:?}: {n} allocations in {MEASURED} steps");
     }
 }
 

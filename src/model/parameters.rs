@@ -27,6 +27,7 @@ impl From<SolverMethod> for Method {
         match m {
             SolverMethod::Rodas5P => Method::Rodas5P,
             SolverMethod::Radau5 => Method::Radau5,
+            SolverMethod::Rodas5PFixed => Method::Rodas5PFixed,
         }
     }
 }
@@ -94,6 +95,8 @@ pub struct Parameters {
     pub atol: f64,
     pub max_step: f64,
     pub max_steps: u64,
+    /// Equal steps per communication step of the real-time method (`solver.substeps`).
+    pub substeps: u32,
     /// Co-simulation: let steps run past communication points while the inputs are unchanged
     /// (`solver.dense_output`).
     pub dense_output: bool,
@@ -132,6 +135,13 @@ impl Parameters {
         if max_steps < 1 {
             return Err(format!(
                 "solver.max_steps: must be at least 1, got {max_steps}"
+            ));
+        }
+        let substeps = values.integer(idx::SOLVER_SUBSTEPS);
+        if !(1..=crate::solver::MAX_SUBSTEPS as i32).contains(&substeps) {
+            return Err(format!(
+                "solver.substeps: must be in 1..={}, got {substeps}",
+                crate::solver::MAX_SUBSTEPS
             ));
         }
         let formulation: Formulation = item::<PlateFormulation, _>(values, idx::PLATE_FORMULATION)?;
@@ -238,6 +248,7 @@ impl Parameters {
             atol: values.real(idx::SOLVER_ATOL),
             max_step: values.real(idx::SOLVER_MAX_STEP),
             max_steps: max_steps as u64,
+            substeps: substeps as u32,
             dense_output: values.boolean(idx::SOLVER_DENSE_OUTPUT),
             stop_time: experiment.stop_time,
         };
@@ -254,6 +265,7 @@ impl Parameters {
             atol: Atol::Vector(system.nominal().iter().map(|n| n * self.atol).collect()),
             max_step: self.max_step,
             max_steps: self.max_steps,
+            substeps: self.substeps,
             ..SolverOptions::default()
         }
     }

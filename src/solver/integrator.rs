@@ -503,6 +503,14 @@ impl Integrator {
         self.h
     }
 
+    /// [`Method::Rodas5PFixed`]: the largest embedded error estimate of the steps of the last
+    /// call, as a multiple of the tolerances (the RMS norm the adaptive drivers test against 1:
+    /// above 1, a step they would have rejected). 0 before the first call and after a
+    /// discontinuity; meaningless for the adaptive methods.
+    pub fn fixed_step_error(&self) -> f64 {
+        self.hist.err_prev
+    }
+
     /// Replace the options (e.g. tolerances) keeping the state. Resets history like
     /// [`Integrator::notify_discontinuity`] since the controller history refers to the old
     /// tolerances.
@@ -651,6 +659,8 @@ impl Integrator {
             // steps it erred by 1e-5 at rtol 1e-6 on the LOES with the plate (6 times the error
             // of steps ending on the points; Rodas5P's order-4 extension: 2e-7).
             Method::Radau5 => super::radau5::advance(self, sys, t_end, times, out),
+            // Real time: the caller's step, in equal substeps, never past t_end.
+            Method::Rodas5PFixed => super::fixed::advance(self, sys, t_end, times, out),
         };
         if let Err(e) = &result {
             if e.kind != SolverErrorKind::TooManySteps {

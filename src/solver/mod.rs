@@ -12,6 +12,10 @@
 //!   [`Method::Radau5`] is the 3-stage Radau IIA collocation method (order 5) implemented the
 //!   way Hairer's `RADAU5` does it (simplified Newton, Jacobian/LU reuse, Gustafsson step
 //!   control); see [`radau5`].
+//!   [`Method::Rodas5PFixed`] is Rodas5P's step without error control, for real time: a fixed
+//!   number of equal substeps per call ([`SolverOptions::substeps`]), each with one Jacobian,
+//!   one factorisation, eight right-hand sides and eight solves, whatever the solution does;
+//!   see [`fixed`].
 //! * **Exact stop times.** [`Integrator::advance_to`] ends bit-exactly on `t_end`: the last
 //!   step is shortened to `t_end - t` and `t` is then *set* to `t_end` (no summing drift).
 //! * **Stepping past requested points.** [`Integrator::advance_past`] reports `t_end` too, but
@@ -98,6 +102,7 @@ use serde::{Deserialize, Serialize};
 
 mod common;
 mod dense;
+pub mod fixed;
 mod integrator;
 pub mod jacobian;
 pub mod linalg;
@@ -178,6 +183,11 @@ pub enum Method {
     Rodas5P,
     /// Radau IIA, 3 stages, order 5 (Hairer & Wanner, RADAU5).
     Radau5,
+    /// Rodas5P's step at a fixed step size, for real time: every call to `t_end` takes
+    /// [`SolverOptions::substeps`] equal steps, none rejected, at a cost independent of the
+    /// solution (see [`fixed`]). No error control: the tolerances only scale the error estimate
+    /// it reports.
+    Rodas5PFixed,
 }
 
 impl Method {
@@ -186,6 +196,7 @@ impl Method {
         match self {
             Method::Rodas5P => "rodas5p",
             Method::Radau5 => "radau5",
+            Method::Rodas5PFixed => "rodas5p-fixed",
         }
     }
 }
@@ -196,7 +207,10 @@ impl std::str::FromStr for Method {
         match s.to_ascii_lowercase().as_str() {
             "rodas5p" => Ok(Method::Rodas5P),
             "radau5" | "radau" | "radauiia5" => Ok(Method::Radau5),
-            _ => Err(format!("unknown method {s:?}; expected rodas5p or radau5")),
+            "rodas5p-fixed" | "rodas5pfixed" | "fixed" => Ok(Method::Rodas5PFixed),
+            _ => Err(format!(
+                "unknown method {s:?}; expected rodas5p, radau5 or rodas5p-fixed"
+            )),
         }
     }
 }
@@ -238,6 +252,18 @@ pub struct SolverOptions {
     pub max_steps: u64,
     /// Maximum number of consecutive rejected step attempts before `TooManyRejections`.
     pub max_consecutive_rejections: u32,
+    /// [`Method::Rodas5PFixed`] only: the number of equal steps each call to `t_end` takes
+    /// (at least 1, at most [`MAX_SUBSTEPS`]). Default 1. The adaptive methods ignore it.
+    #[serde(default = "one_substep")]
+    pub substeps: u32,
+}
+
+/// The most substeps [`SolverOptions::substeps`] allows: a fixed-cost step of more would be a
+/// communication step too long for real time.
+pub const MAX_SUBSTEPS: u32 = 10_000;
+
+fn one_substep() -> u32 {
+    1
 }
 
 impl Default for SolverOptions {
@@ -251,6 +277,7 @@ impl Default for SolverOptions {
             initial_step: None,
             max_steps: 100_000,
             max_consecutive_rejections: 50,
+            substeps: 1,
         }
     }
 }
@@ -326,6 +353,12 @@ impl SolverOptions {
         }
         if self.max_consecutive_rejections == 0 {
             return bad("max_consecutive_rejections must be positive, got 0".to_string());
+        }
+        if !(1..=MAX_SUBSTEPS).contains(&self.substeps) {
+            return bad(format!(
+                "substeps must be in 1..={MAX_SUBSTEPS}, got {}",
+                self.substeps
+            ));
         }
         Ok(())
     }

@@ -300,7 +300,7 @@ impl Default for Rodas5POptions {
 }
 
 /// Why a step attempt failed.
-enum Reject {
+pub(super) enum Reject {
     /// A stage produced NaN/inf.
     NonFinite,
     /// W = I/(hγ) - J is singular for this h.
@@ -310,16 +310,16 @@ enum Reject {
 /// Workspace of `advance`, kept between calls in the integrator's cache (no allocation per
 /// call); its contents are overwritten before they are read.
 pub(crate) struct Work {
-    f0: Vec<f64>,
+    pub(super) f0: Vec<f64>,
     dfdt: Vec<f64>,
     jac: DMatrix<f64>,
     /// The stamp of the constant part of the J that `jac` holds (see
     /// [`OdeSystem::jacobian_constant_part`]), None while it holds none.
     jac_holds: Option<u64>,
-    u: Vec<Vec<f64>>,
+    pub(super) u: Vec<Vec<f64>>,
     y: Vec<f64>,
     fy: Vec<f64>,
-    x1: Vec<f64>,
+    pub(super) x1: Vec<f64>,
     sc: Vec<f64>,
     rhs: DVector<f64>,
     /// Scratch of the structured solve.
@@ -420,13 +420,93 @@ fn factor(
     f.refactor(part, jac, h).then_some(f)
 }
 
+/// J (and, for a non-autonomous system, ∂f/∂t) at the integrator's current point into `w`, with
+/// f0 = f(t, x) already in `w.f0`; an error if either is not finite.
+pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    w: &mut Work,
+    stamp: Option<u64>,
+    autonomous: bool,
+) -> Result<(), SolverError> {
+    let t = integ.t;
+    let ok = jacobian_here(integ, sys, stamp, &w.f0, None, &mut w.jac, &mut w.jac_holds)
+        && (autonomous
+            || jacobian::time_derivative(sys, &mut integ.stats, t, &integ.x, &w.f0, &mut w.dfdt));
+    if ok {
+        Ok(())
+    } else {
+        Err(SolverError::new(
+            SolverErrorKind::NonFinite,
+            t,
+            "the Jacobian (or df/dt) is not finite at the current point",
+        ))
+    }
+}
+
+/// W = I/(h γ) - J for the step size `h`, at the front of `lus`, with the J that `w.jac` (or,
+/// for a constant Jacobian `stamp`, the integrator's cache) holds: for a constant J a kept
+/// factorisation if one was made for this step size (to within `SAME_STEP`) or, if `shorten`,
+/// for a step up to `SHORTER` times shorter, else a new one; for a J that changes from step to
+/// step a new one in the memory of the last. Returns the step size to take (that of the
+/// factorisation) and false if W is singular.
+pub(super) fn factorise<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    w: &mut Work,
+    lus: &mut Vec<Factor>,
+    stamp: Option<u64>,
+    h: f64,
+    shorten: bool,
+) -> (f64, bool) {
+    match stamp {
+        Some(_) => {
+            let h_lu = integ
+                .counted
+                .factorisation_step(h, &mut integ.stats, 1, shorten);
+            let jac = &integ.cache.jac;
+            let pattern = &mut w.pattern;
+            let ok = front_factorisation(
+                lus,
+                h_lu,
+                |f| f.h,
+                |old| {
+                    let mut f = factor(jac, pattern.partition(jac, stamp), h_lu, old)?;
+                    let n = jac.nrows();
+                    if n <= step_map::MAX_DIM {
+                        f.inverse.build(&f.lu, n, &mut w.scratch);
+                    }
+                    Some(f)
+                },
+            );
+            (h_lu, ok)
+        }
+        None => {
+            integ.stats.lu_decompositions += 1;
+            if lus.is_empty() {
+                lus.extend(w.spare.take());
+            }
+            lus.truncate(1);
+            let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
+            let ok = match lus.first_mut() {
+                Some(f) => f.refactor(part, &w.jac, h),
+                None => {
+                    lus.extend(factor(&w.jac, part, h, None));
+                    !lus.is_empty()
+                }
+            };
+            (h, ok)
+        }
+    }
+}
+
 /// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
 /// ∂f/∂t already in `w`. On success `w.x1` holds y1 and the return value is the error norm.
 ///
 /// On x86-64 processors with AVX2 the step is the same code compiled for 4-wide vectors (its
 /// stage sums are vector updates over the states); multiplications and additions stay separate,
 /// so the bits are those of the portable code (see [`super::dense`]).
-fn step<S: OdeSystem + ?Sized>(
+pub(super) fn step<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     w: &mut Work,
@@ -551,7 +631,7 @@ fn extension(y0: f64, y1: f64, k: [f64; 3], theta: f64) -> f64 {
 }
 
 /// Evaluate the dense output at θ into `buf` from y0, y1 and the stage vectors.
-fn interpolate(y0: &[f64], y1: &[f64], u: &[Vec<f64>], theta: f64, buf: &mut [f64]) {
+pub(super) fn interpolate(y0: &[f64], y1: &[f64], u: &[Vec<f64>], theta: f64, buf: &mut [f64]) {
     for i in 0..y0.len() {
         buf[i] = extension(y0[i], y1[i], corrections(u, i), theta);
     }
@@ -580,7 +660,7 @@ pub(crate) fn dense(y0: &[f64], y1: &[f64], coef: &[f64], theta: f64, buf: &mut 
 }
 
 /// Evaluate f0 (and Jacobian/∂f/∂t lazily later) at the current point, failing on NaN/inf.
-fn eval_f0<S: OdeSystem + ?Sized>(
+pub(super) fn eval_f0<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     f0: &mut [f64],
@@ -667,71 +747,13 @@ fn advance_with<S: OdeSystem + ?Sized>(
         };
         let t = integ.t;
         if !jac_ok {
-            let ok = jacobian_here(integ, sys, stamp, &w.f0, None, &mut w.jac, &mut w.jac_holds)
-                && (autonomous
-                    || jacobian::time_derivative(
-                        sys,
-                        &mut integ.stats,
-                        t,
-                        &integ.x,
-                        &w.f0,
-                        &mut w.dfdt,
-                    ));
-            if !ok {
-                return Err(SolverError::new(
-                    SolverErrorKind::NonFinite,
-                    t,
-                    "the Jacobian (or df/dt) is not finite at the current point",
-                ));
-            }
+            jacobian_at_point(integ, sys, w, stamp, autonomous)?;
             jac_ok = true;
         }
-        // W = I/(h γ) - J, one LU for all 8 stages: with a constant J a kept one if it was
-        // made for this step size (to within SAME_STEP; see there) or, stepping freely, for a
-        // step up to SHORTER times shorter, else a new one.
-        let (h, ok) = match stamp {
-            Some(_) => {
-                // A step free to go past t_end that does not end on the limit may be
-                // shortened to use a kept LU.
-                let shorten = limit > t_end && !last;
-                let h_lu = integ
-                    .counted
-                    .factorisation_step(h, &mut integ.stats, 1, shorten);
-                let jac = &integ.cache.jac;
-                let pattern = &mut w.pattern;
-                let ok = front_factorisation(
-                    lus,
-                    h_lu,
-                    |f| f.h,
-                    |old| {
-                        let mut f = factor(jac, pattern.partition(jac, stamp), h_lu, old)?;
-                        let n = jac.nrows();
-                        if n <= step_map::MAX_DIM {
-                            f.inverse.build(&f.lu, n, &mut w.scratch);
-                        }
-                        Some(f)
-                    },
-                );
-                (h_lu, ok)
-            }
-            None => {
-                // J changes from step to step: refactorise in the memory of the last one.
-                integ.stats.lu_decompositions += 1;
-                if lus.is_empty() {
-                    lus.extend(w.spare.take());
-                }
-                lus.truncate(1);
-                let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
-                let ok = match lus.first_mut() {
-                    Some(f) => f.refactor(part, &w.jac, h),
-                    None => {
-                        lus.extend(factor(&w.jac, part, h, None));
-                        !lus.is_empty()
-                    }
-                };
-                (h, ok)
-            }
-        };
+        // W = I/(h γ) - J, one LU for all 8 stages. A step free to go past t_end that does
+        // not end on the limit may be shortened to use a kept LU of a constant J.
+        let shorten = limit > t_end && !last;
+        let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten);
         let result = match lus.first() {
             Some(f) if ok => step(integ, sys, w, f, h, autonomous),
             _ => Err(Reject::Singular),

@@ -73,6 +73,22 @@ pub fn take_warnings() -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// The exported symbol `name` of the library `handle`, as a `T`.
+///
+/// # Safety
+///
+/// `handle` comes from `dlopen` and `T` is the function-pointer type of the symbol.
+unsafe fn sym<T: Copy>(handle: *mut c_void, name: &str) -> Result<T, String> {
+    let c = CString::new(name).map_err(|e| e.to_string())?;
+    // SAFETY: a handle from dlopen and a NUL-terminated name.
+    let p = unsafe { libc::dlsym(handle, c.as_ptr()) };
+    if p.is_null() {
+        return Err(format!("the FMU does not export {name}"));
+    }
+    // SAFETY: the caller names a symbol whose type is `T`, a function pointer.
+    Ok(unsafe { std::mem::transmute_copy(&p) })
+}
+
 /// An unpacked FMU with its library loaded.
 pub struct Fmu {
     handle: *mut c_void,
@@ -119,16 +135,6 @@ impl Fmu {
                 .into_owned();
             return Err(format!("dlopen {}: {err}", so.display()));
         }
-        unsafe fn sym<T: Copy>(handle: *mut c_void, name: &str) -> Result<T, String> {
-            let c = CString::new(name).map_err(|e| e.to_string())?;
-            // SAFETY: a handle from dlopen and a NUL-terminated name.
-            let p = unsafe { libc::dlsym(handle, c.as_ptr()) };
-            if p.is_null() {
-                return Err(format!("the FMU does not export {name}"));
-            }
-            // SAFETY: the caller names a symbol whose type is `T`, a function pointer.
-            Ok(unsafe { std::mem::transmute_copy(&p) })
-        }
         // SAFETY: the symbols are the FMI 2.0 functions with the signatures above.
         unsafe {
             Ok(Fmu {
@@ -148,6 +154,17 @@ impl Fmu {
                 dir,
             })
         }
+    }
+
+    /// Another exported function of the loaded library (an FMI 3.0 one, say).
+    ///
+    /// # Safety
+    ///
+    /// `T` must be the function-pointer type of the symbol `name`.
+    #[allow(dead_code)] // bench-latency's FMI 3.0 calls; `hsp` needs none
+    pub unsafe fn symbol<T: Copy>(&self, name: &str) -> Result<T, String> {
+        // SAFETY: the handle came from dlopen; the caller vouches for `T`.
+        unsafe { sym(self.handle, name) }
     }
 
     /// Instantiates a co-simulation slave.
@@ -326,11 +343,15 @@ impl Instance<'_> {
     }
 
     pub fn do_step(&self, t: f64, h: f64) -> Result<(), String> {
-        check(
-            // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
-            unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) },
-            &format!("fmi2DoStep at t = {t}"),
-        )
+        // The message is formatted only on failure: a step allocates nothing here.
+        check(self.do_step_status(t, h), "fmi2DoStep").map_err(|e| format!("{e} at t = {t}"))
+    }
+
+    /// `fmi2DoStep`'s status alone (what a latency measurement times).
+    #[inline]
+    pub fn do_step_status(&self, t: f64, h: f64) -> Fmi2Status {
+        // SAFETY: a function of the loaded FMU with its live instance and arguments that outlive the call.
+        unsafe { (self.fmu.do_step)(self.c, t, h, FMI2_TRUE) }
     }
 }
 

@@ -1,0 +1,455 @@
+//! Latency of one communication step through the FMU's C ABI, for real-time use (hardware in
+//! the loop). Not a test.
+//!
+//! ```text
+//! cargo run --release --bin hsp -- package            # build fmu/HydraulicSlewingPlate.fmu
+//! cargo run --release --bin bench-latency             # writes bench/latency.md
+//! cargo run --release --bin bench-latency -- --steps 20000 --rounds 1 --only complete
+//! ```
+//!
+//! Loads the packaged FMU's Linux library as an importer does and closes a loop around it, as a
+//! real-time target would: at every communication point the importer reads `y_pot`, computes
+//! the coil drive of a proportional controller, `e_in = A1 A2 (r − y_pot)` (the analog loop's
+//! law, `controller.external = true`), with `r` a square wave (0 and [`R_HIGH`] V, period
+//! [`PERIOD`] s: steps of about 3.75 deg of motor angle, inside linear theory), sets it, and
+//! calls `fmi2DoStep` (or `fmi3DoStep`). So the input changes at every step. After
+//! [`WARM_UP`] steps, each `DoStep` of `--steps` (default 100 000) is timed by the calling
+//! thread's CPU clock (`CLOCK_THREAD_CPUTIME_ID`: what the step costs, without the time the
+//! thread waits while the operating system runs others) and by the wall clock
+//! (`CLOCK_MONOTONIC`).
+//!
+//! For every configuration (a preset, a communication step, a solver) the run is repeated
+//! `--rounds` times (default 3), the rounds of all configurations interleaved, and each figure is
+//! the median over the rounds with the range beside it. The figures: the step's p50, p99, p99.9
+//! and maximum, the ratio max/p50, and the largest communication-step rate the configuration
+//! sustains with a 2× margin, 1 / (2 max), of its thread CPU time; a configuration sustains its
+//! own period when that rate is at least 1 / period.
+//!
+//! With `--accuracy` it instead compares the real-time method's results with the adaptive
+//! solver's and scans its stability, and writes `bench/realtime_accuracy.md` (see
+//! [`accuracy`]).
+//!
+//! The clock reads cost about 0.1 µs (wall) and 0.3–1 µs (thread CPU, a system call) and are
+//! inside every figure; a thread CPU time comes in steps of the kernel's accounting, which on
+//! this machine's kernel is 1 ns (sched_clock).
+
+#[allow(dead_code)]
+#[path = "../hsp/loader.rs"]
+mod loader;
+
+mod accuracy;
+mod fmi3;
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
+use hydraulic_slewing_plate::fmi3::ffi::Fmi3Status;
+use hydraulic_slewing_plate::model::presets;
+use hydraulic_slewing_plate::model::variables::vr;
+use loader::Fmu;
+
+/// The square wave's high level [V]; its low level is 0.
+const R_HIGH: f64 = 0.25;
+/// The square wave's period [s].
+const PERIOD: f64 = 2.0;
+/// The analog loop's gains A1 A2 (controller.A1 = 2, controller.A2 = 10): the controller the
+/// importer runs.
+const GAIN: f64 = 20.0;
+/// Untimed steps before the timed ones (caches, the solver's first Jacobian, the page faults of
+/// its workspace).
+const WARM_UP: usize = 1_000;
+/// The relative tolerance given to the adaptive solvers (through `fmi2SetupExperiment` /
+/// `fmi3EnterInitializationMode`): the FMU's default.
+const RTOL: f64 = 1e-6;
+
+/// The solvers compared: a name, `solver.method`, `solver.substeps`.
+const SOLVERS: &[(&str, i32, i32)] = &[
+    ("Rodas5P (adaptive, default)", 1, 1),
+    ("Radau IIA (adaptive)", 2, 1),
+    ("real time, 1 substep", 3, 1),
+    ("real time, 4 substeps", 3, 4),
+];
+
+/// The plants: a name and the preset it applies (the preset's own move is switched off by
+/// `controller.external`).
+const PLANTS: &[(&str, &str)] = &[
+    ("complete system", presets::COMPLETE),
+    ("LOES motor alone", "loes-motor"),
+    ("LOES with hub and plate (Fig. 9b)", "paper-fig9b"),
+];
+
+/// The communication steps [s].
+const STEPS: &[f64] = &[1e-3, 1e-4];
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Version {
+    Fmi2,
+    Fmi3,
+}
+
+impl Version {
+    fn name(self) -> &'static str {
+        match self {
+            Version::Fmi2 => "fmi2DoStep",
+            Version::Fmi3 => "fmi3DoStep",
+        }
+    }
+}
+
+struct Config {
+    plant: (&'static str, &'static str),
+    solver: (&'static str, i32, i32),
+    step: f64,
+    version: Version,
+}
+
+/// The figures of one run, in nanoseconds.
+#[derive(Clone, Copy, Default)]
+struct Figures {
+    p50: f64,
+    p99: f64,
+    p999: f64,
+    max: f64,
+    wall_p50: f64,
+    wall_p999: f64,
+    wall_max: f64,
+}
+
+fn now(clock: libc::clockid_t) -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes the timespec it is given.
+    unsafe { libc::clock_gettime(clock, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+/// The value at quantile `q` of sorted nanoseconds (the smallest value with at least q of the
+/// sample at or below it).
+fn quantile(sorted: &[u64], q: f64) -> f64 {
+    let k = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[k - 1] as f64
+}
+
+/// The square-wave reference at time t.
+fn reference(t: f64) -> f64 {
+    if (t % PERIOD) < PERIOD / 2.0 {
+        R_HIGH
+    } else {
+        0.0
+    }
+}
+
+/// The settings of a configuration, as `NAME=VALUE`.
+fn settings(config: &Config) -> Result<Vec<(String, String)>, String> {
+    let mut sets: Vec<(String, String)> = presets::preset(config.plant.1)?
+        .settings
+        .iter()
+        .map(|(n, v)| (n.to_string(), v.to_string()))
+        .collect();
+    sets.push(("controller.external".into(), "true".into()));
+    sets.push(("solver.method".into(), config.solver.1.to_string()));
+    sets.push(("solver.substeps".into(), config.solver.2.to_string()));
+    Ok(sets)
+}
+
+/// Runs one configuration: `steps` timed steps after the warm-up.
+fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
+    let n = WARM_UP + steps;
+    let h = config.step;
+    let stop = n as f64 * h;
+    let mut cpu = Vec::with_capacity(steps);
+    let mut wall = Vec::with_capacity(steps);
+    let sets = settings(config)?;
+    match config.version {
+        Version::Fmi2 => {
+            let inst = fmu.instantiate("bench-latency")?;
+            inst.setup(Some(RTOL), 0.0, stop)?;
+            for (name, value) in &sets {
+                inst.set_from_text(&format!("{name}={value}"))?;
+            }
+            inst.enter_initialization()?;
+            inst.exit_initialization()?;
+            let mut y = [0.0];
+            for k in 0..n {
+                let t = k as f64 * h;
+                inst.get_reals_into(&[vr::Y_POT], &mut y)?;
+                inst.set_real(vr::E_IN, GAIN * (reference(t) - y[0]))?;
+                let (c0, w0) = (
+                    now(libc::CLOCK_THREAD_CPUTIME_ID),
+                    now(libc::CLOCK_MONOTONIC),
+                );
+                let status = inst.do_step_status(t, h);
+                let (c1, w1) = (
+                    now(libc::CLOCK_THREAD_CPUTIME_ID),
+                    now(libc::CLOCK_MONOTONIC),
+                );
+                if status > Fmi2Status::Warning {
+                    return Err(format!("fmi2DoStep returned {status:?} at t = {t}"));
+                }
+                if k >= WARM_UP {
+                    cpu.push(c1 - c0);
+                    wall.push(w1 - w0);
+                }
+            }
+            inst.terminate()?;
+        }
+        Version::Fmi3 => {
+            let inst = fmi3::Instance::new(fmu)?;
+            for (name, value) in &sets {
+                inst.set_from_text(name, value)?;
+            }
+            inst.initialize(RTOL, stop)?;
+            let mut y = 0.0;
+            for k in 0..n {
+                let t = k as f64 * h;
+                let s1 = inst.get_real(vr::Y_POT, &mut y);
+                let s2 = inst.set_real(vr::E_IN, GAIN * (reference(t) - y));
+                if s1.max(s2) > Fmi3Status::Warning {
+                    return Err(format!("fmi3GetFloat64/SetFloat64 failed at t = {t}"));
+                }
+                let (c0, w0) = (
+                    now(libc::CLOCK_THREAD_CPUTIME_ID),
+                    now(libc::CLOCK_MONOTONIC),
+                );
+                let status = inst.do_step(t, h);
+                let (c1, w1) = (
+                    now(libc::CLOCK_THREAD_CPUTIME_ID),
+                    now(libc::CLOCK_MONOTONIC),
+                );
+                if status > Fmi3Status::Warning {
+                    return Err(format!("fmi3DoStep returned {status:?} at t = {t}"));
+                }
+                if k >= WARM_UP {
+                    cpu.push(c1 - c0);
+                    wall.push(w1 - w0);
+                }
+            }
+        }
+    }
+    cpu.sort_unstable();
+    wall.sort_unstable();
+    Ok(Figures {
+        p50: quantile(&cpu, 0.5),
+        p99: quantile(&cpu, 0.99),
+        p999: quantile(&cpu, 0.999),
+        max: quantile(&cpu, 1.0),
+        wall_p50: quantile(&wall, 0.5),
+        wall_p999: quantile(&wall, 0.999),
+        wall_max: quantile(&wall, 1.0),
+    })
+}
+
+/// The median of the rounds' values, and their range.
+fn median_range(values: &[f64]) -> (f64, f64, f64) {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let median = if v.len() % 2 == 1 {
+        v[v.len() / 2]
+    } else {
+        0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2])
+    };
+    (median, v[0], v[v.len() - 1])
+}
+
+/// Microseconds with their range over the rounds: "18.3 (18.1–18.9)".
+fn us(values: &[f64]) -> String {
+    let (m, lo, hi) = median_range(values);
+    if values.len() == 1 {
+        format!("{:.1}", m / 1e3)
+    } else {
+        format!("{:.1} ({:.1}–{:.1})", m / 1e3, lo / 1e3, hi / 1e3)
+    }
+}
+
+fn ratio(values: &[f64]) -> String {
+    let (m, lo, hi) = median_range(values);
+    if values.len() == 1 {
+        format!("{m:.1}")
+    } else {
+        format!("{m:.1} ({lo:.1}–{hi:.1})")
+    }
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into())
+}
+
+struct Args {
+    steps: usize,
+    rounds: usize,
+    only: Option<String>,
+    out: Option<PathBuf>,
+    accuracy: bool,
+}
+
+fn args() -> Args {
+    let mut a = Args {
+        steps: 100_000,
+        rounds: 3,
+        only: None,
+        accuracy: false,
+        out: Some(PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/bench/latency.md"
+        ))),
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(arg) = it.next() {
+        let mut value = |what: &str| it.next().unwrap_or_else(|| panic!("{arg} needs {what}"));
+        match arg.as_str() {
+            "--steps" => a.steps = value("a number").parse().expect("--steps N"),
+            "--rounds" => a.rounds = value("a number").parse().expect("--rounds N"),
+            "--only" => a.only = Some(value("a name")),
+            "--print" => a.out = None,
+            "--accuracy" => a.accuracy = true,
+            _ => panic!(
+                "unknown argument {arg}; expected --steps N, --rounds N, --only TEXT, --print or --accuracy"
+            ),
+        }
+    }
+    // A partial run is printed, not written over the committed table.
+    if a.only.is_some() || a.steps != 100_000 {
+        a.out = None;
+    }
+    a
+}
+
+fn main() {
+    let a = args();
+    let fmu_path = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fmu/HydraulicSlewingPlate.fmu"
+    ));
+    let fmu = Fmu::load(&fmu_path).unwrap_or_else(|e| {
+        panic!("{e}: build it first with `cargo run --release --bin hsp -- package`")
+    });
+    if a.accuracy {
+        let md = accuracy::report(&fmu).unwrap_or_else(|e| {
+            eprintln!("{e}");
+            std::process::exit(1)
+        });
+        print!("{md}");
+        let out = concat!(env!("CARGO_MANIFEST_DIR"), "/bench/realtime_accuracy.md");
+        std::fs::write(out, &md).unwrap_or_else(|e| panic!("{out}: {e}"));
+        eprintln!("wrote {out}");
+        return;
+    }
+    let mut configs = Vec::new();
+    for &plant in PLANTS {
+        for &step in STEPS {
+            for &solver in SOLVERS {
+                for version in [Version::Fmi2, Version::Fmi3] {
+                    // FMI 3.0 steps into the same core as FMI 2.0: timed on the complete
+                    // system only.
+                    if version == Version::Fmi3 && plant.1 != presets::COMPLETE {
+                        continue;
+                    }
+                    configs.push(Config {
+                        plant,
+                        solver,
+                        step,
+                        version,
+                    });
+                }
+            }
+        }
+    }
+    let name = |c: &Config| {
+        format!(
+            "{} | {} ms | {} | {}",
+            c.plant.0,
+            c.step * 1e3,
+            c.solver.0,
+            c.version.name()
+        )
+    };
+    if let Some(only) = &a.only {
+        configs.retain(|c| name(c).contains(only.as_str()));
+    }
+    let mut results: Vec<Vec<Figures>> = vec![Vec::new(); configs.len()];
+    for round in 0..a.rounds {
+        for (k, c) in configs.iter().enumerate() {
+            match run(&fmu, c, a.steps) {
+                Ok(f) => {
+                    eprintln!(
+                        "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs",
+                        round + 1,
+                        name(c),
+                        f.p50 / 1e3,
+                        f.p999 / 1e3,
+                        f.max / 1e3
+                    );
+                    results[k].push(f);
+                }
+                Err(e) => {
+                    eprintln!("{}: {e}", name(c));
+                    std::process::exit(1);
+                }
+            }
+        }
+    }
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# Latency of a communication step\n\n\
+         Written by `cargo run --release --bin bench-latency` (see that file's header for the \
+         method) on {} ({} cores as the machine reports them), {} timed steps after {WARM_UP} \
+         of warm-up, {} rounds interleaved: each figure is the median over the rounds with the \
+         range in brackets. A closed loop: `e_in = {GAIN} (r − y_pot)` set before every step, \
+         `r` a square wave of 0 and {R_HIGH} V with period {PERIOD} s. Times are the calling \
+         thread's CPU time of one `DoStep` in µs; \"wall\" is the wall-clock time of the same \
+         calls. \"rate\" is the largest communication-step rate with a 2× margin on the \
+         maximum, 1 / (2 max); \"fits\" says whether that is at least the configuration's own \
+         rate. The adaptive solvers run at rtol {RTOL:e}.\n",
+        cpu_model(),
+        std::thread::available_parallelism().map_or(0, |n| n.get()),
+        a.steps,
+        a.rounds
+    );
+    let _ = writeln!(
+        md,
+        "| plant | step | solver | call | p50 | p99 | p99.9 | max | max/p50 | wall p50 | wall p99.9 | wall max | rate (2× margin) | fits |\n\
+         | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
+    );
+    for (c, figures) in configs.iter().zip(&results) {
+        let pick = |f: fn(&Figures) -> f64| figures.iter().map(f).collect::<Vec<f64>>();
+        let max = pick(|f| f.max);
+        let ratios: Vec<f64> = figures.iter().map(|f| f.max / f.p50).collect();
+        let (max_median, _, _) = median_range(&max);
+        let rate = 1e9 / (2.0 * max_median);
+        let fits = if rate >= 1.0 / c.step { "yes" } else { "no" };
+        let _ = writeln!(
+            md,
+            "| {} | {} ms | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} Hz | {fits} |",
+            c.plant.0,
+            c.step * 1e3,
+            c.solver.0,
+            c.version.name(),
+            us(&pick(|f| f.p50)),
+            us(&pick(|f| f.p99)),
+            us(&pick(|f| f.p999)),
+            us(&max),
+            ratio(&ratios),
+            us(&pick(|f| f.wall_p50)),
+            us(&pick(|f| f.wall_p999)),
+            us(&pick(|f| f.wall_max)),
+            rate
+        );
+    }
+    print!("{md}");
+    if let Some(out) = a.out {
+        std::fs::write(&out, &md).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
+        eprintln!("wrote {}", out.display());
+    }
+}

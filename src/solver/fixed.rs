@@ -1,0 +1,116 @@
+//! The fixed-cost driver for real time, [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed):
+//! Rodas5P's step at a step size fixed by the caller's communication step.
+//!
+//! A hardware-in-the-loop target must finish every communication step within its period, every
+//! time. The adaptive drivers cannot promise that: their work per call varies with rejected
+//! steps, step-size changes and (Radau5) Newton iterations. This driver takes every call to
+//! `t_end` in [`SolverOptions::substeps`](super::SolverOptions::substeps) equal steps
+//! h = (t_end − t) / substeps, and each step does the same work whatever the inputs and the
+//! solution do:
+//!
+//! * one f evaluation at the step's start and one Jacobian (for a system with a constant
+//!   Jacobian, the kept one: see [`OdeSystem::constant_jacobian`]),
+//! * one factorisation of W = I/(hγ) − J (for a constant J, a kept one while h is unchanged),
+//! * seven further f evaluations and eight solves with W (Rodas5P's eight stages),
+//!
+//! and nothing else: no error test, no rejection, no step-size control, no allocation once warm.
+//! The work counters ([`Stats`](super::Stats)) therefore grow by the same amounts at every call
+//! with the same `substeps`, which `tests/realtime.rs` asserts.
+//!
+//! Why Rodas5P's step: it is linearly implicit (no Newton iteration, whose count would vary),
+//! L-stable and stiffly accurate, so modes far faster than the step (the servo valve's, at
+//! about −4000 ± 60000j s⁻¹) are damped out instead of blowing up, and its stage values are
+//! exact for the stiff algebraic limit. What the fixed step gives up is the error control: the
+//! error of the slow, accurate part is O(h⁵) but unmonitored, and a mode of frequency ω is
+//! resolved only while ω h is well below 1. The step's embedded error estimate is still
+//! computed (it comes free with the stages) and the largest of a call is reported by
+//! [`Integrator::fixed_step_error`], relative to the tolerances as the adaptive control would
+//! judge it (above 1: a step the adaptive driver would have rejected).
+//!
+//! A step whose stages are not finite, or whose W is singular, ends the call with an error; the
+//! integrator stays at the last completed step, as the adaptive drivers do.
+
+use super::common::{with_kept_memory, Outputs};
+use super::integrator::Integrator;
+use super::rodas5p::{self, Reject};
+use super::{OdeSystem, SolverError, SolverErrorKind};
+
+/// Advances `integ` to exactly `t_end` in `integ.options.substeps` equal Rodas5P steps (called
+/// by `Integrator::advance_to*` for [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed)).
+pub(crate) fn advance<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    t_end: f64,
+    times: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
+) -> Result<(), SolverError> {
+    let stamp = sys.constant_jacobian();
+    with_kept_memory(
+        integ,
+        stamp,
+        |c| (&mut c.rodas, &mut c.rodas_lu),
+        |integ, w, lus| {
+            let n = integ.x.len();
+            let autonomous = sys.is_autonomous();
+            let substeps = integ.options.substeps.max(1);
+            let t0 = integ.t;
+            let h = (t_end - t0) / f64::from(substeps);
+            let mut outputs = Outputs::new(times, t0, n);
+            integ.hist.err_prev = 0.0;
+            for k in 1..=substeps {
+                let t = integ.t;
+                rodas5p::eval_f0(integ, sys, &mut w.f0)?;
+                rodas5p::jacobian_at_point(integ, sys, w, stamp, autonomous)?;
+                // Never shortened: the step is the caller's.
+                let (h, ok) = rodas5p::factorise(integ, sys, w, lus, stamp, h, false);
+                let result = match lus.first() {
+                    Some(f) if ok => rodas5p::step(integ, sys, w, f, h, autonomous),
+                    _ => Err(Reject::Singular),
+                };
+                let err = result.map_err(|why| {
+                    let (kind, what) = match why {
+                        Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
+                        Reject::Singular => (
+                            SolverErrorKind::SingularMatrix,
+                            "the iteration matrix is singular",
+                        ),
+                    };
+                    SolverError::new(
+                        kind,
+                        t,
+                        format!(
+                            "fixed step {k} of {substeps} (h = {h:e}): {what}; a fixed-step \
+                             method cannot shorten its step: use more substeps, a shorter \
+                             communication step or an adaptive method"
+                        ),
+                    )
+                })?;
+                // The last step ends on t_end itself, bit for bit (its size differs from h by
+                // the rounding of t only).
+                let t1 = if k == substeps {
+                    t_end
+                } else {
+                    t0 + f64::from(k) * h
+                };
+                if outputs.pending(t1) {
+                    let (x0, x1, u) = (&integ.x, &w.x1, &w.u);
+                    outputs.emit(
+                        t,
+                        h,
+                        t1,
+                        x1,
+                        &mut |theta, buf| rodas5p::interpolate(x0, x1, u, theta, buf),
+                        out,
+                    );
+                }
+                integ.x.copy_from_slice(&w.x1);
+                integ.t = t1;
+                integ.stats.accepted += 1;
+                integ.hist.err_prev = integ.hist.err_prev.max(err);
+                integ.hist.first = false;
+            }
+            integ.h = h;
+            Ok(())
+        },
+    )
+}
