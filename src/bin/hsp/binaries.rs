@@ -118,19 +118,33 @@ pub enum Portability {
     HostOnly,
 }
 
+/// Runs one build and says on stderr how long it took (docs/platforms.md quotes these times).
+fn timed<T>(what: &str, build: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    let start = std::time::Instant::now();
+    let result = build()?;
+    eprintln!(
+        "hsp package: {what}: {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(result)
+}
+
 /// Builds the binaries `portability` asks for.
 pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
     let mut binaries = vec![Binary {
         fmi2: Some("linux64"),
         fmi3: Some("x86_64-linux"),
         extension: "so",
-        path: build_linux64(portability)?,
+        path: timed("binaries/linux64", || build_linux64(portability))?,
     }];
     if portability == Portability::HostOnly {
         return Ok(binaries);
     }
     let require_portable = portability == Portability::Required;
-    if let Some(path) = build_linux_aarch64(require_portable)? {
+    let aarch64 = timed("binaries/aarch64-linux", || {
+        build_linux_aarch64(require_portable)
+    })?;
+    if let Some(path) = aarch64 {
         binaries.push(Binary {
             fmi2: None,
             fmi3: Some("aarch64-linux"),
@@ -138,7 +152,7 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
             path,
         });
     }
-    if let Some(path) = build_win64(require_portable)? {
+    if let Some(path) = timed("binaries/win64", || build_win64(require_portable))? {
         binaries.push(Binary {
             fmi2: Some("win64"),
             fmi3: Some("x86_64-windows"),
@@ -146,7 +160,8 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
             path,
         });
     }
-    if let Some([universal, x86_64, aarch64]) = build_macos(require_portable)? {
+    let macos = timed("the macOS binaries", || build_macos(require_portable))?;
+    if let Some([universal, x86_64, aarch64]) = macos {
         for (fmi2, fmi3, path) in [
             (Some("darwin64"), None, universal),
             (None, Some("x86_64-darwin"), x86_64),
