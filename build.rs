@@ -118,11 +118,6 @@ fn generate(text: &str) -> Result<String, String> {
         .ok_or("no <CoSimulation> element")?;
     let model_identifier =
         get(cs, "modelIdentifier").ok_or("CoSimulation has no modelIdentifier")?;
-    // macOS: the library's install name (LC_ID_DYLIB) is its file name in the FMU under @rpath,
-    // not the build directory's absolute path, which the linker would otherwise write into it.
-    if std::env::var("CARGO_CFG_TARGET_VENDOR").as_deref() == Ok("apple") {
-        println!("cargo:rustc-cdylib-link-arg=-Wl,-install_name,@rpath/{model_identifier}.dylib");
-    }
     // Model Exchange, where offered, is the same binary: the same modelIdentifier.
     let me = md.model_exchange.as_deref();
     if let Some(me) = me {

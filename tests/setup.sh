@@ -18,10 +18,12 @@
 #   rustup   x86_64-pc-windows-gnu      the Rust standard library for binaries/win64
 #            aarch64-unknown-linux-gnu  ... for binaries/aarch64-linux (FMI 3.0)
 #            x86_64-apple-darwin        ... for the macOS binaries (darwin64, x86_64-darwin,
-#            aarch64-apple-darwin           aarch64-darwin; zig links them, no Apple SDK needed)
+#            aarch64-apple-darwin           aarch64-darwin), which rustc's own rust-lld links
+#                                           against the ziglang package's libSystem stubs: no
+#                                           Apple SDK needed
 #   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, and
-#            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17, and
-#            the macOS binaries)
+#            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17;
+#            ziglang's libSystem.tbd for the macOS binaries)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -5,7 +5,7 @@
 //! | `linux64` | `x86_64-linux` | `cargo zigbuild --target x86_64-unknown-linux-gnu.2.17` |
 //! | (none) | `aarch64-linux` | `cargo zigbuild --target aarch64-unknown-linux-gnu.2.17` |
 //! | `win64` | `x86_64-windows` | `cargo build --target x86_64-pc-windows-gnu` (mingw-w64) |
-//! | `darwin64` (universal: x86-64 and arm64) | `x86_64-darwin`, `aarch64-darwin` (one each) | `cargo zigbuild --target universal2-apple-darwin` |
+//! | `darwin64` (universal: x86-64 and arm64) | `x86_64-darwin`, `aarch64-darwin` (one each) | `cargo rustc --target {x86_64,aarch64}-apple-darwin` with `ld64.lld` |
 //!
 //! - The Linux binaries are built against glibc 2.17 with `cargo-zigbuild` (zig as the linker), so
 //!   that they load on every Linux of the last decade (RHEL 7, Ubuntu 14.04 and later). Without
@@ -16,14 +16,13 @@
 //!   binary is in the FMI 3.0 FMU only.
 //! - `binaries/win64`: cross-compiled with mingw-w64. It needs Windows 10 or later (Rust's
 //!   standard library imports `ProcessPrng` from `bcryptprimitives.dll`).
-//! - macOS: zig links against the `libSystem` stubs it ships (no Apple SDK needed; the library
-//!   needs nothing else). zig would mark the binaries for its own default minimum macOS (15.0),
-//!   and cargo-zigbuild gives zig no version, so `hsp` hands cargo-zigbuild a linker of its own
-//!   ([`macos_linker`]) that names zig the version rustc compiles for (`rustc --print
-//!   deployment-target`: 10.12 on x86-64, 11.0 on arm64). The arm64 slice carries the ad-hoc code
-//!   signature Apple silicon requires; zig's linker writes it. FMI 2.0's `darwin64` gets the
-//!   universal (fat) binary, which macOS importers load on either processor; FMI 3.0 names one
-//!   folder per processor and gets the single-architecture binaries.
+//! - macOS: linked by LLVM's `ld64.lld` (`rust-lld`, shipped with rustc) against the `libSystem`
+//!   stubs of the `ziglang` package, so no Apple SDK is needed (the library needs nothing else
+//!   from macOS); see [`build_macos`]. The minimum macOS is rustc's for each target (`rustc --print
+//!   deployment-target`: 10.12 on x86-64, 11.0 on arm64), and the arm64 library carries the
+//!   ad-hoc code signature Apple silicon requires. FMI 2.0's `darwin64` gets one universal (fat)
+//!   binary of both, which macOS importers load on either processor ([`write_universal`]); FMI
+//!   3.0 names one folder per processor and gets the single-architecture binaries.
 //!
 //! `tests/setup.sh` installs every toolchain (zig and cargo-zigbuild into `.venv` from PyPI, the
 //! Rust targets with rustup, mingw-w64 with apt). With `--require-portable` a missing toolchain is
@@ -37,6 +36,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use super::package::root;
+use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
 
 /// The glibc the Linux binaries are built against (their newest symbol version may be older).
 pub const LINUX_GLIBC: &str = "2.17";
@@ -44,8 +44,8 @@ const LINUX_TARGET: &str = "x86_64-unknown-linux-gnu";
 const LINUX_AARCH64_TARGET: &str = "aarch64-unknown-linux-gnu";
 const WINDOWS_TARGET: &str = "x86_64-pc-windows-gnu";
 const MACOS_TARGETS: [&str; 2] = ["x86_64-apple-darwin", "aarch64-apple-darwin"];
-/// cargo-zigbuild's name for the two macOS targets built together and joined into a fat binary.
-const MACOS_UNIVERSAL_TARGET: &str = "universal2-apple-darwin";
+/// Where the universal macOS binary is written, under the target directory.
+const MACOS_UNIVERSAL_DIR: &str = "universal-apple-darwin/release";
 const MINGW_GCC: &str = "x86_64-w64-mingw32-gcc";
 /// The library's file stem as cargo names it.
 const CRATE_LIB: &str = "hydraulic_slewing_plate";
@@ -307,85 +307,192 @@ fn build_linux_aarch64(require_portable: bool) -> Result<Option<PathBuf>, String
 }
 
 /// The macOS binaries: the universal one (FMI 2.0's `darwin64`), then the x86-64 and the arm64
-/// one (FMI 3.0's `x86_64-darwin` and `aarch64-darwin`), all from one cargo-zigbuild run.
+/// one (FMI 3.0's `x86_64-darwin` and `aarch64-darwin`).
+///
+/// Each is linked by LLVM's Mach-O linker `ld64.lld` (`rust-lld`, which rustup ships with rustc)
+/// against a minimal SDK ([`macos_sdk`]); rustc gives it the minimum macOS, the SDK version and
+/// the list of symbols to export (the `fmi2*` and `fmi3*` functions), and it signs the arm64
+/// library ad hoc. Not zig's linker: zig 0.17 ignores the export list, so its dylibs export every
+/// Rust symbol of the library as well.
 fn build_macos(require_portable: bool) -> Result<Option<[PathBuf; 3]>, String> {
-    let Some((program, path)) = zig_toolchain(
-        &MACOS_TARGETS,
-        "binaries/darwin64, x86_64-darwin or aarch64-darwin",
-        require_portable,
-    )?
+    let absent: Vec<&str> = MACOS_TARGETS
+        .iter()
+        .copied()
+        .filter(|t| !has_rust_target(t))
+        .collect();
+    let what = "binaries/darwin64, x86_64-darwin or aarch64-darwin";
+    if !absent.is_empty() {
+        return missing(
+            format!(
+                "the Rust target {} is not installed (`rustup target add {}`), so the FMU gets \
+                 no {what}; `bash tests/setup.sh` installs it",
+                absent.join(" and "),
+                absent.join(" ")
+            ),
+            require_portable,
+        );
+    }
+    let Some(sdk) = macos_sdk()? else {
+        return missing(
+            format!(
+                "the ziglang package (whose libSystem stubs the macOS binaries link against) is \
+                 not installed, so the FMU gets no {what}; `bash tests/setup.sh` installs it into \
+                 .venv"
+            ),
+            require_portable,
+        );
+    };
+    let install_name = format!("@rpath/{MODEL_IDENTIFIER}.dylib");
+    let mut thin = Vec::new();
+    for target in MACOS_TARGETS {
+        let mut command = Command::new(cargo());
+        command
+            .args([
+                "rustc",
+                "--release",
+                "--lib",
+                "--no-default-features",
+                "--quiet",
+            ])
+            .args(["--target", target, "--"])
+            .args(["-C", "linker=rust-lld", "-C", "linker-flavor=ld64.lld"])
+            // The install name (LC_ID_DYLIB): the library's name in the FMU, not the path of the
+            // build directory, which the linker would otherwise write into it.
+            .args(["-C", "link-arg=-install_name", "-C"])
+            .arg(format!("link-arg={install_name}"))
+            .env("SDKROOT", &sdk);
+        run(
+            command,
+            &format!("cargo rustc --target {target} (ld64.lld)"),
+        )?;
+        thin.push(library(target, "dylib")?);
+    }
+    let universal = target_dir()
+        .join(MACOS_UNIVERSAL_DIR)
+        .join(format!("lib{CRATE_LIB}.dylib"));
+    write_universal(&universal, &thin)?;
+    let [x86_64, aarch64] = <[PathBuf; 2]>::try_from(thin).map_err(|_| "two macOS targets")?;
+    Ok(Some([universal, x86_64, aarch64]))
+}
+
+/// A minimal macOS SDK for the linker, under the target directory: `usr/lib/libSystem.tbd` (the
+/// text stub listing what `/usr/lib/libSystem.B.dylib` exports), made from the one the `ziglang`
+/// package ships, and `libc`, `libm`, `libpthread`, `libdl` and `libiconv` as its aliases (as in
+/// Apple's SDK, where they are libSystem too). `None` without the ziglang package.
+///
+/// zig's stub names its Apple silicon targets `arm64e` and `arm64e.x1`, which ld64.lld does not
+/// read, and no plain `arm64` (zig treats them as one); here `arm64e` becomes `arm64` and the
+/// `arm64e.x1` entries go. The symbols are those of arm64e, which macOS's libSystem exports on
+/// arm64 alike.
+fn macos_sdk() -> Result<Option<PathBuf>, String> {
+    let venv_python = root().join(".venv/bin/python3");
+    let python = if venv_python.is_file() {
+        venv_python
+    } else {
+        PathBuf::from("python3")
+    };
+    let Some(ziglang) = Command::new(python)
+        .args([
+            "-c",
+            "import pathlib, ziglang; print(pathlib.Path(ziglang.__file__).parent)",
+        ])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()))
     else {
         return Ok(None);
     };
-    let mut command = zigbuild_command(&program, &path, MACOS_UNIVERSAL_TARGET);
-    for target in MACOS_TARGETS {
-        let linker = macos_linker(&program, target, &deployment_target(target)?)?;
-        let variable = format!(
-            "CARGO_TARGET_{}_LINKER",
-            target.to_uppercase().replace('-', "_")
-        );
-        // cargo-zigbuild keeps a linker that is already set, and still does the rest.
-        command.env(variable, linker);
+    let stub = ziglang.join("lib/libc/darwin/libSystem.tbd");
+    let text = std::fs::read_to_string(&stub).map_err(|e| format!("{}: {e}", stub.display()))?;
+    let sdk = target_dir().join("hsp-macos-sdk");
+    let lib = sdk.join("usr/lib");
+    std::fs::create_dir_all(&lib).map_err(|e| format!("{}: {e}", lib.display()))?;
+    let text = apple_silicon_as_arm64(&text);
+    for name in ["System", "c", "m", "pthread", "dl", "iconv"] {
+        let path = lib.join(format!("lib{name}.tbd"));
+        if std::fs::read_to_string(&path).ok().as_deref() != Some(text.as_str()) {
+            std::fs::write(&path, &text).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
     }
-    run(
-        command,
-        &format!("cargo zigbuild --target {MACOS_UNIVERSAL_TARGET}"),
-    )?;
-    Ok(Some([
-        library(MACOS_UNIVERSAL_TARGET, "dylib")?,
-        library(MACOS_TARGETS[0], "dylib")?,
-        library(MACOS_TARGETS[1], "dylib")?,
-    ]))
+    Ok(Some(sdk))
 }
 
-/// The minimum macOS version rustc compiles `target` for (`MACOSX_DEPLOYMENT_TARGET`, else its
-/// default for the target), e.g. `11.0`.
-fn deployment_target(target: &str) -> Result<String, String> {
-    let out = Command::new(rustc())
-        .args(["--print", "deployment-target", "--target", target])
-        .output()
-        .map_err(|e| format!("cannot run rustc --print deployment-target: {e}"))?;
-    let text = String::from_utf8_lossy(&out.stdout);
-    text.trim()
-        .strip_prefix("MACOSX_DEPLOYMENT_TARGET=")
-        .filter(|v| out.status.success() && v.split('.').all(|p| p.parse::<u32>().is_ok()))
-        .map(str::to_string)
-        .ok_or_else(|| {
-            format!(
-                "rustc --print deployment-target --target {target} printed {:?}",
-                text.trim()
-            )
-        })
+/// A text stub's target lists with `arm64e-…` as `arm64-…` and without `arm64e.x1-…` (see
+/// [`macos_sdk`]); everything else as it was.
+fn apple_silicon_as_arm64(tbd: &str) -> String {
+    let mut out = String::with_capacity(tbd.len());
+    let mut rest = tbd;
+    while let Some(open) = rest.find('[') {
+        let Some(close) = rest[open..].find(']').map(|c| open + c) else {
+            break;
+        };
+        out.push_str(&rest[..=open]);
+        let items: Vec<String> = rest[open + 1..close]
+            .split(',')
+            .map(str::trim)
+            .filter(|item| !item.is_empty() && !item.starts_with("arm64e.x1-"))
+            .map(|item| match item.strip_prefix("arm64e-") {
+                Some(platform) => format!("arm64-{platform}"),
+                None => item.to_string(),
+            })
+            .collect();
+        out.push(' ');
+        out.push_str(&items.join(", "));
+        out.push_str(" ]");
+        rest = &rest[close + 1..];
+    }
+    out.push_str(rest);
+    out
 }
 
-/// A linker script for `target` (written under the target directory): cargo-zigbuild's `zig cc`,
-/// as its own wrapper calls it, but with the minimum macOS version in zig's target
-/// (`aarch64-macos.11.0-none`). cargo-zigbuild's wrapper names no version and drops rustc's, so
-/// zig would otherwise mark the binary for its own default, newer than most Macs run.
-fn macos_linker(program: &Path, target: &str, version: &str) -> Result<PathBuf, String> {
-    let arch = target.split('-').next().unwrap_or(target);
-    let zig_target = format!("{arch}-macos.{version}-none");
-    let program = program.to_string_lossy();
-    if program.contains('\'') {
-        return Err(format!("cannot quote the path {program} in a shell script"));
+/// Writes a universal (fat) Mach-O file of the single-architecture files `slices`: the big-endian
+/// header (`FAT_MAGIC`, then per slice its CPU type and subtype, offset, size and alignment) and
+/// each slice on a 16 KiB boundary, the page size of arm64 macOS, as `lipo` lays them out.
+fn write_universal(path: &Path, slices: &[PathBuf]) -> Result<(), String> {
+    const ALIGN_LOG2: u32 = 14;
+    const MH_MAGIC_64: u32 = 0xFEED_FACF;
+    let align = 1usize << ALIGN_LOG2;
+    let mut data = Vec::new();
+    for slice in slices {
+        let bytes = std::fs::read(slice).map_err(|e| format!("{}: {e}", slice.display()))?;
+        let word = |at: usize| {
+            bytes
+                .get(at..at + 4)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        };
+        if word(0) != Some(MH_MAGIC_64) {
+            return Err(format!("{} is not a 64-bit Mach-O file", slice.display()));
+        }
+        let (cputype, cpusubtype) = (word(4).unwrap_or(0), word(8).unwrap_or(0));
+        data.push((cputype, cpusubtype, bytes));
     }
-    let script = format!(
-        "#!/bin/sh\n# Written by `hsp package` (src/bin/hsp/binaries.rs): the linker of {target}.\n\
-         exec '{program}' zig cc -- -g -fno-sanitize=all -target {zig_target} \"$@\"\n"
-    );
-    let dir = target_dir().join("hsp-linkers");
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let path = dir.join(format!("zigcc-{zig_target}.sh"));
-    if std::fs::read_to_string(&path).ok().as_deref() != Some(script.as_str()) {
-        std::fs::write(&path, script).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut out = Vec::new();
+    out.extend_from_slice(&0xCAFE_BABEu32.to_be_bytes());
+    out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+    let mut offset = align; // the header fits in the first page
+    let mut layout = Vec::new();
+    for (cputype, cpusubtype, bytes) in &data {
+        for field in [
+            *cputype,
+            *cpusubtype,
+            offset as u32,
+            bytes.len() as u32,
+            ALIGN_LOG2,
+        ] {
+            out.extend_from_slice(&field.to_be_bytes());
+        }
+        layout.push(offset);
+        offset = (offset + bytes.len()).div_ceil(align) * align;
     }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt as _;
-        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+    for ((_, _, bytes), at) in data.iter().zip(layout) {
+        out.resize(at, 0);
+        out.extend_from_slice(bytes);
     }
-    Ok(path)
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    std::fs::write(path, out).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Whether rustup (or the toolchain) has the standard library for `target`.
@@ -446,4 +553,53 @@ fn build_win64(require_portable: bool) -> Result<Option<PathBuf>, String> {
             .join(format!("{CRATE_LIB}.dll")),
     )
     .map(Some)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn apple_silicon_targets_become_arm64_and_symbols_stay() {
+        let zig = "targets:         [ x86_64-macos, x86_64-maccatalyst, arm64e-macos, arm64e-maccatalyst, \n\
+                   arm64e.x1-macos, arm64e.x1-maccatalyst ]\nsymbols: [ _sin, _arm64e_thing ]\n";
+        assert_eq!(
+            apple_silicon_as_arm64(zig),
+            "targets:         [ x86_64-macos, x86_64-maccatalyst, arm64-macos, arm64-maccatalyst ]\n\
+             symbols: [ _sin, _arm64e_thing ]\n"
+        );
+    }
+
+    #[test]
+    fn a_universal_file_holds_each_slice_on_a_16_kib_boundary() {
+        let dir = std::env::temp_dir().join(format!("hsp-fat-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let slice = |cpu: u32, len: usize| {
+            let mut b = vec![7u8; len];
+            b[..4].copy_from_slice(&0xFEED_FACFu32.to_le_bytes());
+            b[4..8].copy_from_slice(&cpu.to_le_bytes());
+            b[8..12].copy_from_slice(&3u32.to_le_bytes());
+            let path = dir.join(format!("{cpu:x}"));
+            std::fs::write(&path, &b).unwrap();
+            (path, b)
+        };
+        let (a, bytes_a) = slice(0x0100_0007, 20_000);
+        let (b, bytes_b) = slice(0x0100_000C, 100);
+        let fat = dir.join("fat");
+        write_universal(&fat, &[a.clone(), b]).unwrap();
+        let data = std::fs::read(&fat).unwrap();
+        let be = |at: usize| u32::from_be_bytes(data[at..at + 4].try_into().unwrap());
+        assert_eq!((be(0), be(4)), (0xCAFE_BABE, 2));
+        // x86-64 at 16 KiB, arm64 at the next 16 KiB boundary after it (20 000 bytes: 48 KiB).
+        assert_eq!(
+            [be(8), be(12), be(16), be(20), be(24)],
+            [0x0100_0007, 3, 16384, 20_000, 14]
+        );
+        assert_eq!([be(28), be(36), be(40)], [0x0100_000C, 49152, 100]);
+        assert_eq!(&data[16384..16384 + 20_000], &bytes_a[..]);
+        assert_eq!(&data[49152..], &bytes_b[..]);
+        std::fs::write(&a, b"not mach-o").unwrap();
+        assert!(write_universal(&fat, &[a]).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
