@@ -332,6 +332,15 @@ fn build_macos(require_portable: bool) -> Result<Option<[PathBuf; 3]>, String> {
             require_portable,
         );
     }
+    if !has_rust_lld() {
+        return missing(
+            format!(
+                "rustc's linker rust-lld is not installed (it comes with rustup's rustc), so the \
+                 FMU gets no {what}"
+            ),
+            require_portable,
+        );
+    }
     let Some(sdk) = macos_sdk()? else {
         return missing(
             format!(
@@ -493,6 +502,31 @@ fn write_universal(path: &Path, slices: &[PathBuf]) -> Result<(), String> {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
     std::fs::write(path, out).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Whether rustc has its own copy of LLVM's linker, `rust-lld` (in `lib/rustlib/<host>/bin` of
+/// its sysroot, where rustc looks for it).
+fn has_rust_lld() -> bool {
+    let sysroot = Command::new(rustc())
+        .args(["--print", "sysroot"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()));
+    let host = Command::new(rustc())
+        .args(["--print", "host-tuple"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+    match (sysroot, host) {
+        (Some(sysroot), Some(host)) => sysroot
+            .join("lib/rustlib")
+            .join(host)
+            .join("bin/rust-lld")
+            .is_file(),
+        _ => false,
+    }
 }
 
 /// Whether rustup (or the toolchain) has the standard library for `target`.
