@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # The project's test command: installs what is missing (tests/setup.sh), builds the FMU with its
-# portable binaries (glibc-2.17 Linux and Windows; `--require-portable` makes a missing toolchain
-# an error rather than a warning), then runs the Rust tests (cargo test) and the import-side Python
-# tests (pytest: fmpy, libcosim, fmutool, the examples, and the glibc and Wine checks of
-# test_portable.py). Fails if either fails; both always run.
+# portable binaries (glibc-2.17 Linux on x86-64 and aarch64, Windows, macOS; `--require-portable`
+# makes a missing toolchain an error rather than a warning), then runs the Rust tests (cargo test)
+# and the import-side Python tests (pytest: fmpy, libcosim, fmutool, the examples, and the glibc,
+# Wine, qemu and Mach-O checks of test_portable.py). Fails if either fails; both always run.
 #
 #   bash tests/run_all.sh           everything (CI runs this)
 #   bash tests/run_all.sh --quick   the contributor's inner loop: the FMU with the Linux binary
 #                                   for this machine only (`hsp package --host-only`, no glibc-2.17
-#                                   or Windows cross build) and every test but the portable ones
+#                                   or other cross build) and every test but the portable ones
 #                                   (test_portable.py, which needs those binaries)
 set -uo pipefail
 cd "$(dirname "$0")/.."

@@ -7,15 +7,28 @@
 #            gcc-mingw-w64-x86-64  x86_64-w64-mingw32-gcc, the linker of binaries/win64 and the
 #                                  compiler of the Wine test's driver (tests/portable/)
 #            wine, wine64          /usr/bin/wine and /usr/lib/wine/wine64: run that test's driver
-#            binutils              objdump, which reads the Linux binary's glibc symbol versions
+#            binutils              objdump, which reads the Linux binaries' glibc symbol versions
+#            qemu-user             /usr/bin/qemu-aarch64: runs the aarch64 driver of that test on
+#                                  binaries/aarch64-linux (user-mode emulation)
+#            gcc-aarch64-linux-gnu aarch64-linux-gnu-gcc, the compiler of that driver
+#            libc6-dev-arm64-cross its aarch64 crt files and libraries (/usr/aarch64-linux-gnu/lib),
+#                                  and through libc6-arm64-cross the loader and libc.so.6 that
+#                                  `qemu-aarch64 -L /usr/aarch64-linux-gnu` runs it with
 #            python3-venv          only where python3 lacks the venv/ensurepip modules
-#   rustup   x86_64-pc-windows-gnu  the Rust standard library for binaries/win64
+#   rustup   x86_64-pc-windows-gnu      the Rust standard library for binaries/win64
+#            aarch64-unknown-linux-gnu  ... for binaries/aarch64-linux (FMI 3.0)
+#            x86_64-apple-darwin        ... for the macOS binaries (darwin64, x86_64-darwin,
+#            aarch64-apple-darwin           aarch64-darwin), which rustc's own rust-lld links
+#                                           against the ziglang package's libSystem stubs: no
+#                                           Apple SDK needed
 #   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, and
-#            the build tools ziglang and cargo-zigbuild (binaries/linux64 against glibc 2.17)
+#            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17;
+#            ziglang's libSystem.tbd for the macOS binaries)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-WINDOWS_TARGET=x86_64-pc-windows-gnu
+RUST_TARGETS=(x86_64-pc-windows-gnu aarch64-unknown-linux-gnu x86_64-apple-darwin aarch64-apple-darwin)
+AARCH64_ROOT=/usr/aarch64-linux-gnu
 
 # bindgen (through clang-sys) dlopens libclang.so, libclang-N.so or libclang.so.N; test for exactly
 # those names. libclang-cpp.so (the C++ interface, present on many machines) is a different library
@@ -31,6 +44,10 @@ have_libclang || apt_packages+=(libclang-dev)
 have x86_64-w64-mingw32-gcc || apt_packages+=(gcc-mingw-w64-x86-64)
 { have wine && [ -x /usr/lib/wine/wine64 ]; } || apt_packages+=(wine wine64)
 have objdump || apt_packages+=(binutils)
+have qemu-aarch64 || apt_packages+=(qemu-user)
+have aarch64-linux-gnu-gcc || apt_packages+=(gcc-aarch64-linux-gnu)
+{ [ -e "$AARCH64_ROOT/lib/crt1.o" ] && [ -e "$AARCH64_ROOT/lib/ld-linux-aarch64.so.1" ] &&
+    [ -e "$AARCH64_ROOT/lib/libc.so.6" ]; } || apt_packages+=(libc6-dev-arm64-cross)
 python3 -c "import venv, ensurepip" 2>/dev/null || apt_packages+=(python3-venv)
 have chromium || apt_packages+=(chromium)  # headless browser of tests/python/test_docs.py
 if [ "${#apt_packages[@]}" -gt 0 ]; then
@@ -43,15 +60,18 @@ if [ "${#apt_packages[@]}" -gt 0 ]; then
 fi
 have_libclang || { echo "setup: libclang.so still missing after installing libclang-dev" >&2; exit 1; }
 
-# The Windows standard library, where rustc looks for it (the same test as `hsp package`).
-if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$WINDOWS_TARGET/lib" ]; then
-    if ! have rustup; then
-        echo "setup: the Rust target $WINDOWS_TARGET is missing and rustup is not installed" >&2
-        exit 1
+# The standard library of each cross target, where rustc looks for it (the same test as
+# `hsp package`).
+for target in "${RUST_TARGETS[@]}"; do
+    if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$target/lib" ]; then
+        if ! have rustup; then
+            echo "setup: the Rust target $target is missing and rustup is not installed" >&2
+            exit 1
+        fi
+        echo "setup: adding the Rust target $target (rustup)"
+        rustup target add "$target"
     fi
-    echo "setup: adding the Rust target $WINDOWS_TARGET (rustup)"
-    rustup target add "$WINDOWS_TARGET"
-fi
+done
 
 venv_complete() {
     [ -x .venv/bin/python ] && [ -x .venv/bin/cargo-zigbuild ] &&

@@ -93,11 +93,12 @@ enum Command {
         /// Where to write the FMU
         #[arg(long, default_value = package::DEFAULT_FMU)]
         output: String,
-        /// Fail unless the glibc-2.17 Linux binary and the Windows binary are both built (without
-        /// it, a missing toolchain gives a warning and a binary for this machine only)
+        /// Fail unless every binary is built: Linux (x86-64 and aarch64, glibc 2.17), Windows and
+        /// macOS (without it, a missing toolchain gives a warning and the FMU lacks that platform;
+        /// without zig, the Linux binary is built for this machine's glibc only)
         #[arg(long)]
         require_portable: bool,
-        /// Build only the Linux binary for this machine (no glibc-2.17 or Windows cross build):
+        /// Build only the Linux binary for this machine (no glibc-2.17 or other cross build):
         /// the quick test loop's FMU
         #[arg(long, conflicts_with = "require_portable")]
         host_only: bool,

@@ -1,12 +1,15 @@
 //! `hsp package`: builds the release cdylib and writes the FMU archive: `modelDescription.xml`
 //! (verbatim from `modelDescription/`), `binaries/linux64/HydraulicSlewingPlate.so` (glibc 2.17),
-//! `binaries/win64/HydraulicSlewingPlate.dll` (where the binaries come from: [`binaries`]) and
+//! `binaries/win64/HydraulicSlewingPlate.dll`, `binaries/darwin64/HydraulicSlewingPlate.dylib` (one
+//! universal binary for x86-64 and arm64 Macs; where the binaries come from: [`binaries`]) and
 //! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU), and the
 //! ecosystem's formats ([`ecosystem`]): `extra/org.fmi-standard.fmi-ls-ref/` (the default
 //! experiment's result, the presets as SSP parameter sets) and the icon `model.png`.
 //!
 //! Beside it, in `fmi3/` of the same folder, the FMI 3.0 FMU: the same binaries (they export the
-//! `fmi3*` functions too) under FMI 3.0's platform names (`x86_64-linux`, `x86_64-windows`), the
+//! `fmi3*` functions too) under FMI 3.0's platform names (`x86_64-linux`, `x86_64-windows`), with
+//! the aarch64 Linux binary (`aarch64-linux`, a folder FMI 2.0 has no name for) and the macOS one
+//! per processor (`x86_64-darwin`, `aarch64-darwin`) in place of the universal one, the
 //! FMI 3.0 `modelDescription.xml` written by `modelDescription/fmi3.py`, the same documentation
 //! and `extra/`, and `terminalsAndIcons/` (the icon and the terminals) in place of `model.png`.
 //!
@@ -33,16 +36,6 @@ pub fn package(output: &str) -> Result<String, String> {
     package_with(output, Portability::IfInstalled).map(|[fmi2, _, _]| fmi2)
 }
 
-/// FMI 3.0's name of an FMI 2.0 platform folder.
-fn fmi3_platform(fmi2: &str) -> &str {
-    match fmi2 {
-        "linux64" => "x86_64-linux",
-        "win64" => "x86_64-windows",
-        "darwin64" => "x86_64-darwin",
-        other => other,
-    }
-}
-
 /// Where the FMI 3.0 FMU goes: `fmi3/` beside the FMI 2.0 one.
 pub fn fmi3_path(fmi2: &Path) -> PathBuf {
     let name = fmi2.file_name().unwrap_or_default();
@@ -62,11 +55,17 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
     let binaries = binaries::build(portability)?;
     let xml_path = root().join("modelDescription/modelDescription.xml");
     let xml = std::fs::read(&xml_path).map_err(|e| format!("{}: {e}", xml_path.display()))?;
-    let mut files = Vec::new();
+    // Each binary under its folder in each FMU that has one for it (see `binaries`).
+    let (mut files2, mut files3) = (Vec::new(), Vec::new());
     for b in &binaries {
         let data = std::fs::read(&b.path).map_err(|e| format!("{}: {e}", b.path.display()))?;
-        let name = format!("binaries/{}/{MODEL_IDENTIFIER}.{}", b.platform, b.extension);
-        files.push((name, data));
+        let name = |platform| format!("binaries/{platform}/{MODEL_IDENTIFIER}.{}", b.extension);
+        if let Some(platform) = b.fmi2 {
+            files2.push((name(platform), data.clone()));
+        }
+        if let Some(platform) = b.fmi3 {
+            files3.push((name(platform), data));
+        }
     }
     let out = if Path::new(output).is_absolute() {
         PathBuf::from(output)
@@ -78,36 +77,30 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
     }
     let xml_text = String::from_utf8_lossy(&xml).into_owned();
     let mut entries: Vec<(String, Vec<u8>)> = vec![("modelDescription.xml".into(), xml)];
-    entries.extend(files);
+    entries.extend(files2);
     // Write to a temporary name and rename, so that a reader never sees half an archive. The
     // documentation's figures come from running this very FMU: a first archive without them is
     // run, then the complete one is written.
     let tmp = out.with_extension("fmu.partial");
     write_archive(&tmp, &entries)?;
-    let platforms = platforms(&entries);
-    let docs = docpage::documentation(&tmp, &xml_text, &platforms)?;
-    entries.extend(
-        docs.files
-            .into_iter()
-            .map(|(name, bytes)| (format!("documentation/{name}"), bytes)),
-    );
-    entries.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
+    let docs = docpage::documentation(&tmp, &xml_text, &platforms(&entries), &platforms(&files3))?;
+    // What both FMUs carry besides the model description and the binaries.
+    let mut shared: Vec<(String, Vec<u8>)> = docs
+        .files
+        .into_iter()
+        .map(|(name, bytes)| (format!("documentation/{name}"), bytes))
+        .collect();
+    shared.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
+    entries.extend(shared.iter().cloned());
 
-    // FMI 3.0: the same entries but the model description, under FMI 3.0's platform names.
+    // FMI 3.0: its own model description, the binaries under its platform names, the same
+    // documentation and extra/, and terminalsAndIcons/.
     let xml3_path = root().join("modelDescription/fmi3/modelDescription.xml");
     let xml3 = std::fs::read(&xml3_path).map_err(|e| format!("{}: {e}", xml3_path.display()))?;
     let terminals_and_icons = ecosystem::fmi3_only(&String::from_utf8_lossy(&xml3))?;
     let entries3: Vec<(String, Vec<u8>)> = std::iter::once(("modelDescription.xml".into(), xml3))
-        .chain(entries.iter().skip(1).map(|(name, bytes)| {
-            let name = match name
-                .strip_prefix("binaries/")
-                .and_then(|r| r.split_once('/'))
-            {
-                Some((platform, file)) => format!("binaries/{}/{file}", fmi3_platform(platform)),
-                None => name.clone(),
-            };
-            (name, bytes.clone())
-        }))
+        .chain(files3)
+        .chain(shared)
         .chain(terminals_and_icons)
         .collect();
     entries.extend(ecosystem::fmi2_only()?);

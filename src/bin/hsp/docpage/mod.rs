@@ -42,16 +42,27 @@ pub struct Documentation {
 }
 
 /// The documentation of the packaged FMU `fmu` (without documentation: the default experiment is
-/// run on it), `xml` its model description, `platforms` the `binaries/` folders it carries.
-pub fn documentation(fmu: &Path, xml: &str, platforms: &[String]) -> Result<Documentation, String> {
+/// run on it), `xml` its model description, `platforms2` and `platforms3` the `binaries/` folders
+/// of the FMI 2.0 and the FMI 3.0 FMU (both carry this documentation).
+pub fn documentation(
+    fmu: &Path,
+    xml: &str,
+    platforms2: &[String],
+    platforms3: &[String],
+) -> Result<Documentation, String> {
     let work = std::env::temp_dir().join(format!("hsp-doc-{}", std::process::id()));
     std::fs::create_dir_all(&work).map_err(|e| format!("{}: {e}", work.display()))?;
-    let result = make(fmu, xml, platforms, &work);
+    let result = make(fmu, xml, [platforms2, platforms3], &work);
     let _ = std::fs::remove_dir_all(&work);
     result
 }
 
-fn make(fmu: &Path, xml: &str, platforms: &[String], work: &Path) -> Result<Documentation, String> {
+fn make(
+    fmu: &Path,
+    xml: &str,
+    platforms: [&[String]; 2],
+    work: &Path,
+) -> Result<Documentation, String> {
     let md = ModelDescription::parse(xml)?;
     let mut files: Vec<DocFile> = vec![
         ("sketch.svg".into(), figures::SKETCH.as_bytes().to_vec()),

@@ -26,11 +26,12 @@ const EXTERNAL: &str =
     Modelica, Python) closes the loop on the outputs <code>y_pot</code>, \
     <code>theta_hub</code>, the torsion-bar torque and the accelerometers.</p>\n";
 
-/// The page: `md` is the FMU's model description, `platforms` its `binaries/` folders, `summary`
-/// what `hsp run` printed for the default experiment, `bode_caption` the Bode plot's caption.
+/// The page: `md` is the FMU's model description, `platforms` the `binaries/` folders of the FMI 2.0
+/// and of the FMI 3.0 FMU (both carry the page), `summary` what `hsp run` printed for the default
+/// experiment, `bode_caption` the Bode plot's caption.
 pub fn page(
     md: &ModelDescription,
-    platforms: &[String],
+    platforms: [&[String]; 2],
     summary: &str,
     bode_caption: &str,
 ) -> Result<String, String> {
@@ -53,15 +54,33 @@ pub fn page(
     } else {
         "Co-Simulation only (the FMU carries its own stiff solver)"
     };
-    let platform_list: Vec<String> = platforms
-        .iter()
-        .map(|p| match p.as_str() {
-            "linux64" => "<code>linux64</code> (x86-64 Linux)".to_string(),
-            "win64" => "<code>win64</code> (x86-64 Windows 10 or later)".to_string(),
-            "darwin64" => "<code>darwin64</code> (x86-64 macOS)".to_string(),
-            other => format!("<code>{}</code>", escape(other)),
-        })
-        .collect();
+    let folders = |list: &[String]| {
+        list.iter()
+            .map(|p| {
+                let what = match p.as_str() {
+                    "linux64" | "x86_64-linux" => "x86-64 Linux",
+                    "aarch64-linux" => "aarch64 Linux",
+                    "win64" | "x86_64-windows" => "x86-64 Windows 10 or later",
+                    "darwin64" => "macOS, one universal binary for x86-64 and Apple silicon",
+                    "x86_64-darwin" => "x86-64 macOS",
+                    "aarch64-darwin" => "Apple silicon macOS",
+                    _ => "",
+                };
+                let name = format!("<code>{}</code>", escape(p));
+                if what.is_empty() {
+                    name
+                } else {
+                    format!("{name} ({what})")
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let platform_list = format!(
+        "FMI 2.0 FMU: {}. FMI 3.0 FMU: {}.",
+        folders(platforms[0]),
+        folders(platforms[1])
+    );
     let de = |k: &str| {
         md.default_experiment
             .as_deref()
@@ -97,7 +116,7 @@ pub fn page(
             ("fmu_version", &fmu_version),
             ("today", &today),
             ("capabilities", &capabilities),
-            ("platforms", &platform_list.join(", ")),
+            ("platforms", &platform_list),
             ("default_experiment", &default_experiment),
             ("guid", &guid),
             ("generation_tool", &generation_tool),
@@ -180,7 +199,13 @@ mod tests {
     fn every_placeholder_of_the_page_has_a_value() {
         let xml = include_str!("../../../../modelDescription/modelDescription.xml");
         let md = ModelDescription::parse(xml).unwrap();
-        let page = page(&md, &["linux64".into()], "summary", "caption").unwrap();
+        let page = page(
+            &md,
+            [&["linux64".into()], &["x86_64-linux".into()]],
+            "summary",
+            "caption",
+        )
+        .unwrap();
         assert!(!page.contains("{{"), "a placeholder is left");
         assert!(page.contains(md.attribute("guid").unwrap()));
         assert!(page.contains("<h3>Parameters</h3>"));
