@@ -30,7 +30,7 @@
 //! A step whose stages are not finite, or whose W is singular, ends the call with an error; the
 //! integrator stays at the last completed step, as the adaptive drivers do.
 
-use super::common::{with_kept_memory, Outputs};
+use super::common::Outputs;
 use super::integrator::Integrator;
 use super::rodas5p::{self, Reject};
 use super::{OdeSystem, SolverError, SolverErrorKind};
@@ -45,72 +45,67 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     out: &mut dyn FnMut(f64, &[f64]),
 ) -> Result<(), SolverError> {
     let stamp = sys.constant_jacobian();
-    with_kept_memory(
-        integ,
-        stamp,
-        |c| (&mut c.rodas, &mut c.rodas_lu),
-        |integ, w, lus| {
-            let n = integ.x.len();
-            let autonomous = sys.is_autonomous();
-            let substeps = integ.options.substeps.max(1);
-            let t0 = integ.t;
-            let h = (t_end - t0) / f64::from(substeps);
-            let mut outputs = Outputs::new(times, t0, n);
-            integ.hist.err_prev = 0.0;
-            for k in 1..=substeps {
-                let t = integ.t;
-                rodas5p::eval_f0(integ, sys, &mut w.f0)?;
-                rodas5p::jacobian_at_point(integ, sys, w, stamp, autonomous)?;
-                // Never shortened: the step is the caller's.
-                let (h, ok) = rodas5p::factorise(integ, sys, w, lus, stamp, h, false);
-                let result = match lus.first() {
-                    Some(f) if ok => rodas5p::step(integ, sys, w, f, h, autonomous),
-                    _ => Err(Reject::Singular),
+    rodas5p::with_memory(integ, stamp, |integ, w, lus| {
+        let n = integ.x.len();
+        let autonomous = sys.is_autonomous();
+        let substeps = integ.options.substeps.max(1);
+        let t0 = integ.t;
+        let h = (t_end - t0) / f64::from(substeps);
+        let mut outputs = Outputs::new(times, t0, n);
+        integ.hist.err_prev = 0.0;
+        for k in 1..=substeps {
+            let t = integ.t;
+            rodas5p::eval_f0(integ, sys, &mut w.f0)?;
+            rodas5p::jacobian_at_point(integ, sys, w, stamp, autonomous)?;
+            // Never shortened: the step is the caller's.
+            let (h, ok) = rodas5p::factorise(integ, sys, w, lus, stamp, h, false);
+            let result = match lus.first() {
+                Some(f) if ok => rodas5p::step(integ, sys, w, f, h, autonomous),
+                _ => Err(Reject::Singular),
+            };
+            let err = result.map_err(|why| {
+                let (kind, what) = match why {
+                    Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
+                    Reject::Singular => (
+                        SolverErrorKind::SingularMatrix,
+                        "the iteration matrix is singular",
+                    ),
                 };
-                let err = result.map_err(|why| {
-                    let (kind, what) = match why {
-                        Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
-                        Reject::Singular => (
-                            SolverErrorKind::SingularMatrix,
-                            "the iteration matrix is singular",
-                        ),
-                    };
-                    SolverError::new(
-                        kind,
-                        t,
-                        format!(
-                            "fixed step {k} of {substeps} (h = {h:e}): {what}; a fixed-step \
+                SolverError::new(
+                    kind,
+                    t,
+                    format!(
+                        "fixed step {k} of {substeps} (h = {h:e}): {what}; a fixed-step \
                              method cannot shorten its step: use more substeps, a shorter \
                              communication step or an adaptive method"
-                        ),
-                    )
-                })?;
-                // The last step ends on t_end itself, bit for bit (its size differs from h by
-                // the rounding of t only).
-                let t1 = if k == substeps {
-                    t_end
-                } else {
-                    t0 + f64::from(k) * h
-                };
-                if outputs.pending(t1) {
-                    let (x0, x1, u) = (&integ.x, &w.x1, &w.u);
-                    outputs.emit(
-                        t,
-                        h,
-                        t1,
-                        x1,
-                        &mut |theta, buf| rodas5p::interpolate(x0, x1, u, theta, buf),
-                        out,
-                    );
-                }
-                integ.x.copy_from_slice(&w.x1);
-                integ.t = t1;
-                integ.stats.accepted += 1;
-                integ.hist.err_prev = integ.hist.err_prev.max(err);
-                integ.hist.first = false;
+                    ),
+                )
+            })?;
+            // The last step ends on t_end itself, bit for bit (its size differs from h by
+            // the rounding of t only).
+            let t1 = if k == substeps {
+                t_end
+            } else {
+                t0 + f64::from(k) * h
+            };
+            if outputs.pending(t1) {
+                let (x0, x1, u) = (&integ.x, &w.x1, &w.u);
+                outputs.emit(
+                    t,
+                    h,
+                    t1,
+                    x1,
+                    &mut |theta, buf| rodas5p::interpolate(x0, x1, u, theta, buf),
+                    out,
+                );
             }
-            integ.h = h;
-            Ok(())
-        },
-    )
+            integ.x.copy_from_slice(&w.x1);
+            integ.t = t1;
+            integ.stats.accepted += 1;
+            integ.hist.err_prev = integ.hist.err_prev.max(err);
+            integ.hist.first = false;
+        }
+        integ.h = h;
+        Ok(())
+    })
 }

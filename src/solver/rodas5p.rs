@@ -690,15 +690,20 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
 ) -> Result<(), SolverError> {
     let opts = Rodas5POptions::default();
     let stamp = sys.constant_jacobian();
-    with_kept_memory(
-        integ,
-        stamp,
-        |c| (&mut c.rodas, &mut c.rodas_lu),
-        |integ, w, lus| {
-            let span = (t_end, limit);
-            advance_with(integ, sys, &opts, span, times, out, w, lus, stamp)
-        },
-    )
+    with_memory(integ, stamp, |integ, w, lus| {
+        let span = (t_end, limit);
+        advance_with(integ, sys, &opts, span, times, out, w, lus, stamp)
+    })
+}
+
+/// Runs `body` with Rodas5P's workspace and its kept factorisations (see `with_kept_memory`),
+/// for the Jacobian `stamp`: the adaptive driver's and the fixed-step driver's (`super::fixed`).
+pub(super) fn with_memory<R>(
+    integ: &mut Integrator,
+    stamp: Option<u64>,
+    body: impl FnOnce(&mut Integrator, &mut Work, &mut Vec<Factor>) -> R,
+) -> R {
+    with_kept_memory(integ, stamp, |c| (&mut c.rodas, &mut c.rodas_lu), body)
 }
 
 #[allow(clippy::too_many_arguments)]
