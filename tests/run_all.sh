@@ -8,8 +8,9 @@
 #   bash tests/run_all.sh           everything (CI runs this)
 #   bash tests/run_all.sh --quick   the contributor's inner loop: the FMU with the Linux binary
 #                                   for this machine only (`hsp package --host-only`, no glibc-2.17
-#                                   or other cross build) and every test but the portable ones
-#                                   (test_portable.py, which needs those binaries)
+#                                   or other cross build), every Rust test built in the `quick`
+#                                   profile (no LTO, incremental) and every Python test but the
+#                                   portable ones (test_portable.py, which needs those binaries)
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,12 +25,16 @@ bash tests/setup.sh || exit 1
 if [ "$quick" -eq 1 ]; then
     cargo run --release --quiet --bin hsp -- package --host-only || exit 1
     pytest_skip=(--ignore tests/python/test_portable.py)
+    # The Rust tests in Cargo.toml's `quick` profile: release optimisations without LTO,
+    # incremental, so that a change recompiles in seconds (the FMU above is a release build).
+    test_profile=(--profile quick)
 else
     cargo run --release --quiet --bin hsp -- package --require-portable || exit 1
     pytest_skip=()
+    test_profile=(--release)
 fi
 
-cargo test --release --no-fail-fast
+cargo test "${test_profile[@]}" --no-fail-fast
 rust=$?
 .venv/bin/python -m pytest tests/python -q --durations=10 "${pytest_skip[@]}"
 python=$?
