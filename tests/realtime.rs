@@ -10,6 +10,9 @@ mod fmu;
 
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
+use hydraulic_slewing_plate::fmu::Kind;
+use hydraulic_slewing_plate::model::variables::VARIABLES;
+use hydraulic_slewing_plate::solver::MAX_SUBSTEPS;
 
 /// The outputs compared with the adaptive solver.
 const COMPARED: [&str; 5] = ["y_pot", "theta_motor", "theta_hub", "w_tip", "p_load"];
@@ -186,9 +189,20 @@ fn the_error_estimate_follows_the_step() {
     assert_eq!(largest(&closed_loop(&[])), 0.0);
 }
 
-/// `solver.substeps` outside 1..=10000 is refused with a message that names it.
+/// `solver.substeps` outside 1..=10000 is refused with a message that names it, and that range
+/// in the model description is the solver's own (`MAX_SUBSTEPS`).
 #[test]
 fn substeps_out_of_range_are_refused() {
+    let declared = VARIABLES
+        .iter()
+        .find(|v| v.name == "solver.substeps")
+        .map(|v| v.kind);
+    match declared {
+        Some(Kind::Integer { min, max, .. }) => {
+            assert_eq!((min, max), (Some(1), Some(MAX_SUBSTEPS as i32)));
+        }
+        other => panic!("solver.substeps is declared as {other:?}"),
+    }
     for bad in [0, -3, 10_001] {
         let fmu = Fmu::new();
         let status = fmu.set_integer("solver.substeps", bad);

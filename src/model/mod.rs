@@ -30,7 +30,7 @@ use crate::fmu::{
     Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
 };
 use crate::fragments::validity::Monitor;
-use crate::solver::{Integrator, Method, OdeSystem};
+use crate::solver::{Integrator, OdeSystem};
 use assembly::Assembled;
 use parameters::Parameters;
 use variables::idx;
@@ -199,11 +199,7 @@ impl HydraulicSlewingPlate {
         values.set_integer(idx::SOLVER_F_EVALS, clamp(stats.f_evals));
         values.set_integer(idx::SOLVER_JAC_EVALS, clamp(stats.jac_evals));
         values.set_integer(idx::SOLVER_LU, clamp(stats.lu_decompositions));
-        let error = match integrator.options().method {
-            Method::Rodas5PFixed => integrator.fixed_step_error(),
-            _ => 0.0,
-        };
-        values.set_real(idx::SOLVER_ERROR_ESTIMATE, error);
+        values.set_real(idx::SOLVER_ERROR_ESTIMATE, integrator.fixed_step_error());
     }
 }
 

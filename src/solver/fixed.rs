@@ -58,11 +58,8 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             rodas5p::eval_f0(integ, sys, &mut w.f0)?;
             rodas5p::jacobian_at_point(integ, sys, w, stamp, autonomous)?;
             // Never shortened: the step is the caller's.
-            let (h, ok) = rodas5p::factorise(integ, sys, w, lus, stamp, h, false);
-            let result = match lus.first() {
-                Some(f) if ok => rodas5p::step(integ, sys, w, f, h, autonomous),
-                _ => Err(Reject::Singular),
-            };
+            let (h, result) =
+                rodas5p::factorised_step(integ, sys, w, lus, stamp, h, false, autonomous);
             let err = result.map_err(|why| {
                 let (kind, what) = match why {
                     Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
@@ -103,7 +100,6 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             integ.t = t1;
             integ.stats.accepted += 1;
             integ.hist.err_prev = integ.hist.err_prev.max(err);
-            integ.hist.first = false;
         }
         integ.h = h;
         Ok(())

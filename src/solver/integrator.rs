@@ -506,9 +506,13 @@ impl Integrator {
     /// [`Method::Rodas5PFixed`]: the largest embedded error estimate of the steps of the last
     /// call, as a multiple of the tolerances (the RMS norm the adaptive drivers test against 1:
     /// above 1, a step they would have rejected). 0 before the first call and after a
-    /// discontinuity; meaningless for the adaptive methods.
+    /// discontinuity, and always 0 for the adaptive methods (whose step-size controller keeps
+    /// another number in the same place).
     pub fn fixed_step_error(&self) -> f64 {
-        self.hist.err_prev
+        match self.options.method {
+            Method::Rodas5PFixed => self.hist.err_prev,
+            Method::Rodas5P | Method::Radau5 => 0.0,
+        }
     }
 
     /// Replace the options (e.g. tolerances) keeping the state. Resets history like

@@ -450,7 +450,7 @@ pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
 /// for a step up to `SHORTER` times shorter, else a new one; for a J that changes from step to
 /// step a new one in the memory of the last. Returns the step size to take (that of the
 /// factorisation) and false if W is singular.
-pub(super) fn factorise<S: OdeSystem + ?Sized>(
+fn factorise<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     w: &mut Work,
@@ -500,13 +500,36 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
     }
 }
 
+/// One step from the current point, with f0, J (and ∂f/∂t) there already in `w`: W factorised
+/// for about `h` (see [`factorise`]; `shorten` lets a constant J's kept LU shorten the step),
+/// then the stages. Returns the step size taken and the step's error norm, or why it failed.
+/// The adaptive driver and the fixed-step one (`super::fixed`) step through this.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn factorised_step<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    w: &mut Work,
+    lus: &mut Vec<Factor>,
+    stamp: Option<u64>,
+    h: f64,
+    shorten: bool,
+    autonomous: bool,
+) -> (f64, Result<f64, Reject>) {
+    let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten);
+    let result = match lus.first() {
+        Some(f) if ok => step(integ, sys, w, f, h, autonomous),
+        _ => Err(Reject::Singular),
+    };
+    (h, result)
+}
+
 /// One Rodas5P step of size h from (t, x) with f0 = f(t, x), J and (if non-autonomous)
 /// ∂f/∂t already in `w`. On success `w.x1` holds y1 and the return value is the error norm.
 ///
 /// On x86-64 processors with AVX2 the step is the same code compiled for 4-wide vectors (its
 /// stage sums are vector updates over the states); multiplications and additions stay separate,
 /// so the bits are those of the portable code (see [`super::dense`]).
-pub(super) fn step<S: OdeSystem + ?Sized>(
+fn step<S: OdeSystem + ?Sized>(
     integ: &mut Integrator,
     sys: &S,
     w: &mut Work,
@@ -758,11 +781,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
         // W = I/(h γ) - J, one LU for all 8 stages. A step free to go past t_end that does
         // not end on the limit may be shortened to use a kept LU of a constant J.
         let shorten = limit > t_end && !last;
-        let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten);
-        let result = match lus.first() {
-            Some(f) if ok => step(integ, sys, w, f, h, autonomous),
-            _ => Err(Reject::Singular),
-        };
+        let (h, result) = factorised_step(integ, sys, w, lus, stamp, h, shorten, autonomous);
         match result {
             Ok(err) if err <= 1.0 => {
                 let t1 = if last { limit } else { t + h };
