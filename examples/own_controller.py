@@ -119,29 +119,36 @@ def design(lin):
     assert np.abs(A @ v).max() == 0.0
     vr = reduce(v)
 
+    # The bond graph keeps both angles and the bar's twist as states, so theta_motor - theta_hub
+    # - twist is conserved: a direction w with w' Ar = 0 and w' Br = 0, an eigenvalue 0 that no
+    # input moves and no sensor sees, on which neither Riccati equation has a stabilising
+    # solution. The motion stays in w' xr = 0 (the FMU starts there, and w' Ad = w', w' Bd = 0
+    # keep the observer there too), so both designs are made in coordinates z of that subspace,
+    # xr = W z with W an orthonormal basis of it, and their gains mapped back.
+    Ub, sv, _ = np.linalg.svd(np.hstack([Ar, Br]))
+    assert sv[-1] < 1e-9 * sv[0], sv[-3:] / sv[0]
+    W = scipy.linalg.null_space(Ub[:, -1][None, :])
+    Az, bz = W.T @ Ad @ W, W.T @ b
+
     # 3. LQR, Bryson's rule.
-    Cz = np.vstack([C[y["theta_hub"]], C[y["w_tip"]]]) @ slow
+    Cz = np.vstack([C[y["theta_hub"]], C[y["w_tip"]]]) @ slow @ W
     Q = Cz.T @ np.diag([1 / 0.002 ** 2, 1 / 0.005 ** 2]) @ Cz
     R = 1 / 3.0 ** 2
-    P = scipy.linalg.solve_discrete_are(Ad, b[:, None], Q, np.array([[R]]))
-    K = (b @ P @ Ad) / (R + b @ P @ b)
+    P = scipy.linalg.solve_discrete_are(Az, bz[:, None], Q, np.array([[R]]))
+    K = (bz @ P @ Az) / (R + bz @ P @ bz) @ W.T
 
     # 4. Kalman filter (predictor form) on y_pot, torsion bar torque, w_tip.
     meas = ["y_pot", "torsion_bar.torque", "w_tip"]
     Cm_full = np.vstack([C[y[m]] for m in meas])
     Cm = Cm_full @ slow
     Dm = Cm_full @ x_static[:, u["e_in"]]
-    G = Bd[:, [u["e_in"], u["F1"], u["F2"]]]
+    G = W.T @ Bd[:, [u["e_in"], u["F1"], u["F2"]]]
     Qn = G @ np.diag([0.1 ** 2, 1.0 ** 2, 1.0 ** 2]) @ G.T        # 0.1 V, 1 N, 1 N
     sigma = np.array([1e-3, 0.1, 1e-4])                           # 1 mV, 0.1 N m, 0.1 mm
-    # The bond graph keeps both angles and the bar's twist as states, so theta_motor - theta_hub
-    # - twist is conserved: an eigenvalue 0 that no input moves. A little noise on every reduced
-    # state lets the filter's Riccati equation treat it like the others. Measurements in units
-    # of their noise keep the equation well scaled.
-    Qn += 1e-6 * np.trace(Qn) / k * np.eye(k)
-    Cs = Cm / sigma[:, None]
-    Pk = scipy.linalg.solve_discrete_are(Ad.T, Cs.T, Qn, np.eye(len(meas)))
-    L = Ad @ Pk @ Cs.T @ np.linalg.inv(Cs @ Pk @ Cs.T + np.eye(len(meas))) / sigma[None, :]
+    # Measurements in units of their noise keep the equation well scaled.
+    Cs = Cm @ W / sigma[:, None]
+    Pk = scipy.linalg.solve_discrete_are(Az.T, Cs.T, Qn, np.eye(len(meas)))
+    L = W @ Az @ Pk @ Cs.T @ np.linalg.inv(Cs @ Pk @ Cs.T + np.eye(len(meas))) / sigma[None, :]
 
     # 5. Velocity feedforward: motor speed per volt at 1e-3 rad/s.
     w = 1e-3

@@ -18,6 +18,7 @@
 //! | [`fmu`] | the version-neutral FMU core: instance, state machine, values, FMU states, logging | a model trait, no FMI version, no physics |
 //! | [`fmi2`] | the FMI 2.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
 //! | [`fmi3`] | the FMI 3.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
+//! | [`web`] | the browser build: a simulation API for JavaScript, exported by the `.wasm` | the core |
 
 #![deny(unsafe_op_in_unsafe_fn)]
 
@@ -27,14 +28,18 @@ pub mod fmi3;
 pub mod fmu;
 pub mod fnv1a;
 pub mod fragments;
+pub mod math;
 pub mod model;
 pub mod solver;
+pub mod web;
 
 // The hash of the sources this library is built from (`SOURCE_HASH`, `SOURCE_MARKER`), written by
 // build.rs (tools/source_hash.rs): a test tells a stale packaged FMU by it.
 include!(concat!(env!("OUT_DIR"), "/source_hash.rs"));
 
 // The FMI 2.0 C API (Co-Simulation and Model Exchange) of the shipped FMU.
+#[cfg(not(target_family = "wasm"))]
 export_fmi2_cosimulation!(crate::model::HydraulicSlewingPlate);
 // The FMI 3.0 C API of the same model, for the FMI 3.0 FMU (the same binary).
+#[cfg(not(target_family = "wasm"))]
 export_fmi3!(crate::model::HydraulicSlewingPlate);

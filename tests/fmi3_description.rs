@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use hydraulic_slewing_plate::fmi3::variables::{fmi3_type_name, Fmi3Table, TIME_VALUE_REFERENCE};
-use hydraulic_slewing_plate::fmu::{Causality, Variability};
+use hydraulic_slewing_plate::fmu::Variability;
 use hydraulic_slewing_plate::model::variables::{CONTINUOUS_STATES, GUID, VARIABLES};
 
 fn root() -> PathBuf {
@@ -27,17 +27,6 @@ fn the_fmi3_description_is_generated_from_the_fmi2_one() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-}
-
-fn causality(c: Causality) -> &'static str {
-    match c {
-        Causality::Parameter => "parameter",
-        Causality::CalculatedParameter => "calculatedParameter",
-        Causality::Input => "input",
-        Causality::Output => "output",
-        Causality::Local => "local",
-        Causality::Independent => "independent",
-    }
 }
 
 fn variability(v: Variability) -> &'static str {
@@ -92,7 +81,7 @@ fn the_fmi3_description_declares_what_the_layer_serves() {
         );
         assert_eq!(
             node.attribute("causality"),
-            Some(causality(first.causality)),
+            Some(first.causality.xml_name()),
             "{}",
             v.name
         );

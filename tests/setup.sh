@@ -15,19 +15,26 @@
 #                                  and through libc6-arm64-cross the loader and libc.so.6 that
 #                                  `qemu-aarch64 -L /usr/aarch64-linux-gnu` runs it with
 #            python3-venv          only where python3 lacks the venv/ensurepip modules
+#            chromium              /usr/bin/chromium: the headless browser of test_docs.py and
+#                                  test_web.py
+#            chromium-driver       /usr/bin/chromedriver, through which Selenium drives it
+#                                  (test_web.py, bench/web_speed.py)
 #   rustup   x86_64-pc-windows-gnu      the Rust standard library for binaries/win64
 #            aarch64-unknown-linux-gnu  ... for binaries/aarch64-linux (FMI 3.0)
 #            x86_64-apple-darwin        ... for the macOS binaries (darwin64, x86_64-darwin,
 #            aarch64-apple-darwin           aarch64-darwin), which rustc's own rust-lld links
 #                                           against the ziglang package's libSystem stubs: no
 #                                           Apple SDK needed
-#   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, and
+#            wasm32-unknown-unknown     the browser build (docs/web/hsp.wasm, `hsp web`)
+#   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest,
+#            selenium, and
 #            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17;
 #            ziglang's libSystem.tbd for the macOS binaries)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-RUST_TARGETS=(x86_64-pc-windows-gnu aarch64-unknown-linux-gnu x86_64-apple-darwin aarch64-apple-darwin)
+RUST_TARGETS=(x86_64-pc-windows-gnu aarch64-unknown-linux-gnu x86_64-apple-darwin aarch64-apple-darwin
+    wasm32-unknown-unknown)
 AARCH64_ROOT=/usr/aarch64-linux-gnu
 
 # bindgen (through clang-sys) dlopens libclang.so, libclang-N.so or libclang.so.N; test for exactly
@@ -49,7 +56,8 @@ have aarch64-linux-gnu-gcc || apt_packages+=(gcc-aarch64-linux-gnu)
 { [ -e "$AARCH64_ROOT/lib/crt1.o" ] && [ -e "$AARCH64_ROOT/lib/ld-linux-aarch64.so.1" ] &&
     [ -e "$AARCH64_ROOT/lib/libc.so.6" ]; } || apt_packages+=(libc6-dev-arm64-cross)
 python3 -c "import venv, ensurepip" 2>/dev/null || apt_packages+=(python3-venv)
-have chromium || apt_packages+=(chromium)  # headless browser of tests/python/test_docs.py
+have chromium || apt_packages+=(chromium)  # headless browser of test_docs.py and test_web.py
+have chromedriver || apt_packages+=(chromium-driver)  # Selenium's driver of that browser (test_web.py)
 if [ "${#apt_packages[@]}" -gt 0 ]; then
     echo "setup: installing ${apt_packages[*]} (apt)"
     SUDO=""
@@ -75,7 +83,7 @@ done
 
 venv_complete() {
     [ -x .venv/bin/python ] && [ -x .venv/bin/cargo-zigbuild ] &&
-        .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, distributed, matplotlib" 2>/dev/null &&
+        .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, distributed, matplotlib, selenium" 2>/dev/null &&
         .venv/bin/python -m ziglang version >/dev/null 2>&1
 }
 if ! venv_complete; then

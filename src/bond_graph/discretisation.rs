@@ -37,7 +37,7 @@ impl ExactDiscretisation {
         let mut m = DMatrix::zeros(nx + nu, nx + nu);
         m.view_mut((0, 0), (nx, nx)).copy_from(&(a * h));
         m.view_mut((0, nx), (nx, nu)).copy_from(&(b * h));
-        let e = m.exp();
+        let e = m.exp(); // nalgebra's matrix exponential (scalars from libm: libm-force)
         ExactDiscretisation {
             phi: e.view((0, 0), (nx, nx)).into_owned(),
             gamma: e.view((0, nx), (nx, nu)).into_owned(),
@@ -96,9 +96,10 @@ mod tests {
         let wd = w * (1.0 - zeta * zeta).sqrt();
         for (k, x) in states.iter().enumerate() {
             let t = (k + 1) as f64 * h;
-            let decay = (-zeta * w * t).exp();
-            let pos = 1.0 - decay * ((wd * t).cos() + zeta * w / wd * (wd * t).sin());
-            let vel = decay * w * w / wd * (wd * t).sin();
+            let decay = crate::math::exp(-zeta * w * t);
+            let pos =
+                1.0 - decay * (crate::math::cos(wd * t) + zeta * w / wd * crate::math::sin(wd * t));
+            let vel = decay * w * w / wd * crate::math::sin(wd * t);
             assert!(
                 (x[0] - pos).abs() < 1e-12 * 2.0,
                 "x at step {k}: {} vs {pos}",

@@ -15,6 +15,20 @@ pub enum Causality {
     Independent,
 }
 
+impl Causality {
+    /// The name `modelDescription.xml` gives it (`causality="..."`).
+    pub fn xml_name(self) -> &'static str {
+        match self {
+            Causality::Parameter => "parameter",
+            Causality::CalculatedParameter => "calculatedParameter",
+            Causality::Input => "input",
+            Causality::Output => "output",
+            Causality::Local => "local",
+            Causality::Independent => "independent",
+        }
+    }
+}
+
 /// `variability` of a ScalarVariable.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Variability {

@@ -127,7 +127,7 @@ impl AmplifierLimit {
                     return (u, 1.0);
                 }
                 let w = e_max - k;
-                let t = ((a - k) / w).tanh();
+                let t = crate::math::tanh((a - k) / w);
                 ((k + w * t).copysign(u), 1.0 - t * t)
             }
         }

@@ -283,7 +283,9 @@ mod tests {
                 (k as f64 + 1.0) * 0.37 - j as f64 * 1.9
             }
         });
-        let x: Vec<f64> = (0..cols).map(|j| (j as f64 * 0.77).sin() * 1e3).collect();
+        let x: Vec<f64> = (0..cols)
+            .map(|j| crate::math::sin(j as f64 * 0.77) * 1e3)
+            .collect();
         let y0: Vec<f64> = (0..rows).map(|k| k as f64 - 3.5).collect();
         let mut y = vec![f64::NAN; rows];
         let blocked = BlockRows::from_dense(&c);

@@ -71,9 +71,9 @@ pub fn frequency_response(
             "need 0 < from < to and at least 3 points, got {from}, {to}, {points}"
         ));
     }
-    let ratio = (to / from).ln() / (points - 1) as f64;
+    let ratio = crate::math::ln(to / from) / (points - 1) as f64;
     let f_hz: Vec<f64> = (0..points)
-        .map(|k| from * (ratio * k as f64).exp())
+        .map(|k| from * crate::math::exp(ratio * k as f64))
         .collect();
     let h: Vec<Complex<f64>> = f_hz.iter().map(|&f| response_at(lin, iu, iy, f)).collect();
     let magnitude: Vec<f64> = h.iter().map(|z| z.norm()).collect();

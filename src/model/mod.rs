@@ -89,6 +89,11 @@ impl HydraulicSlewingPlate {
         self.system.as_ref()
     }
 
+    /// The parameters the model was last built from.
+    pub fn parameters(&self) -> Option<&Parameters> {
+        self.parameters.as_ref()
+    }
+
     pub fn integrator(&self) -> Option<&Integrator> {
         self.integrator.as_ref()
     }

@@ -305,7 +305,7 @@ fn check_magnitudes(values: &Values) -> Result<(), String> {
 fn culprit(values: &Values, from: &[usize]) -> String {
     let decades = |i: usize| match (values.get(i), VARIABLES[i].kind) {
         (Value::Real(v), Kind::Real { start: Some(s), .. }) if *v != 0.0 && s != 0.0 => {
-            (v.abs() / s.abs()).log10().abs()
+            crate::math::log10(v.abs() / s.abs()).abs()
         }
         _ => 0.0,
     };
@@ -413,6 +413,16 @@ impl Parameters {
 
 /// Sets a variable by its name from text (`--set loes.C3=6e-11`), with the FMU's own checks.
 pub fn set_by_name(values: &mut Values, name: &str, text: &str) -> Result<(), String> {
+    let (index, value) = parse_setting(name, text)?;
+    check(index, &value)?;
+    values.set(index, value);
+    Ok(())
+}
+
+/// A setting `NAME=TEXT` as the variable's position and typed value, checked against the
+/// variable's type and declared range (the model's own checks, [`check`], come on top): the one
+/// reader of settings as text, for `--set`, the presets and the browser build.
+pub fn parse_setting(name: &str, text: &str) -> Result<(usize, Value), String> {
     let index = VARIABLES
         .iter()
         .position(|v| v.name == name)
@@ -454,7 +464,5 @@ pub fn set_by_name(values: &mut Values, name: &str, text: &str) -> Result<(), St
         Kind::String { .. } => Value::String(text.to_string()),
     };
     check_value(var, &value)?;
-    check(index, &value)?;
-    values.set(index, value);
-    Ok(())
+    Ok((index, value))
 }

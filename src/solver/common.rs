@@ -200,7 +200,7 @@ pub(crate) fn initial_step<S: OdeSystem + ?Sized>(
     let h1 = if dm <= 1e-15 {
         (h0 * 1e-3).max(1e-6)
     } else {
-        (0.01 / dm).powf(1.0 / (order + 1.0))
+        crate::math::powf(0.01 / dm, 1.0 / (order + 1.0))
     };
     let h = (100.0 * h0).min(h1).min(cap);
     if h.is_finite() && h > 0.0 {

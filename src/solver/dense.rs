@@ -104,7 +104,13 @@ mod tests {
             .map(|k| ((k * 37 % 17) as f64 - 8.0) * 0.37)
             .collect();
         let x: Vec<f64> = (0..n)
-            .map(|j| if j == 3 { 0.0 } else { (j as f64).sin() * 1e3 })
+            .map(|j| {
+                if j == 3 {
+                    0.0
+                } else {
+                    crate::math::sin(j as f64) * 1e3
+                }
+            })
             .collect();
         let a: Vec<f64> = (0..rows).map(|i| i as f64 - 2.5).collect();
         let (mut y, mut y_loop) = (vec![f64::NAN; rows], vec![f64::NAN; rows]);

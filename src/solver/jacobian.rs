@@ -59,7 +59,7 @@ pub fn finite_difference_jacobian<S: OdeSystem + ?Sized>(
     let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
     let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
     for j in 0..n {
-        let d0 = f64::EPSILON.cbrt() * x[j].abs().max(1e-3);
+        let d0 = crate::math::cbrt(f64::EPSILON) * x[j].abs().max(1e-3);
         xp[j] = x[j] + d0;
         xm[j] = x[j] - d0;
         let d = xp[j] - xm[j];

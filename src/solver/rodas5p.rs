@@ -816,9 +816,11 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 // PI step-size controller.
                 let e = err.max(opts.err_floor);
                 let mut fac = if integ.hist.err_prev > 0.0 {
-                    opts.safe * e.powf(-opts.beta1) * integ.hist.err_prev.powf(opts.beta2)
+                    opts.safe
+                        * crate::math::powf(e, -opts.beta1)
+                        * crate::math::powf(integ.hist.err_prev, opts.beta2)
                 } else {
-                    opts.safe * e.powf(-1.0 / ERR_ORDER)
+                    opts.safe * crate::math::powf(e, -1.0 / ERR_ORDER)
                 };
                 fac = fac.clamp(opts.fac_min, opts.fac_max);
                 if integ.hist.last_rejected {
@@ -846,7 +848,8 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 let fac = match result {
                     Ok(err) => {
                         last_nonfinite = false;
-                        (opts.safe * err.powf(-1.0 / ERR_ORDER)).clamp(opts.fac_min, 1.0)
+                        (opts.safe * crate::math::powf(err, -1.0 / ERR_ORDER))
+                            .clamp(opts.fac_min, 1.0)
                     }
                     Err(Reject::NonFinite) => {
                         last_nonfinite = true;

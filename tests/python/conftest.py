@@ -166,3 +166,18 @@ def closed_loop_step(times, r=1.0, c3=C3, i_b=I_B, r7=R7, d_m=D_M, k_sv=K_SV, a1
         E = scipy.linalg.expm(M * t)
         out.append(C @ E[:3, 3])
     return np.array(out)
+
+
+def page_requests(net_log):
+    """The URLs the page itself requested over the network, from Chromium's net log: requests
+    whose network isolation key is the page's (file://) site; the browser's own background
+    requests carry none. (Checked by hand: an <img> pointing at an https address shows up here.)"""
+    events = json.loads(pathlib.Path(net_log).read_text())["events"]
+    urls, from_page = {}, set()
+    for e in events:
+        p, source = e.get("params", {}), e.get("source", {}).get("id")
+        if "url" in p:
+            urls.setdefault(source, p["url"])
+        if "file://" in str(p.get("network_isolation_key", "")):
+            from_page.add(source)
+    return sorted({urls[s] for s in from_page if s in urls})

@@ -6,7 +6,6 @@ machine."""
 import html
 import html.parser
 import json
-import pathlib
 import re
 import shutil
 import subprocess
@@ -16,7 +15,7 @@ import zipfile
 import pytest
 from fmpy.validation import validate_fmu
 
-from conftest import hsp
+from conftest import hsp, page_requests
 from figures import assert_png, assert_svg
 
 FIGURES = ["sketch.svg", "bond_graph.svg", "default_experiment.svg", "bode.svg"]
@@ -126,21 +125,6 @@ window.addEventListener("load", () => {
 </script></body>"""
 
 
-def page_requests(net_log):
-    """The URLs the page itself requested over the network, from Chromium's net log: requests
-    whose network isolation key is the page's (file://) site; the browser's own background
-    requests carry none. (Checked by hand: an <img> pointing at an https address shows up here.)"""
-    events = json.loads(pathlib.Path(net_log).read_text())["events"]
-    urls, from_page = {}, set()
-    for e in events:
-        p, source = e.get("params", {}), e.get("source", {}).get("id")
-        if "url" in p:
-            urls.setdefault(source, p["url"])
-        if "file://" in str(p.get("network_isolation_key", "")):
-            from_page.add(source)
-    return sorted({urls[s] for s in from_page if s in urls})
-
-
 def test_chromium_renders_every_image_and_requests_nothing_outside(archive, tmp_path):
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
     assert chromium, "headless Chromium is needed (tests/setup.sh installs Debian's chromium)"
@@ -148,6 +132,7 @@ def test_chromium_renders_every_image_and_requests_nothing_outside(archive, tmp_
     doc.mkdir()
     for name, data in archive.items():
         if name.startswith("documentation/"):
+            (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
             (tmp_path / name).write_bytes(data)
     page = (doc / "index.html").read_text()
     assert page.count("</body>") == 1

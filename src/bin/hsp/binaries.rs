@@ -59,13 +59,13 @@ pub struct Binary {
     pub path: PathBuf,
 }
 
-fn target_dir() -> PathBuf {
+pub(super) fn target_dir() -> PathBuf {
     std::env::var_os("CARGO_TARGET_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|| root().join("target"))
 }
 
-fn cargo() -> String {
+pub(super) fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
 }
 
@@ -74,7 +74,7 @@ fn rustc() -> String {
 }
 
 /// Runs a build command in the repository root; the error names the command.
-fn run(mut command: Command, what: &str) -> Result<(), String> {
+pub(super) fn run(mut command: Command, what: &str) -> Result<(), String> {
     let status = command
         .current_dir(root())
         .status()
@@ -86,7 +86,7 @@ fn run(mut command: Command, what: &str) -> Result<(), String> {
     }
 }
 
-fn built(path: PathBuf) -> Result<PathBuf, String> {
+pub(super) fn built(path: PathBuf) -> Result<PathBuf, String> {
     if path.exists() {
         Ok(path)
     } else {
@@ -119,7 +119,7 @@ pub enum Portability {
 }
 
 /// Runs one build and says on stderr how long it took (docs/platforms.md quotes these times).
-fn timed<T>(what: &str, build: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+pub(super) fn timed<T>(what: &str, build: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
     let start = std::time::Instant::now();
     let result = build()?;
     eprintln!(
@@ -530,7 +530,7 @@ fn has_rust_lld() -> bool {
 }
 
 /// Whether rustup (or the toolchain) has the standard library for `target`.
-fn has_rust_target(target: &str) -> bool {
+pub(super) fn has_rust_target(target: &str) -> bool {
     Command::new(rustc())
         .args(["--print", "sysroot"])
         .output()

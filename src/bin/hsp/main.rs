@@ -20,6 +20,8 @@
 //!   states, plan, the Jacobian's pattern, its varying entries and passes per evaluation.
 //! - `hsp validate [--check]`: writes docs/validation.md and its figures, the model against the
 //!   paper (`--check` compares instead).
+//! - `hsp web [--out docs/web]`: the browser build, the `.wasm` beside the interactive page's
+//!   sources (docs/web.md).
 //! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
 //!   copied for the README.
 
@@ -41,6 +43,7 @@ mod progress;
 mod results;
 mod run;
 mod validate;
+mod web;
 
 use std::process::ExitCode;
 
@@ -108,6 +111,13 @@ enum Command {
     Ssp {
         /// Where to write them
         #[arg(long, default_value = "ssp")]
+        out: String,
+    },
+    /// Build the browser build (WebAssembly) and put it beside the interactive page: open
+    /// docs/web/index.html
+    Web {
+        /// Where to write the page (its sources are copied there too unless it is docs/web)
+        #[arg(long, default_value = web::PAGE_DIR)]
         out: String,
     },
     /// Run the default experiment (a slewing manoeuvre) through the FMU's C ABI and summarise it
@@ -353,6 +363,13 @@ fn main() -> ExitCode {
             }
         }),
         Command::Run(args) => run::run(&args),
+        Command::Web { out } => web::page_files()
+            .and_then(|files| web::write(&files, &package::root().join(out)))
+            .map(|paths| {
+                for p in paths {
+                    println!("wrote {}", p.display());
+                }
+            }),
         Command::Ssp { out } => ecosystem::ssp::write(&package::root().join(out)).map(|paths| {
             for p in paths {
                 println!("wrote {}", p.display());

@@ -2,7 +2,8 @@
 //! (verbatim from `modelDescription/`), `binaries/linux64/HydraulicSlewingPlate.so` (glibc 2.17),
 //! `binaries/win64/HydraulicSlewingPlate.dll`, `binaries/darwin64/HydraulicSlewingPlate.dylib` (one
 //! universal binary for x86-64 and arm64 Macs; where the binaries come from: [`binaries`]) and
-//! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU), and the
+//! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU, and the
+//! interactive page with the browser build in `documentation/web/`, see [`web`]), and the
 //! ecosystem's formats ([`ecosystem`]): `extra/org.fmi-standard.fmi-ls-ref/` (the default
 //! experiment's result, the presets as SSP parameter sets) and the icon `model.png`.
 //!
@@ -20,7 +21,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::binaries::{self, Portability};
-use super::{docpage, ecosystem};
+use super::{docpage, ecosystem, web};
 use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
 
 pub const DEFAULT_FMU: &str = "fmu/HydraulicSlewingPlate.fmu";
@@ -91,6 +92,13 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
         .map(|(name, bytes)| (format!("documentation/{name}"), bytes))
         .collect();
     shared.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
+    // The interactive page with the browser build, in the FMUs and beside its sources.
+    let page = web::page_files()?;
+    web::write(&page, &root().join(web::PAGE_DIR))?;
+    shared.extend(
+        page.into_iter()
+            .map(|(name, bytes)| (format!("documentation/web/{name}"), bytes)),
+    );
     entries.extend(shared.iter().cloned());
 
     // FMI 3.0: its own model description, the binaries under its platform names, the same

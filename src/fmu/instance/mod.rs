@@ -214,6 +214,12 @@ impl<M: FmuModel> Instance<M> {
         self.state
     }
 
+    /// The model, read-only: for layers that show more of it than FMI variables can (the
+    /// browser build draws the plate from the model's parameters).
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
     pub fn time(&self) -> f64 {
         self.time
     }

@@ -69,20 +69,26 @@ pub fn characteristic_root(kind: BeamKind, k: usize) -> f64 {
     // Starting guesses and the residual g(beta) with derivative.
     let (mut x, g): (f64, Residual) = match kind {
         BeamKind::PinnedFree => ((kf + 0.25) * PI, |b| {
-            let t = b.tanh();
+            let t = crate::math::tanh(b);
             let sech2 = 1.0 - t * t;
             (
-                b.sin() - b.cos() * t,
-                b.cos() + b.sin() * t - b.cos() * sech2,
+                crate::math::sin(b) - crate::math::cos(b) * t,
+                crate::math::cos(b) + crate::math::sin(b) * t - crate::math::cos(b) * sech2,
             )
         }),
         BeamKind::ClampedFree => (if k == 1 { 1.875 } else { (kf - 0.5) * PI }, |b| {
-            let sech = 1.0 / b.cosh();
-            (b.cos() + sech, -b.sin() - sech * b.tanh())
+            let sech = 1.0 / crate::math::cosh(b);
+            (
+                crate::math::cos(b) + sech,
+                -crate::math::sin(b) - sech * crate::math::tanh(b),
+            )
         }),
         BeamKind::FreeFree => ((kf + 0.5) * PI, |b| {
-            let sech = 1.0 / b.cosh();
-            (b.cos() - sech, -b.sin() + sech * b.tanh())
+            let sech = 1.0 / crate::math::cosh(b);
+            (
+                crate::math::cos(b) - sech,
+                -crate::math::sin(b) + sech * crate::math::tanh(b),
+            )
         }),
     };
     for _ in 0..100 {
@@ -121,8 +127,8 @@ impl BeamFunction {
             index
         };
         let b = characteristic_root(kind, k);
-        let em = (-b).exp();
-        let (sb, cb) = b.sin_cos();
+        let em = crate::math::exp(-b);
+        let (sb, cb) = crate::math::sin_cos(b);
         f.beta = b;
         match kind {
             BeamKind::PinnedFree => {
@@ -177,9 +183,9 @@ impl BeamFunction {
         }
         let b = self.beta;
         let u = b * xi;
-        let hyper = self.p * (u - b).exp()
-            + if k.is_multiple_of(2) { 1.0 } else { -1.0 } * self.q * (-u).exp();
-        let (su, cu) = u.sin_cos();
+        let hyper = self.p * crate::math::exp(u - b)
+            + if k.is_multiple_of(2) { 1.0 } else { -1.0 } * self.q * crate::math::exp(-u);
+        let (su, cu) = crate::math::sin_cos(u);
         // d^k/du^k of c cos u + s sin u
         let trig = match k % 4 {
             0 => self.c * cu + self.s * su,
@@ -225,7 +231,7 @@ fn gauss_legendre() -> &'static [(f64, f64)] {
 pub fn gauss_legendre_rule(n: usize) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut x = crate::math::cos(PI * (i as f64 + 0.75) / (n as f64 + 0.5));
         let mut dp = 0.0;
         for _ in 0..100 {
             let (mut p0, mut p1) = (1.0, x);

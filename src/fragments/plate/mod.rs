@@ -208,6 +208,10 @@ impl PlateParameters {
     }
 }
 
+/// The displacement of a point `(x, y)` per unit generalised coordinate
+/// ([`PlateModel::with_displacements`]).
+pub type DisplacementMap = Box<dyn Fn(f64, f64) -> DVector<f64>>;
+
 /// A plate model in generalised coordinates `q`: the hub angle first when the root is the hub,
 /// then the plate coordinates. Kinetic energy `q' M q / 2`, strain energy `q' K q / 2`.
 #[derive(Clone, Debug)]
@@ -277,17 +281,25 @@ impl PlateNominal {
 impl PlateModel {
     /// The model of a parameter set.
     pub fn new(p: &PlateParameters) -> Result<Self, String> {
+        let (mut model, map) = Self::with_displacements(p)?;
+        model.drag = drag::drag_points(p, &model, map);
+        Ok(model)
+    }
+
+    /// The model of a parameter set (without its drag points) and the map from a point
+    /// `(x, y)` of the plate \[m\] to its displacement per unit coordinate \[m\] (the rigid
+    /// rotation `x theta` of the hub coordinate included): what draws the deflected plate from
+    /// the coordinates.
+    pub fn with_displacements(p: &PlateParameters) -> Result<(Self, DisplacementMap), String> {
         p.validate()?;
         Ok(match p.formulation {
             Formulation::Paper => {
-                let (mut model, map) = paper::build(p);
-                model.drag = drag::drag_points(p, &model, map);
-                model
+                let (model, map) = paper::build(p);
+                (model, Box::new(map))
             }
             Formulation::Consistent => {
-                let (mut model, map) = consistent::build(p);
-                model.drag = drag::drag_points(p, &model, map);
-                model
+                let (model, map) = consistent::build(p);
+                (model, Box::new(map))
             }
         })
     }

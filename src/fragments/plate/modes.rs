@@ -30,7 +30,7 @@ pub fn generalized_eigen(
         .clone()
         .try_inverse()
         .ok_or("the Cholesky factor of the plate's mass matrix is singular")?;
-    let a = &linv * k * linv.transpose();
+    let a = crate::math::product(&crate::math::product(&linv, k), &linv.transpose());
     let a = (&a + a.transpose()) * 0.5;
     let eig = a.symmetric_eigen();
     let n = k.nrows();

@@ -87,8 +87,8 @@ pub fn compare_with_g_est(
             let e = g_est(2.0 * std::f64::consts::PI * f);
             GEstPoint {
                 f_hz: f,
-                mag_db: 20.0 * g.norm().log10(),
-                mag_db_est: 20.0 * e.norm().log10(),
+                mag_db: 20.0 * crate::math::log10(g.norm()),
+                mag_db_est: 20.0 * crate::math::log10(e.norm()),
                 phase_deg: g.arg().to_degrees(),
                 phase_deg_est: e.arg().to_degrees(),
             }
@@ -99,6 +99,6 @@ pub fn compare_with_g_est(
 /// Log-spaced frequencies from `f0` to `f1` \[Hz\], `n` points.
 pub fn log_frequencies(f0: f64, f1: f64, n: usize) -> Vec<f64> {
     (0..n)
-        .map(|i| f0 * (f1 / f0).powf(i as f64 / (n - 1) as f64))
+        .map(|i| f0 * crate::math::powf(f1 / f0, i as f64 / (n - 1) as f64))
         .collect()
 }

@@ -41,7 +41,7 @@ fn values_computed_when_read_are_those_written_at_once() {
             .iter()
             .zip(a.nominal())
             .enumerate()
-            .map(|(i, (r, s))| r + s * (0.37 * i as f64).sin())
+            .map(|(i, (r, s))| r + s * crate::math::sin(0.37 * i as f64))
             .collect();
         let mut eager = values.clone();
         a.write_outputs(&x, &mut eager);

@@ -15,8 +15,8 @@ pub fn nodes() -> (f64, f64) {
 /// Eigenvalues of A⁻¹ (A the Radau IIA matrix): a real one γ and a complex pair α ± iβ.
 /// RADAU5: U1 = 1/((6 + 81^(1/3) - 9^(1/3))/30), ALPH, BETA = (…)/(ALPH² + BETA²).
 pub fn inverse_eigenvalues() -> (f64, f64, f64) {
-    let c81 = 81f64.cbrt();
-    let c9 = 9f64.cbrt();
+    let c81 = crate::math::cbrt(81f64);
+    let c9 = crate::math::cbrt(9f64);
     let u1 = (6.0 + c81 - c9) / 30.0; // real eigenvalue of A
     let alph = (12.0 - c81 + c9) / 60.0; // real part of the complex pair of A
     let beta = (c81 + c9) * 3f64.sqrt() / 60.0; // imaginary part

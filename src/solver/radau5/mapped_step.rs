@@ -53,11 +53,8 @@ pub(super) fn mapped_step(
     } else if !lu.map.fits(c0) {
         lu.map.refit(c0, response);
     }
-    integ.hist.faccon = integ
-        .hist
-        .faccon
-        .max(f64::EPSILON)
-        .powf(opts.faccon_exponent);
+    integ.hist.faccon =
+        crate::math::powf(integ.hist.faccon.max(f64::EPSILON), opts.faccon_exponent);
     lu.map.apply(&integ.x, &mut work.mapped);
     let (z3, e) = work.mapped.split_at(n);
     let mut sum = 0.0;

@@ -77,11 +77,8 @@ pub(super) fn newton<S: OdeSystem + ?Sized>(
     let (u1, alph, beta) = inverse_eigenvalues();
     let fac1 = u1 / h;
     let (alphn, betan) = (alph / h, beta / h);
-    integ.hist.faccon = integ
-        .hist
-        .faccon
-        .max(f64::EPSILON)
-        .powf(opts.faccon_exponent);
+    integ.hist.faccon =
+        crate::math::powf(integ.hist.faccon.max(f64::EPSILON), opts.faccon_exponent);
     let mut theta = opts.thet;
     let mut newt = 0;
     let nit = opts.nit;
@@ -147,8 +144,8 @@ pub(super) fn newton<S: OdeSystem + ?Sized>(
                 if dyth >= 1.0 {
                     // Would not converge within NIT iterations: smaller step.
                     let qnewt = dyth.clamp(opts.qnewt_min, opts.qnewt_max);
-                    let hhfac =
-                        opts.hhfac_safety * qnewt.powf(-1.0 / (4.0 + (nit - 1 - newt) as f64));
+                    let hhfac = opts.hhfac_safety
+                        * crate::math::powf(qnewt, -1.0 / (4.0 + (nit - 1 - newt) as f64));
                     return Err((Why::Newton, hhfac));
                 }
             } else {

@@ -24,12 +24,13 @@ pub(super) fn step_size(
     let (safe, facl, facr) = (opts.safe, opts.facl, opts.facr);
     let cfac = safe * (1 + 2 * opts.nit) as f64;
     let fac = safe.min(cfac / (newt + 2 * opts.nit) as f64);
-    let mut quot = facr.max(facl.min(err.powf(0.25) / fac));
+    let mut quot = facr.max(facl.min(crate::math::powf(err, 0.25) / fac));
     let mut hnew = h / quot;
     if err < 1.0 {
         if !integ.hist.first && integ.hist.h_acc > 0.0 {
-            let facgus =
-                (integ.hist.h_acc / h) * (err * err / integ.hist.err_acc).powf(0.25) / safe;
+            let facgus = (integ.hist.h_acc / h)
+                * crate::math::powf(err * err / integ.hist.err_acc, 0.25)
+                / safe;
             let facgus = facgus.clamp(facr, facl);
             quot = quot.max(facgus);
             hnew = h / quot;

@@ -29,7 +29,7 @@ pub(super) fn transformed_tolerances(
         return tol;
     }
     let rtol_user = integ.options.rtol;
-    let rtol = 0.1 * rtol_user.powf(2.0 / 3.0);
+    let rtol = 0.1 * crate::math::powf(rtol_user, 2.0 / 3.0);
     let atol_factor = (rtol / rtol_user).min(1.0);
     for (i, a) in work.atol.iter_mut().enumerate() {
         *a = atol_factor * integ.options.atol.get(i);

@@ -1,0 +1,201 @@
+"""The interactive page with the browser build (docs/web/, and documentation/web/ in the FMU), in
+headless Chromium driven by Selenium through Debian's chromedriver: the page from the FMU loads
+from the disk with no request leaving the machine, runs the default move, shows what a native
+run of the FMU gives for the same settings, changes its result when a control moves, and draws
+a real picture.
+
+The agreement with the native FMU is asserted to 1e-9 of each output's range (the same Rust code
+on both sides: only libm's last bits may differ, the browser's WebAssembly build using Rust's
+own libm and the native build the system's); which presets agree to the bit is printed and
+written in docs/web.md from bench/web_speed.py's run."""
+
+import functools
+import http.server
+import json
+import threading
+import zipfile
+
+import numpy as np
+import pytest
+
+from selenium.webdriver.common.by import By
+from selenium.webdriver.common.keys import Keys
+from selenium.webdriver.support.ui import Select, WebDriverWait
+
+from conftest import ROOT, page_requests
+from figures import assert_png
+from webpage import AGREEMENT, chrome, deviation, native, wait_for_run
+
+def choose_preset(driver, preset):
+    """Chooses a preset, which starts a new run (the Run button when it is already chosen)."""
+    select = Select(driver.find_element(By.ID, "preset"))
+    if select.first_selected_option.get_attribute("value") == preset:
+        driver.find_element(By.ID, "run").click()
+    else:
+        select.select_by_value(preset)
+
+
+def go_fast(driver):
+    driver.find_element(By.CSS_SELECTOR, 'input[name="speed"][value="fast"]').click()
+
+
+@pytest.fixture(scope="module")
+def page_dir(fmu_path, tmp_path_factory):
+    """documentation/web/ of the packaged FMU, unpacked as an importer's tool would."""
+    out = tmp_path_factory.mktemp("fmu-doc")
+    with zipfile.ZipFile(fmu_path) as z:
+        for name in z.namelist():
+            if name.startswith("documentation/"):
+                z.extract(name, out)
+    return out / "documentation" / "web"
+
+
+@pytest.fixture(scope="module")
+def browser(page_dir, tmp_path_factory):
+    """The FMU's page opened from the disk; the net log is read when the module's tests end."""
+    tmp = tmp_path_factory.mktemp("chromium")
+    net_log = tmp / "net.json"
+    driver = chrome(tmp, net_log)
+    driver.get((page_dir / "index.html").as_uri())
+    state = {"driver": driver, "net_log": net_log, "first": None}
+    yield state
+    driver.quit()
+
+
+@pytest.fixture(scope="module")
+def first_run(browser):
+    """The run the page starts by itself on load (the default move), finished as fast as
+    possible."""
+    driver = browser["driver"]
+    WebDriverWait(driver, 60).until(lambda d: d.execute_script(
+        "return !!(window.hspPage && (hspPage.run || hspPage.error))"))
+    go_fast(driver)
+    return wait_for_run(driver)
+
+
+def test_the_page_runs_the_default_move_from_the_disk(first_run):
+    assert first_run["error"] is None, first_run["error"]
+    assert first_run["failed"] is None, first_run["failed"]
+    assert first_run["request"]["preset"] == "complete"
+    t = first_run["samples"]["t"]
+    assert len(t) == 5001 and abs(t[-1] - 5.0) < 1e-9, (len(t), t[-1])
+    assert "5.0 s simulated" in first_run["status"], first_run["status"]
+    # The default move: 30 degrees of motor angle, with no validity warning.
+    assert abs(np.degrees(first_run["samples"]["theta_motor"][-1]) - 30) < 0.2
+    assert not [m for m in first_run["messages"] if m["status"] != "ok"], first_run["messages"]
+    # Loaded from the script form of the module (browsers refuse fetch() on file:// pages).
+    assert first_run and first_run["samples"]
+
+
+@pytest.mark.parametrize("preset", ["complete", "servo-valve-motor", "loes-motor", "paper-fig9b"])
+def test_the_page_agrees_with_the_native_fmu(browser, first_run, fmu_path, preset):
+    driver = browser["driver"]
+    before = driver.execute_script("return hspPage.run.id")
+    choose_preset(driver, preset)
+    run = wait_for_run(driver)
+    assert run["id"] > before and run["request"]["preset"] == preset
+    assert run["error"] is None and run["failed"] is None, (run["error"], run["failed"])
+    rows = native(fmu_path, run)
+    dev = deviation(run["samples"], rows)
+    worst = max(dev, key=lambda n: dev[n][0])
+    identical = all(same for _, same in dev.values())
+    print(f"{preset}: worst {worst} {dev[worst][0]:.3e} of its range; bit-identical: {identical}")
+    assert dev[worst][0] <= AGREEMENT, (preset, worst, dev[worst])
+
+
+def test_moving_a_control_changes_the_result(browser, first_run):
+    driver = browser["driver"]
+    choose_preset(driver, "complete")
+    default = wait_for_run(driver)
+    peak = max(abs(v) for v in default["samples"]["w_tip"])
+    duration = driver.find_element(By.ID, "duration")
+    duration.clear()
+    duration.send_keys("1", Keys.TAB)  # the change event: a new run
+    fast = wait_for_run(driver)
+    assert fast["id"] > default["id"]
+    assert fast["request"]["settings"]["reference.duration"] == 1
+    peak_fast = max(abs(v) for v in fast["samples"]["w_tip"])
+    # The same 30 degrees in half the time: four times the acceleration bends the plate more.
+    assert peak_fast > 1.5 * peak, (peak, peak_fast)
+    shown = driver.find_element(By.CSS_SELECTOR, '#summary tr[data-key="peak_w_tip"]')
+    assert float(shown.get_attribute("data-value")) == peak_fast
+    duration.clear()
+    duration.send_keys("2", Keys.TAB)
+    wait_for_run(driver)
+
+
+def test_the_slider_drives_r_while_the_run_goes_on(browser, first_run):
+    driver = browser["driver"]
+    driver.find_element(By.CSS_SELECTOR, 'input[name="speed"][value="realtime"]').click()
+    driver.find_element(By.CSS_SELECTOR, 'input[name="command"][value="slider"]').click()
+    slider = driver.find_element(By.ID, "r")
+    assert slider.is_enabled()
+    id_before = driver.execute_script("return hspPage.run.id")
+    slider.send_keys(*[Keys.ARROW_RIGHT] * 50)  # 50 steps of 0.01 V: r = 0.5 V
+    run = wait_for_run(driver, timeout=60)
+    assert run["id"] == id_before, "moving the slider must not restart the run"
+    ref, y = run["samples"]["controller.reference"], run["samples"]["y_pot"]
+    assert ref[0] == 0 and abs(ref[-1] - 0.5) < 1e-12, (ref[0], ref[-1])
+    # The loop follows r (about its mean over the last second: the plate's slow mode rings on).
+    assert abs(np.mean(y[-1000:]) - 0.5) < 0.01, np.mean(y[-1000:])
+    go_fast(driver)
+    driver.find_element(By.CSS_SELECTOR, 'input[name="command"][value="move"]').click()
+    wait_for_run(driver)
+
+
+def test_the_page_draws_a_real_picture(browser, first_run, tmp_path):
+    driver = browser["driver"]
+    drawn = driver.execute_script("""
+        return [...document.querySelectorAll('canvas')].map(c => {
+          const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+          let inked = 0;
+          for (let i = 3; i < d.length; i += 4) if (d[i] > 0) inked++;
+          return [c.id, inked];
+        });""")
+    assert len(drawn) == 6, drawn
+    for canvas, inked in drawn:
+        assert inked > 2000, (canvas, inked)
+    shot = tmp_path / "page.png"
+    driver.save_screenshot(str(shot))
+    assert_png(shot.read_bytes(), min_width=1200, min_height=1000, min_bytes=60_000)
+
+
+def test_no_request_leaves_the_machine(browser, first_run):
+    # The net log is complete once the browser is closed.
+    browser["driver"].quit()
+    assert page_requests(browser["net_log"]) == []
+
+
+class QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+def test_served_over_http_the_page_fetches_the_wasm_and_gives_the_same_run(page_dir, tmp_path,
+                                                                            fmu_path):
+    handler = functools.partial(QuietHandler, directory=str(page_dir))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    driver = chrome(tmp_path)
+    try:
+        driver.get(f"http://127.0.0.1:{server.server_port}/index.html?speed=fast")
+        run = wait_for_run(driver)
+        assert run["error"] is None and run["failed"] is None
+        # fetch() got hsp.wasm: the base64 script was never loaded.
+        assert driver.execute_script("return typeof globalThis.HSP_WASM_BASE64") == "undefined"
+        rows = native(fmu_path, run)
+        dev = deviation(run["samples"], rows)
+        assert max(d for d, _ in dev.values()) <= AGREEMENT, dev
+    finally:
+        driver.quit()
+        server.shutdown()
+
+
+def test_the_repository_page_is_the_fmus(page_dir):
+    """docs/web/ (the sources, and the module `hsp package` writes beside them) is what the FMU
+    carries."""
+    for name in ["index.html", "page.js", "page.css", "hsp.js", "hsp.wasm", "hsp.wasm.js"]:
+        assert (ROOT / "docs" / "web" / name).read_bytes() == (page_dir / name).read_bytes(), name
+    assert (page_dir / "hsp.wasm").stat().st_size < 1_500_000
+    text = (page_dir / "hsp.wasm.js").read_text()
+    assert json.loads(text[text.index('"'):text.rindex('"') + 1])  # a non-empty string literal

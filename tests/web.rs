@@ -1,0 +1,192 @@
+//! The browser build's simulation API (`src/web/`), natively: what the `.wasm` exports and
+//! `docs/web/hsp.js` calls. The page itself, in Chromium, is `tests/python/test_web.py`.
+
+use hydraulic_slewing_plate::web::{parse_request, value_reference, variables_json, Simulation};
+
+fn vr(name: &str) -> u32 {
+    value_reference(name).unwrap_or_else(|| panic!("no variable {name}"))
+}
+
+fn settings(pairs: &[(&str, &str)]) -> Vec<(String, String)> {
+    pairs
+        .iter()
+        .map(|(n, v)| (n.to_string(), v.to_string()))
+        .collect()
+}
+
+fn run(sim: &mut Simulation, steps: usize, names: &[&str]) -> Vec<Vec<f64>> {
+    let refs: Vec<u32> = names.iter().map(|n| vr(n)).collect();
+    let mut rows = Vec::new();
+    for _ in 0..steps {
+        sim.step(1e-3).unwrap();
+        let mut row = vec![0.0; refs.len()];
+        sim.get_reals(&refs, &mut row).unwrap();
+        rows.push(row);
+    }
+    rows
+}
+
+#[test]
+fn the_drawn_plate_at_the_tip_is_the_models_w_tip() {
+    // The grid's point (a, b/2) is where the model's w_tip is taken (eq. 22): the drawing's shape
+    // functions and coordinates against the model's own output, for both plate formulations.
+    for preset in ["complete", "paper-fig9b"] {
+        let mut sim = Simulation::new(preset, &settings(&[("reference.angle", "0.5")])).unwrap();
+        let (nx, ny) = (11, 5);
+        let mut grid = vec![0.0; nx * ny];
+        let mut largest = 0.0f64;
+        for _ in 0..8 {
+            // r steps the paper's presets; the move drives the complete system.
+            sim.set_real(vr("r"), 0.2).unwrap();
+            for _ in 0..150 {
+                sim.step(1e-3).unwrap();
+            }
+            sim.deflection(nx, ny, &mut grid).unwrap();
+            let mut w_tip = [0.0];
+            sim.get_reals(&[vr("w_tip")], &mut w_tip).unwrap();
+            let tip = grid[(nx - 1) + nx * (ny / 2)];
+            assert!(
+                (tip - w_tip[0]).abs() <= 1e-12 * w_tip[0].abs().max(1e-9),
+                "{preset} t = {}: grid {tip} against w_tip {}",
+                sim.time(),
+                w_tip[0]
+            );
+            largest = largest.max(w_tip[0].abs());
+            // Relative to the hub: the root does not move.
+            assert!(grid[nx * (ny / 2)].abs() <= 1e-12 * largest.max(1e-9));
+        }
+        assert!(
+            largest > 1e-4,
+            "{preset}: the plate barely moved ({largest} m)"
+        );
+    }
+}
+
+#[test]
+fn a_reset_simulation_repeats_itself_bit_for_bit() {
+    let names = ["y_pot", "theta_hub", "w_tip", "servo_valve.p_1"];
+    let mut sim = Simulation::new("complete", &[]).unwrap();
+    let first = run(&mut sim, 800, &names);
+    sim.reset().unwrap();
+    assert_eq!(sim.time(), 0.0);
+    assert_eq!(run(&mut sim, 800, &names), first);
+    let mut fresh = Simulation::new("complete", &[]).unwrap();
+    assert_eq!(run(&mut fresh, 800, &names), first);
+}
+
+#[test]
+fn bad_requests_name_their_culprit() {
+    let err = |r: Result<Simulation, String>| r.err().expect("must fail");
+    assert!(err(Simulation::new("nope", &[])).contains("unknown preset 'nope'"));
+    assert!(err(Simulation::new("", &settings(&[("no.such", "1")]))).contains("'no.such'"));
+    let e = err(Simulation::new("", &settings(&[("torsion_bar.k", "-1")])));
+    assert!(e.contains("torsion_bar.k"), "{e}");
+    let e = err(Simulation::new("", &settings(&[("plate.N", "two")])));
+    assert!(e.contains("plate.N") && e.contains("'two'"), "{e}");
+    // An output is not a setting.
+    assert!(err(Simulation::new("", &settings(&[("w_tip", "1")]))).contains("w_tip"));
+
+    assert!(parse_request("{").unwrap_err().contains("not JSON"));
+    assert!(parse_request(r#"{"preset": 3}"#)
+        .unwrap_err()
+        .contains("preset"));
+    assert!(parse_request(r#"{"settings": [1]}"#)
+        .unwrap_err()
+        .contains("settings"));
+    let e = parse_request(r#"{"settings": {"plate.a": [1]}}"#).unwrap_err();
+    assert!(e.contains("plate.a"), "{e}");
+    let (preset, s) =
+        parse_request(r#"{"preset": "loes-motor", "settings": {"controller.saturation": false, "plate.root": "Locked", "loes.C3": 6e-11}}"#)
+            .unwrap();
+    assert_eq!(preset, "loes-motor");
+    assert!(s.contains(&("loes.C3".into(), "6e-11".into())));
+    assert!(s.contains(&("plate.root".into(), "Locked".into())));
+    assert!(s.contains(&("controller.saturation".into(), "false".into())));
+    // And the typed texts are what the model takes.
+    Simulation::new(&preset, &s).unwrap();
+}
+
+#[test]
+fn a_refused_call_keeps_the_last_good_state_until_a_reset() {
+    // As in FMI: a refused call puts the instance in the error state, where it keeps its time
+    // and values; only a reset goes on.
+    let mut sim = Simulation::new("complete", &[]).unwrap();
+    run(&mut sim, 10, &["y_pot"]);
+    let t = sim.time();
+    let mut before = [0.0];
+    sim.get_reals(&[vr("y_pot")], &mut before).unwrap();
+    let e = sim.step(-1e-3).unwrap_err();
+    assert!(e.contains("communicationStepSize"), "{e}");
+    assert!(sim.step(1e-3).is_err(), "the error state refuses steps");
+    assert_eq!(sim.time(), t);
+    let mut after = [0.0];
+    sim.get_reals(&[vr("y_pot")], &mut after).unwrap();
+    assert_eq!(after, before);
+    sim.reset().unwrap();
+    assert_eq!(sim.time(), 0.0);
+    sim.step(1e-3).unwrap();
+
+    for (name, value) in [("plate.a", 2.0), ("r", f64::NAN)] {
+        let mut sim = Simulation::new("complete", &[]).unwrap();
+        let e = sim.set_real(vr(name), value).unwrap_err();
+        assert!(e.contains(name), "{name}: {e}");
+    }
+    let mut sim = Simulation::new("complete", &[]).unwrap();
+    let mut out = [0.0; 2];
+    assert!(sim.get_reals(&[vr("y_pot")], &mut out).is_err());
+    let e = sim.deflection(1, 5, &mut [0.0; 5]).unwrap_err();
+    assert!(e.contains("2 x 2"), "{e}");
+}
+
+#[test]
+fn the_monitors_and_messages_are_the_fmus() {
+    // The paper's 2 V step drives the default plant out of the linear model's range: the FMU's
+    // validity warnings reach the page.
+    let mut sim = Simulation::new("complete", &settings(&[("reference.angle", "0")])).unwrap();
+    let monitors = sim.monitors();
+    let names: Vec<&str> = monitors.iter().map(|m| m.0).collect();
+    assert_eq!(
+        names,
+        [
+            "plate.w_tip_ratio",
+            "plate.stress",
+            "torsion_bar.stress",
+            "hub.omega_ratio"
+        ]
+    );
+    assert!(monitors.iter().all(|m| m.1 > 0.0 && m.1.is_finite()));
+    sim.set_real(vr("r"), 2.0).unwrap();
+    let mut warned = false;
+    for _ in 0..2000 {
+        warned |= sim.step(1e-3).unwrap();
+    }
+    let messages = sim.take_messages();
+    assert!(warned);
+    assert!(
+        messages
+            .iter()
+            .any(|m| m.status == "warning" && m.message.contains("validity:")),
+        "{messages:?}"
+    );
+    assert!(sim.take_messages().is_empty(), "taken once");
+}
+
+#[test]
+fn the_variable_table_is_the_fmus() {
+    let table = variables_json();
+    let list = table.as_array().unwrap();
+    let find = |name: &str| list.iter().find(|v| v["name"] == name).unwrap().clone();
+    let k = find("torsion_bar.k");
+    assert_eq!(k["valueReference"], vr("torsion_bar.k"));
+    assert_eq!(k["causality"], "parameter");
+    assert_eq!(k["type"], "Real");
+    assert_eq!(k["unit"], "N.m/rad");
+    assert_eq!(k["start"], 2500.0);
+    assert_eq!(find("r")["causality"], "input");
+    let method = find("solver.method");
+    assert_eq!(method["type"], "Enumeration");
+    assert_eq!(
+        (method["min"].as_i64(), method["max"].as_i64()),
+        (Some(1), Some(3))
+    );
+}
