@@ -184,32 +184,27 @@ def settings_of(md, vr, values):
 def test_win64_under_wine_matches_linux_bit_for_bit_on_the_loes(fmu_path, unzipped, md, vr,
                                                                drivers):
     # The LOES on the motor alone (preset loes-motor) is linear: its right-hand side calls no
-    # libm function, so both binaries take the same steps and evaluations, and agree to 1e-9.
+    # math function at all, so both binaries take the same steps and evaluations.
     a, b = run_both(fmu_path, unzipped, md, vr, drivers, settings_of(md, vr, preset("loes-motor")))
-    scale = {k: max(abs(row[1][k]) for row in a) for k in a[0][1]}
     for (t, reals_l, ints_l), (_, reals_w, ints_w) in zip(a, b):
         # The same solver steps and evaluations: the counters are equal, not close.
         assert ints_l == ints_w, f"t = {t}: Linux {ints_l}, Wine {ints_w}"
-        for k, x in reals_l.items():
-            assert abs(x - reals_w[k]) <= 1e-9 * scale[k], (t, k, x, reals_w[k])
+        assert reals_l == reals_w, f"t = {t}: Linux {reals_l}, Wine {reals_w}"
 
 
-def test_win64_under_wine_matches_linux_on_the_complete_system(fmu_path, unzipped, md, vr,
-                                                               drivers):
+def test_win64_under_wine_matches_linux_bit_for_bit_on_the_complete_system(fmu_path, unzipped,
+                                                                            md, vr, drivers):
     # The FMU's defaults, the complete system, at rtol 1e-10. Its orifices, limits and amplifier
-    # call sqrt, exp, tanh and log, whose last bits differ between glibc's libm and the Windows
-    # C runtime's; the adaptive step control turns that into a different sequence of steps, so
-    # the results agree to the integrator's accuracy, not bit for bit: both lie within about
-    # rtol of the exact solution, asserted here as 1e-7 of each output's range over the run. The
-    # absolute tolerance goes down with rtol (it is a fraction of each state's nominal value,
-    # 10 rad/s for the rotor, far above the default move's speeds): at the default 1e-8 it, not
-    # rtol, would bound the accuracy.
+    # call exp, tanh and log1p, and the plate's shape functions sin, cos and exp: from the libm
+    # crate compiled into the library (src/math.rs), not from glibc or the Windows C runtime,
+    # whose last bits differ and which the adaptive step control would turn into another
+    # sequence of steps. So both binaries take the same steps and give the same doubles.
     a, b = run_both(fmu_path, unzipped, md, vr, drivers,
                     settings_of(md, vr, {"solver.rtol": 1e-10, "solver.atol": 1e-10}))
-    scale = {k: max(abs(row[1][k]) for row in a) for k in a[0][1]}
-    for (t, reals_l, _), (_, reals_w, _) in zip(a, b):
-        for k in scale:
-            assert abs(reals_l[k] - reals_w[k]) <= 1e-7 * scale[k], (t, k, reals_l[k], reals_w[k])
+    report_deviation("win64 (Wine) vs Linux, complete system", vr, a, b)
+    for (t, reals_l, ints_l), (_, reals_w, ints_w) in zip(a, b):
+        assert ints_l == ints_w, f"t = {t}: Linux {ints_l}, Wine {ints_w}"
+        assert reals_l == reals_w, f"t = {t}: Linux {reals_l}, Wine {reals_w}"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -301,22 +296,19 @@ def test_aarch64_under_qemu_matches_x86_64_bit_for_bit_on_the_loes(fmu_path, unz
         assert reals_x == reals_a, f"t = {t}: x86-64 {reals_x}, aarch64 {reals_a}"
 
 
-def test_aarch64_under_qemu_matches_x86_64_on_the_complete_system(fmu_path, unzipped, unzipped3,
-                                                                  md, vr, drivers, aarch64_driver):
-    # The FMU's defaults at rtol 1e-10, as the Wine test: the orifices, limits and amplifier call
-    # sqrt, exp, tanh and log, so the result depends on the libm the library runs with, which is
-    # the user's, not ours: its last bits are not specified and differ between glibc versions and
-    # builds (on x86-64 glibc picks FMA variants of some functions at run time), and the adaptive
-    # step control can turn one different bit into other steps. So the bound is the integrator's
-    # accuracy, 1e-7 of each output's range over the run, as for Wine. (With Debian 12's glibc
-    # 2.36 on both sides the runs have been identical to the last bit: report_deviation prints it.)
+def test_aarch64_under_qemu_matches_x86_64_bit_for_bit_on_the_complete_system(
+        fmu_path, unzipped, unzipped3, md, vr, drivers, aarch64_driver):
+    # The FMU's defaults at rtol 1e-10, as the Wine test: the library's transcendental functions
+    # come from the libm crate compiled into it, not from the user's glibc (whose last bits differ
+    # between versions, builds and CPUs: on x86-64 glibc picks FMA variants at run time), and its
+    # matrix products are summed in a fixed order (nalgebra's go through FMA kernels on aarch64
+    # and on x86-64 CPUs that have them). So both processors give the same doubles.
     a, b = run_x86_64_and_aarch64(fmu_path, unzipped, unzipped3, md, vr, drivers, aarch64_driver,
                                   settings_of(md, vr, {"solver.rtol": 1e-10, "solver.atol": 1e-10}))
     report_deviation("aarch64 (qemu) vs x86-64, complete system", vr, a, b)
-    scale = {k: max(abs(row[1][k]) for row in a) for k in a[0][1]}
-    for (t, reals_x, _), (_, reals_a, _) in zip(a, b):
-        for k in scale:
-            assert abs(reals_x[k] - reals_a[k]) <= 1e-7 * scale[k], (t, k, reals_x[k], reals_a[k])
+    for (t, reals_x, ints_x), (_, reals_a, ints_a) in zip(a, b):
+        assert ints_x == ints_a, f"t = {t}: x86-64 {ints_x}, aarch64 {ints_a}"
+        assert reals_x == reals_a, f"t = {t}: x86-64 {reals_x}, aarch64 {reals_a}"
 
 
 # ---------------------------------------------------------------------------------------------
