@@ -190,3 +190,39 @@ fn the_variable_table_is_the_fmus() {
         (Some(1), Some(3))
     );
 }
+
+#[test]
+fn run_is_step_by_step_in_one_call() {
+    // sim.run (what the page calls) against the same steps one by one, to the bit, and its rows
+    // up to a failure are kept.
+    let names = ["y_pot", "theta_hub", "w_tip", "controller.e_out"];
+    let refs: Vec<u32> = names.iter().map(|n| vr(n)).collect();
+    let inputs: Vec<f64> = (0..700).map(|k| if k < 300 { 0.0 } else { 0.3 }).collect();
+    let mut one = Simulation::new("complete", &[]).unwrap();
+    let mut expected = Vec::new();
+    let mut warned = false;
+    for &u in &inputs {
+        one.set_real(vr("r"), u).unwrap();
+        warned |= one.step(1e-3).unwrap();
+        let mut row = vec![0.0; refs.len()];
+        one.get_reals(&refs, &mut row).unwrap();
+        expected.extend(row);
+    }
+    let mut batch = Simulation::new("complete", &[]).unwrap();
+    let mut out = vec![0.0; inputs.len() * refs.len()];
+    let (done, result) = batch.run(1e-3, vr("r"), &inputs, &refs, &mut out);
+    assert_eq!((done, result), (inputs.len(), Ok(warned)));
+    assert_eq!(out, expected);
+    assert_eq!(batch.time(), one.time());
+    // A NaN input is refused at its step: the rows before it stay.
+    let mut bad = inputs[..5].to_vec();
+    bad[3] = f64::NAN;
+    let mut fresh = Simulation::new("complete", &[]).unwrap();
+    let mut rows = vec![0.0; bad.len() * refs.len()];
+    let (done, result) = fresh.run(1e-3, vr("r"), &bad, &refs, &mut rows);
+    assert_eq!(done, 3);
+    assert!(result.unwrap_err().contains('r'));
+    assert_eq!(rows[..3 * refs.len()], expected[..3 * refs.len()]);
+    let (_, result) = fresh.run(1e-3, vr("r"), &inputs[..2], &refs, &mut rows);
+    assert!(result.unwrap_err().contains("places"));
+}

@@ -6,6 +6,7 @@
 //   const model = await HSP.load();                  // hsp.wasm beside this script
 //   const sim = model.create({preset: "complete", settings: {"torsion_bar.k": 2500}});
 //   sim.step(1e-3, {r: 0.1});                        // one communication step, inputs held
+//   sim.run(1e-3, "r", [0, 0.1, 0.1], ["y_pot"]);     // several, r before each, y_pot after
 //   sim.get(["y_pot", "theta_hub", "w_tip"]);         // -> Float64Array, SI units
 //   sim.deflection(11, 5);                           // the plate's deflection on a grid [m]
 //   sim.messages();  sim.reset();  sim.free();
@@ -126,7 +127,7 @@
     constructor(model, handle) {
       this.model = model;
       this.handle = handle;
-      this.buffers = { vrs: [0, 0], out: [0, 0] };
+      this.buffers = { vrs: [0, 0], out: [0, 0], in: [0, 0], done: [0, 0] };
     }
 
     get time() {
@@ -158,6 +159,30 @@
       if (inputs) this.set(inputs);
       const m = this.model;
       return m.guard(() => m.check(m.exports.hsp_step(this.handle, h))) === 1;
+    }
+
+    // Runs inputs.length communication steps of h seconds in one call: the Real input `input`
+    // (a name) set to inputs[k] before step k, the Reals `names` read after every step. Returns
+    // {values: Float64Array of steps rows of names.length values, steps, warned, error}: on a
+    // failure `error` holds the message and the rows of the steps done before it are good.
+    run(h, input, inputs, names) {
+      const m = this.model;
+      const vrs = names.map((n) => (typeof n === "number" ? n : m.variable(n).valueReference));
+      const n = inputs.length, w = vrs.length;
+      const pin = this.scratch("in", 8 * n);
+      const pv = this.scratch("vrs", 4 * w);
+      const po = this.scratch("out", 8 * n * w);
+      const pd = this.scratch("done", 4);
+      // Views made after every allocation: a growing memory detaches the older ones.
+      const memory = m.exports.memory.buffer;
+      new Float64Array(memory, pin, n).set(inputs);
+      new Uint32Array(memory, pv, w).set(vrs);
+      const status = m.guard(() => m.exports.hsp_run(this.handle, h, m.variable(input).valueReference,
+        pin, n, pv, w, po, pd));
+      const steps = new Uint32Array(m.exports.memory.buffer, pd, 1)[0];
+      const values = new Float64Array(m.exports.memory.buffer, po, steps * w).slice();
+      const error = status >= 2 ? m.text(m.exports.hsp_text_len()) : null;
+      return { values, steps, warned: status === 1, error };
     }
 
     // The values of the Reals `names` (an array of names or of value references) [SI].

@@ -6,7 +6,9 @@
 const STEP = 1e-3; // communication step [s]
 const DEG = 180 / Math.PI;
 const GRID = [21, 7]; // the plate's deflection grid, along and across
-const SLICE_MS = 12; // stepping per animation frame when running as fast as possible
+const SLICE_MS = 12; // stepping per slice when running as fast as possible
+const CHUNK = 200; // communication steps per call into the module
+const DRAW_MS = 250; // running as fast as possible, the plots are redrawn at most this often
 
 // The outputs recorded at every communication point [SI], and how they are shown.
 const RECORDED = [
@@ -24,6 +26,8 @@ const page = {
   timing: { start: performance.now() },
   runs: 0,
   error: null,
+  dirty: false,
+  drawn: 0, // when the plots were last drawn
 };
 window.hspPage = page;
 
@@ -140,16 +144,25 @@ function newRun() {
     failed: null,
     exaggeration: 0,
   };
-  for (const name of RECORDED) run.samples[name] = [];
+  run.peak = {}; // the largest magnitude of each recorded output so far
+  for (const name of RECORDED) {
+    run.samples[name] = [];
+    run.peak[name] = 0;
+  }
   page.run = run;
   record(run);
   return run;
 }
 
+// The point the simulation is at (its initial point, when a run starts).
 function record(run) {
   const v = page.sim.get(RECORDED);
-  run.samples.t.push(page.sim.time);
-  RECORDED.forEach((name, k) => run.samples[name].push(v[k]));
+  run.time = page.sim.time;
+  run.samples.t.push(run.time);
+  RECORDED.forEach((name, k) => {
+    run.samples[name].push(v[k]);
+    run.peak[name] = Math.max(run.peak[name], Math.abs(v[k]));
+  });
 }
 
 // The input r of the coming step.
@@ -159,24 +172,48 @@ function reference(run, t) {
   return 0;
 }
 
-// Steps until the run's time reaches `until` or `budgetMs` of wall time is spent.
+// Steps until the run's time reaches `until` or `budgetMs` of wall time is spent, CHUNK steps
+// per call into the module (r for each step computed before, the outputs of each read after).
 function advance(run, until, budgetMs) {
   const t0 = performance.now();
+  if (!run.stepping) {
+    // The run's wall clock starts with its first step (making the model and drawing the empty
+    // plots come before).
+    run.stepping = true;
+    run.started = t0;
+  }
+  const width = RECORDED.length;
   let k = run.samples.t.length - 1;
   while (k < run.steps && k * STEP < until - 1e-12) {
-    const t = page.sim.time;
-    try {
-      const r = reference(run, t);
-      run.inputs.push(r);
-      if (page.sim.step(STEP, { r })) collectMessages(run);
-    } catch (e) {
-      run.failed = e.message;
-      collectMessages(run);
+    const wanted = Math.ceil((until - k * STEP) / STEP - 1e-9);
+    const n = Math.max(1, Math.min(CHUNK, run.steps - k, wanted));
+    const inputs = new Float64Array(n);
+    const times = new Float64Array(n);
+    let t = run.time;
+    for (let i = 0; i < n; i++) {
+      inputs[i] = reference(run, t);
+      t += STEP; // the FMU's own time after the step (the same sum)
+      times[i] = t;
+    }
+    const done = page.sim.run(STEP, "r", inputs, RECORDED);
+    for (let i = 0; i < done.steps; i++) {
+      run.inputs.push(inputs[i]);
+      run.samples.t.push(times[i]);
+      for (let j = 0; j < width; j++) {
+        const v = done.values[i * width + j];
+        run.samples[RECORDED[j]].push(v);
+        const a = Math.abs(v);
+        if (a > run.peak[RECORDED[j]]) run.peak[RECORDED[j]] = a;
+      }
+    }
+    if (done.steps > 0) run.time = times[done.steps - 1];
+    k += done.steps;
+    if (done.warned || done.error) collectMessages(run);
+    if (done.error) {
+      run.failed = done.error;
       break;
     }
-    record(run);
-    k++;
-    if ((k & 15) === 0 && performance.now() - t0 > budgetMs) break;
+    if (performance.now() - t0 > budgetMs) break;
   }
   run.stepMs += performance.now() - t0;
   if (k >= run.steps || run.failed) finish(run);
@@ -205,7 +242,7 @@ pumpChannel.port1.onmessage = () => {
   if (!run || run.pausedAt || run.done || run.speed !== "fast") return;
   advance(run, run.stop, SLICE_MS);
   page.dirty = true;
-  requestFrame();
+  if (run.done || performance.now() - page.drawn > DRAW_MS) requestFrame();
   if (!run.done) pump();
 };
 function pump() {
@@ -221,6 +258,10 @@ function frame() {
   const run = page.run;
   if (!run) return;
   if (!run.pausedAt && !run.done && run.speed !== "fast") {
+    if (!run.stepping) {
+      run.stepping = true;
+      run.started = performance.now();
+    }
     const wall = (performance.now() - run.started - run.paused) / 1000;
     advance(run, Math.min(wall, run.stop), 30);
     page.dirty = true;
@@ -228,6 +269,7 @@ function frame() {
   if (page.dirty) {
     page.dirty = false;
     draw(run);
+    page.drawn = performance.now();
   }
   if (!run.done && !run.pausedAt && run.speed !== "fast") requestFrame();
 }
@@ -393,7 +435,7 @@ function drawPlate(run) {
     $("plate-caption").textContent = e.message;
     return;
   }
-  const wmaxRun = Math.max(1e-9, ...run.samples.w_tip.map(Math.abs));
+  const wmaxRun = Math.max(1e-9, run.peak.w_tip);
   const k = exaggeration(run, wmaxRun);
   const theta = run.samples.theta_hub[run.samples.theta_hub.length - 1];
   const ref = run.samples["controller.reference"];
@@ -461,8 +503,7 @@ function drawMonitors(run) {
     "hub.omega_ratio": "hub speed / first bending frequency",
   };
   box.innerHTML = "<h2>Validity monitors (peak of the run / limit)</h2>" + run.monitors.map((m) => {
-    const peak = Math.max(0, ...run.samples[m.variable].map(Math.abs));
-    const ratio = peak / m.limit;
+    const ratio = run.peak[m.variable] / m.limit;
     const tripped = ratio > 1;
     return `<div class="monitor${tripped ? " tripped" : ""}" data-variable="${m.variable}">
       <span>${names[m.variable] || m.variable}</span>
@@ -485,7 +526,7 @@ function escapeHtml(s) {
 function drawSummary(run) {
   const s = run.samples;
   const last = (name) => s[name][s[name].length - 1];
-  const peak = (name) => Math.max(...s[name].map(Math.abs));
+  const peak = (name) => run.peak[name];
   const rows = [
     ["time", "t", `${last("t").toFixed(3)} s`, last("t")],
     ["motor angle", "theta_motor", `${(last("theta_motor") * DEG).toFixed(4)} deg`, last("theta_motor")],

@@ -227,6 +227,53 @@ impl Simulation {
         Ok(warned)
     }
 
+    /// Runs `inputs.len()` communication steps of `h` seconds, the Real input `input` set to
+    /// `inputs[k]` before step `k`, and reads the Reals `value_references` after each step into
+    /// row `k` of `out` (`inputs.len()` rows of `value_references.len()` values): what the page
+    /// does at every point, in one call. Returns the number of steps done (rows filled) and how
+    /// the run ended: `Ok(true)` when a step logged a warning; on an error the rows before it
+    /// are good.
+    pub fn run(
+        &mut self,
+        h: f64,
+        input: u32,
+        inputs: &[f64],
+        value_references: &[u32],
+        out: &mut [f64],
+    ) -> (usize, Result<bool, String>) {
+        let width = value_references.len();
+        if out.len() != inputs.len() * width {
+            return (
+                0,
+                Err(format!(
+                    "run: {} steps of {width} values need {} places, got {}",
+                    inputs.len(),
+                    inputs.len() * width,
+                    out.len()
+                )),
+            );
+        }
+        let mut warned = false;
+        for (k, (&u, row)) in inputs
+            .iter()
+            .zip(out.chunks_exact_mut(width.max(1)))
+            .enumerate()
+        {
+            let step = self
+                .set_real(input, u)
+                .and_then(|_| self.step(h))
+                .and_then(|w| {
+                    self.get_reals(value_references, &mut row[..width])
+                        .map(|_| w)
+                });
+            match step {
+                Ok(w) => warned |= w,
+                Err(e) => return (k, Err(e)),
+            }
+        }
+        (inputs.len(), Ok(warned))
+    }
+
     /// Reads Reals by value reference into `out`.
     pub fn get_reals(&mut self, value_references: &[u32], out: &mut [f64]) -> Result<(), String> {
         if value_references.len() != out.len() {

@@ -54,13 +54,14 @@ unsafe fn simulation<'a>(sim: *mut Simulation) -> Result<&'a mut Simulation, Str
     unsafe { sim.as_mut() }.ok_or_else(|| "no simulation (null handle)".to_string())
 }
 
-/// `len` bytes for JavaScript to write into (freed with [`hsp_dealloc`]).
+/// `len` bytes for JavaScript to write into, aligned for f64 (freed with [`hsp_dealloc`]).
 #[no_mangle]
 pub extern "C" fn hsp_alloc(len: usize) -> *mut u8 {
-    let mut buffer = vec![0u8; len.max(1)].into_boxed_slice();
+    let words = len.div_ceil(8).max(1);
+    let mut buffer = vec![0u64; words].into_boxed_slice();
     let ptr = buffer.as_mut_ptr();
     std::mem::forget(buffer);
-    ptr
+    ptr.cast()
 }
 
 /// Frees a buffer from [`hsp_alloc`].
@@ -70,8 +71,11 @@ pub extern "C" fn hsp_alloc(len: usize) -> *mut u8 {
 #[no_mangle]
 pub unsafe extern "C" fn hsp_dealloc(ptr: *mut u8, len: usize) {
     if !ptr.is_null() {
+        let words = len.div_ceil(8).max(1);
         // SAFETY: the caller's contract: this is the boxed slice hsp_alloc leaked.
-        drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(ptr, len.max(1))) });
+        drop(unsafe {
+            Box::from_raw(std::ptr::slice_from_raw_parts_mut(ptr.cast::<u64>(), words))
+        });
     }
 }
 
@@ -203,6 +207,46 @@ pub unsafe extern "C" fn hsp_get_reals(
     };
     // SAFETY: the caller's contract.
     status(unsafe { simulation(sim) }.and_then(|s| s.get_reals(vrs, out).map(|_| false)))
+}
+
+/// Runs `n` communication steps (see [`Simulation::run`]): the input `input_vr` from `inputs`
+/// (`n` f64) before each, the `nvr` Reals `vrs` after each into `out` (`n nvr` f64, row by row);
+/// the number of steps done goes to `done`.
+///
+/// # Safety
+/// As [`hsp_free`]; the pointers point to as many values as said, in the module's memory.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn hsp_run(
+    sim: *mut Simulation,
+    h: f64,
+    input_vr: u32,
+    inputs: *const f64,
+    n: usize,
+    vrs: *const u32,
+    nvr: usize,
+    out: *mut f64,
+    done: *mut u32,
+) -> i32 {
+    if inputs.is_null() || vrs.is_null() || out.is_null() || done.is_null() {
+        return status(Err("run: null array".into()));
+    }
+    // SAFETY: the caller's contract.
+    let (inputs, vrs, out) = unsafe {
+        (
+            std::slice::from_raw_parts(inputs, n),
+            std::slice::from_raw_parts(vrs, nvr),
+            std::slice::from_raw_parts_mut(out, n.saturating_mul(nvr)),
+        )
+    };
+    // SAFETY: the caller's contract.
+    let (steps, result) = match unsafe { simulation(sim) } {
+        Ok(s) => s.run(h, input_vr, inputs, vrs, out),
+        Err(e) => (0, Err(e)),
+    };
+    // SAFETY: the caller's contract.
+    unsafe { done.write(steps as u32) };
+    status(result)
 }
 
 /// The plate's deflection on an `nx` x `ny` grid into `out` (`nx ny` f64), see
