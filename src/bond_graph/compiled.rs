@@ -19,6 +19,7 @@ use super::element::NonlinearLaw;
 use super::energy::{PowerTerm, Storage};
 use super::plan::{Op, NONE};
 use super::structure::Structure;
+use super::tangent;
 
 /// A compiled bond graph: state equations `dx/dt = f(x, u)` and outputs `y = g(x, u)` as a flat
 /// plan of operations over slots, with exact derivatives.
@@ -56,6 +57,8 @@ pub struct CompiledModel {
 thread_local! {
     static WS_F64: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static WS_DUAL: RefCell<Vec<Dual>> = const { RefCell::new(Vec::new()) };
+    static WS_SWEEP: RefCell<(Vec<f64>, Vec<tangent::Lanes>)> =
+        const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
 impl CompiledModel {
@@ -444,12 +447,70 @@ impl CompiledModel {
             }
             Some(fixed) => {
                 jac.copy_from(fixed);
-                let passes = st.variable_colours.iter().zip(&st.variable_row_column);
-                for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
-                    self.jacobian_pass(ops, group, row_column, x, u, jac);
-                }
+                self.varying_entries(x, u, jac);
             }
         }
+    }
+
+    /// The varying entries into `jac`: by the value pass and tangent sweeps of
+    /// [`CompiledModel::jacobian_varying_by_sweeps`], or by the dual passes where that
+    /// declines.
+    fn varying_entries(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
+        if !self.jacobian_varying_by_sweeps(x, u, jac) {
+            self.jacobian_varying_by_passes(x, u, jac);
+        }
+    }
+
+    /// The varying entries into `jac` by one dual-number pass per group of the variable
+    /// colouring, each through the operations the rows it reads need: the reference for
+    /// [`CompiledModel::jacobian_varying_by_sweeps`].
+    #[doc(hidden)]
+    pub fn jacobian_varying_by_passes(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
+        let n = self.n_states();
+        assert_eq!(jac.shape(), (n, n), "jacobian shape");
+        let st = &self.structure;
+        let passes = st.variable_colours.iter().zip(&st.variable_row_column);
+        for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
+            self.jacobian_pass(ops, group, row_column, x, u, jac);
+        }
+    }
+
+    /// The varying entries into `jac` with the bits of
+    /// [`CompiledModel::jacobian_varying_by_passes`], from one value pass and tangent sweeps
+    /// of four groups at a time (`tangent.rs`): the values and the laws' partial derivatives are
+    /// computed once, and each sweep carries tangents only through the operations its seeds
+    /// reach. Returns false, with `jac` as it was, where a zero tangent is NaN (a value that
+    /// is not finite, or 0/0): then the dual passes must give the entries.
+    #[doc(hidden)]
+    pub fn jacobian_varying_by_sweeps(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) -> bool {
+        self.check_dims(x, u);
+        let n = self.n_states();
+        assert_eq!(jac.shape(), (n, n), "jacobian shape");
+        let sw = &self.structure.tangents;
+        let slots = self.n_slots;
+        WS_SWEEP.with(|ws| {
+            let mut ws = ws.borrow_mut();
+            let (values, lanes) = &mut *ws;
+            if values.len() < 3 * slots {
+                values.resize(3 * slots, 0.0);
+            }
+            if lanes.len() < 2 * slots + 1 {
+                lanes.resize(2 * slots + 1, [0.0; tangent::LANES]);
+            }
+            let (v, rest) = values.split_at_mut(slots);
+            let (pdx, pdm) = rest.split_at_mut(slots);
+            let pdm = &mut pdm[..slots];
+            let t = &mut lanes[..2 * slots + 1];
+            if !tangent::value_pass(&sw.value_ops, &self.terms, &self.laws, x, u, v, t, pdx, pdm) {
+                return false;
+            }
+            for sweep in &sw.sweeps {
+                tangent::run_sweep(sweep, &sw.terms, (v, pdx, pdm), t, |i, j, d| {
+                    jac[(i, j)] = d;
+                });
+            }
+            true
+        })
     }
 
     /// Overwrites only the Jacobian's varying entries (the passes over the variable columns of
@@ -467,12 +528,9 @@ impl CompiledModel {
             self.constant_entries.is_some(),
             "jacobian_varying before fix_constant_entries"
         );
-        let st = &self.structure;
-        let passes = st.variable_colours.iter().zip(&st.variable_row_column);
-        for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
-            self.jacobian_pass(ops, group, row_column, x, u, jac);
-        }
-        st.varying
+        self.varying_entries(x, u, jac);
+        self.structure
+            .varying
             .iter()
             .enumerate()
             .all(|(i, row)| row.iter().all(|&j| jac[(i, j as usize)].is_finite()))
@@ -592,10 +650,19 @@ impl CompiledModel {
         self.structure.variable_colours.len()
     }
 
-    /// Number of operations those passes run in all (each runs the operations the rows it
-    /// reads need); a full Jacobian runs [`CompiledModel::jacobian_colours`] times
-    /// [`CompiledModel::derivative_plan_len`].
+    /// Number of operations a Jacobian runs once the constant entries are fixed: those of
+    /// the value pass and of the tangent sweeps (one per group, each through the operations of
+    /// the rows it reads that its seeds reach; see
+    /// [`CompiledModel::jacobian_varying_by_sweeps`]); a full Jacobian runs
+    /// [`CompiledModel::jacobian_colours`] times [`CompiledModel::derivative_plan_len`].
     pub fn variable_jacobian_ops(&self) -> usize {
+        let sweeps = &self.structure.tangents;
+        sweeps.value_ops.len() + sweeps.len()
+    }
+
+    /// Number of operations the dual passes over the variable columns run in all (each runs
+    /// the operations the rows it reads need): the work the tangent sweeps replace.
+    pub fn variable_jacobian_pass_ops(&self) -> usize {
         self.structure.variable_ops.iter().map(Vec::len).sum()
     }
 

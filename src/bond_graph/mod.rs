@@ -104,6 +104,7 @@ mod lower;
 mod plan;
 mod sort;
 mod structure;
+mod tangent;
 // The compiled model: evaluation (values and dual numbers), energy, linearisation.
 mod compiled;
 mod discretisation;
