@@ -283,6 +283,15 @@ impl CompiledModel {
         })
     }
 
+    /// The rows that are not affine ([`CompiledModel::nonaffine_rows`]) as sparse linear forms
+    /// over the states, the inputs and the results of the nonlinear operations they need:
+    /// [`NonaffineForms::derivatives`] gives the values of
+    /// [`CompiledModel::nonaffine_derivatives`] to rounding, with a few dot products instead
+    /// of a pass through the plan.
+    pub fn nonaffine_forms(&self) -> super::NonaffineForms {
+        super::NonaffineForms::new(self)
+    }
+
     /// The derivatives of the affine rows at x = 0, `f_i(0, u)`, into their places in `dx` (the
     /// entries of the other rows are left as they are): the offsets of `f_i = J_i x + f_i(0, u)`.
     pub fn affine_offsets(&self, u: &[f64], dx: &mut [f64]) {

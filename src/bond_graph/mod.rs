@@ -100,6 +100,7 @@ mod validate;
 // Compilation, in pipeline order: causality, lowering to equations, sorting, the flat plan, the
 // structure read off it.
 mod causality;
+mod forms;
 mod lower;
 mod plan;
 mod sort;
@@ -122,5 +123,6 @@ pub use element::{
 };
 pub use energy::PowerBalance;
 pub use error::BondGraphError;
+pub use forms::NonaffineForms;
 pub use graph::BondGraph;
 pub use linearization::Linearization;
