@@ -40,7 +40,7 @@ fn points(system: &Assembled, count: usize, spread: f64, seed: u64) -> Vec<(Vec<
         .collect()
 }
 
-/// The sweeps (one value pass, tangents four groups at a time through the operations the seeds
+/// The sweeps (one value pass, tangents of several groups at a time through the operations the seeds
 /// reach) give the bits of the dual passes over the variable columns and of a full dual
 /// Jacobian of a model without fixed entries, near rest and far from it; and they do not
 /// decline (no NaN zero tangent at finite points), so it is their entries that are compared.

@@ -486,7 +486,7 @@ impl CompiledModel {
 
     /// The varying entries into `jac` with the bits of
     /// [`CompiledModel::jacobian_varying_by_passes`], from one value pass and tangent sweeps
-    /// of four groups at a time (`tangent.rs`): the values and the laws' partial derivatives are
+    /// of [`LANES`](tangent::LANES) groups at a time (`tangent.rs`): the values and the laws' partial derivatives are
     /// computed once, and each sweep carries tangents only through the operations its seeds
     /// reach. Returns false, with `jac` as it was, where a zero tangent is NaN (a value that
     /// is not finite, or 0/0): then the dual passes must give the entries.

@@ -33,8 +33,9 @@
 use super::element::NonlinearLaw;
 use super::plan::{Op, NONE};
 
-/// Groups per sweep: four doubles, one 256-bit vector.
-pub(super) const LANES: usize = 4;
+/// Groups per sweep: sixteen doubles, four 256-bit vectors (the complete system has 15 groups:
+/// one sweep; the chains of additions of four vectors overlap).
+pub(super) const LANES: usize = 16;
 
 /// The tangents of one slot, one per group of a sweep.
 pub(super) type Lanes = [f64; LANES];
@@ -375,8 +376,8 @@ pub(super) fn run_sweep(
     run_sweep_body(sweep, terms, (v, pdx, pdm), t, entry)
 }
 
-/// [`run_sweep_body`] compiled for 256-bit vectors: one operation on the four lanes is one
-/// vector operation. Multiplications and additions stay separate (no fused multiply-add), so
+/// [`run_sweep_body`] compiled for 256-bit vectors: one operation on the lanes is four vector
+/// operations. Multiplications and additions stay separate (no fused multiply-add), so
 /// the bits are those of the portable code.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
