@@ -140,3 +140,56 @@ fn forms_of_the_nonaffine_rows_are_the_plans_values() {
     }
     assert!(presets_with_rows >= 3, "{presets_with_rows} presets");
 }
+
+/// The forms of the affine rows' and outputs' offsets give the plan's `f_i(0, u)` and
+/// `y_k(0, u)` to rounding: within 1e-12 of the largest magnitude over the inputs tried, on
+/// every preset.
+#[test]
+fn forms_of_the_affine_offsets_are_the_plans_values() {
+    let mut compared = 0;
+    for preset in presets::PRESETS {
+        let system = Assembled::new(&parameters(preset.name)).unwrap();
+        let m = system.compiled();
+        let forms = m.affine_offset_forms();
+        let (n, o) = (m.n_states(), m.n_outputs());
+        let mut pts = points(&system, 20, 0.0, 3);
+        for (k, (_, u)) in pts.iter_mut().enumerate() {
+            // Inputs from small to large.
+            u.iter_mut()
+                .for_each(|v| *v *= 10f64.powi(k as i32 % 5 - 1));
+        }
+        let mut results = Vec::new();
+        for (_, u) in &pts {
+            let (mut a, mut b) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+            let (mut ya, mut yb) = (vec![f64::NAN; o], vec![f64::NAN; o]);
+            m.affine_offsets(u, &mut a);
+            forms.rows(m, u, &mut b);
+            m.affine_output_offsets(u, &mut ya);
+            forms.outputs(m, u, &mut yb);
+            a.extend(ya);
+            b.extend(yb);
+            // The same entries are written.
+            for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+                assert_eq!(x.is_nan(), y.is_nan(), "{}: entry {i}", preset.name);
+            }
+            results.push((a, b));
+        }
+        for i in 0..n + o {
+            let scale = results.iter().fold(0.0_f64, |s, (a, _)| s.max(a[i].abs()));
+            for (k, (a, b)) in results.iter().enumerate() {
+                if a[i].is_nan() {
+                    continue;
+                }
+                assert!(
+                    (a[i] - b[i]).abs() <= 1e-12 * scale,
+                    "{}: entry {i} at point {k}: plan {:e}, forms {:e}",
+                    preset.name,
+                    a[i],
+                    b[i]
+                );
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 1000, "{compared} values compared");
+}

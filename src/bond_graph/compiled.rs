@@ -54,6 +54,32 @@ pub struct CompiledModel {
     pub(super) constant_entries: Option<DMatrix<f64>>,
 }
 
+/// The offsets `f_i(0, u)` of the affine rows and `y_k(0, u)` of the affine outputs as forms
+/// ([`CompiledModel::affine_offset_forms`]).
+#[derive(Clone, Debug, Default)]
+pub struct AffineOffsets {
+    rows: super::NonaffineForms,
+    outputs: super::NonaffineForms,
+}
+
+impl AffineOffsets {
+    /// The affine rows' offsets `f_i(0, u)` into their places in `dx` (the other entries left
+    /// as they are), at the inputs `u` of `m`, the model the forms were made from.
+    pub fn rows(&self, m: &CompiledModel, u: &[f64], dx: &mut [f64]) {
+        assert_eq!(u.len(), m.n_inputs(), "input vector length");
+        assert_eq!(dx.len(), m.n_states(), "derivative vector length");
+        self.rows.evaluate(m, None, u, dx);
+    }
+
+    /// The affine outputs' offsets `y_k(0, u)` into their places in `y` (the other entries
+    /// left as they are), at the inputs `u` of `m`, the model the forms were made from.
+    pub fn outputs(&self, m: &CompiledModel, u: &[f64], y: &mut [f64]) {
+        assert_eq!(u.len(), m.n_inputs(), "input vector length");
+        assert_eq!(y.len(), m.n_outputs(), "output vector length");
+        self.outputs.evaluate(m, None, u, y);
+    }
+}
+
 thread_local! {
     static WS_F64: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static WS_DUAL: RefCell<Vec<Dual>> = const { RefCell::new(Vec::new()) };
@@ -289,7 +315,39 @@ impl CompiledModel {
     /// [`CompiledModel::nonaffine_derivatives`] to rounding, with a few dot products instead
     /// of a pass through the plan.
     pub fn nonaffine_forms(&self) -> super::NonaffineForms {
-        super::NonaffineForms::new(self)
+        let st = &self.structure;
+        let rows: Vec<(u32, u32)> = st
+            .nonaffine_rows
+            .iter()
+            .map(|&i| (i, self.deriv_slots[i as usize]))
+            .collect();
+        super::NonaffineForms::new(self, &st.nonaffine_ops, &rows)
+    }
+
+    /// The offsets of the affine rows and outputs as forms: [`AffineOffsets::rows`] and
+    /// [`AffineOffsets::outputs`] give [`CompiledModel::affine_offsets`] and
+    /// [`CompiledModel::affine_output_offsets`] to rounding, with a few dot products over the inputs and the nonlinear results they need
+    /// instead of passes through the plan.
+    pub fn affine_offset_forms(&self) -> AffineOffsets {
+        let st = &self.structure;
+        let affine = |slots: &[u32], nonaffine: &[u32]| -> Vec<(u32, u32)> {
+            (0..slots.len() as u32)
+                .filter(|i| nonaffine.binary_search(i).is_err())
+                .map(|i| (i, slots[i as usize]))
+                .collect()
+        };
+        AffineOffsets {
+            rows: super::NonaffineForms::new(
+                self,
+                &st.affine_ops,
+                &affine(&self.deriv_slots, &st.nonaffine_rows),
+            ),
+            outputs: super::NonaffineForms::new(
+                self,
+                &st.affine_output_ops,
+                &affine(&self.output_slots, &st.nonaffine_outputs),
+            ),
+        }
     }
 
     /// The derivatives of the affine rows at x = 0, `f_i(0, u)`, into their places in `dx` (the

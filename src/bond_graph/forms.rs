@@ -70,9 +70,9 @@ struct Sparse {
 }
 
 impl NonaffineForms {
-    /// The forms of `m`'s rows that are not affine.
-    pub(super) fn new(m: &CompiledModel) -> Self {
-        let st = &m.structure;
+    /// The forms of `targets` (`(index, slot)`: the slot's form is delivered at `index`)
+    /// through `ops`, the operations of `m`'s plan they need (in plan order).
+    pub(super) fn new(m: &CompiledModel, ops: &[Op], targets: &[(u32, u32)]) -> Self {
         let known = m.n_states() + m.n_inputs();
         let mut out = NonaffineForms {
             known,
@@ -86,7 +86,7 @@ impl NonaffineForms {
             });
         }
         // Dense accumulator over the variables (states, inputs, nonlinear results).
-        let mut acc: Vec<f64> = vec![0.0; known + st.nonaffine_ops.len()];
+        let mut acc: Vec<f64> = vec![0.0; known + ops.len()];
         let mut touched: Vec<u32> = Vec::new();
         let form_of = |slot: &[Option<Sparse>], s: u32| -> Sparse {
             slot[s as usize]
@@ -102,7 +102,7 @@ impl NonaffineForms {
                 end: out.entries.len() as u32,
             }
         };
-        for op in &st.nonaffine_ops {
+        for op in ops {
             let (dst, form) = match *op {
                 Op::Const { dst, c } => (dst, Sparse { c, terms: vec![] }),
                 Op::Copy { dst, src } => (dst, form_of(&slot, src)),
@@ -163,9 +163,8 @@ impl NonaffineForms {
             };
             slot[dst as usize] = Some(form);
         }
-        for &i in &st.nonaffine_rows {
-            let f = form_of(&slot, m.deriv_slots[i as usize]);
-            let f = push(&mut out, &f);
+        for &(i, s) in targets {
+            let f = push(&mut out, &form_of(&slot, s));
             out.rows.push((i, f));
         }
         out
@@ -188,6 +187,19 @@ impl NonaffineForms {
     /// at the states `x` and inputs `u` of `m`, the model the forms were made from.
     pub fn derivatives(&self, m: &CompiledModel, x: &[f64], u: &[f64], dx: &mut [f64]) {
         assert_eq!(x.len() + u.len(), self.known, "state and input lengths");
+        self.evaluate(m, Some(x), u, dx);
+    }
+
+    /// The targets into their places in `out` (the others left as they are), at the states
+    /// `x` (zero for `None`) and inputs `u` of `m`, the model the forms were made from.
+    pub(super) fn evaluate(
+        &self,
+        m: &CompiledModel,
+        x: Option<&[f64]>,
+        u: &[f64],
+        out: &mut [f64],
+    ) {
+        let n = self.known - u.len();
         WS.with(|ws| {
             let mut ws = ws.borrow_mut();
             let len = self.known + self.nonlinear.len();
@@ -195,8 +207,11 @@ impl NonaffineForms {
                 ws.resize(len, 0.0);
             }
             let w = &mut ws[..len];
-            w[..x.len()].copy_from_slice(x);
-            w[x.len()..self.known].copy_from_slice(u);
+            match x {
+                Some(x) => w[..n].copy_from_slice(x),
+                None => w[..n].fill(0.0),
+            }
+            w[n..self.known].copy_from_slice(u);
             let entries = &self.entries;
             let dot = |w: &[f64], f: &Form| {
                 entries[f.start as usize..f.end as usize]
@@ -213,7 +228,7 @@ impl NonaffineForms {
                 };
             }
             for (i, f) in &self.rows {
-                dx[*i as usize] = dot(w, f);
+                out[*i as usize] = dot(w, f);
             }
         })
     }

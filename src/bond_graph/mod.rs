@@ -115,7 +115,7 @@ mod linearization;
 // Drawing.
 mod dot;
 
-pub use compiled::CompiledModel;
+pub use compiled::{AffineOffsets, CompiledModel};
 pub use discretisation::ExactDiscretisation;
 pub use element::{
     Bond, BondId, Element, ElementId, ElementKind, Law, LawFn, Modulus, NonlinearLaw, OutputDef,

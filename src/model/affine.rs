@@ -11,7 +11,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{CompiledModel, NonaffineForms};
+use crate::bond_graph::{AffineOffsets, CompiledModel, NonaffineForms};
 
 /// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
 /// as (column, value).
@@ -120,7 +120,8 @@ pub(super) const MAX_AFFINE_OUTPUTS: usize = 64;
 /// plan's. J is 1–5 % dense (the plate's modes meet only at the hub and the torsion bar), so
 /// the product over its nonzeros costs a fraction of a pass through the plan, which also
 /// evaluates every bond variable on the way. The offsets `f(0, u)` and `y(0, u)` are evaluated
-/// through the plan whenever the held inputs change.
+/// whenever the held inputs change, as forms over the inputs and the nonlinear results they
+/// need ([`AffineOffsets`]: the plan's values to rounding).
 #[derive(Clone, Debug)]
 pub(super) struct Affine {
     /// The affine rows of J (the other rows empty).
@@ -129,6 +130,8 @@ pub(super) struct Affine {
     pub(super) partial: bool,
     /// The rows that are not affine as forms over the states, inputs and nonlinear results.
     nonaffine: NonaffineForms,
+    /// The offsets `f(0, u)` and `y(0, u)` as forms over the inputs and nonlinear results.
+    offsets: AffineOffsets,
     /// `f(0, u)` at the held inputs.
     pub(super) offset: Vec<f64>,
     /// The largest `|f_i(0, u)|` of the affine rows (+inf if one is not finite).
@@ -213,6 +216,7 @@ impl Affine {
             } else {
                 NonaffineForms::default()
             },
+            offsets: compiled.affine_offset_forms(),
             offset: vec![0.0; jac_rows],
             offset_max: 0.0,
             outputs,
@@ -222,11 +226,11 @@ impl Affine {
     }
 
     pub(super) fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
-        compiled.affine_offsets(inputs, &mut self.offset);
+        self.offsets.rows(compiled, inputs, &mut self.offset);
         let rows = compiled.nonaffine_rows();
         self.offset_max = max_abs(&self.offset, |i| rows.binary_search(&(i as u32)).is_err());
         if let Some(o) = &mut self.outputs {
-            compiled.affine_output_offsets(inputs, &mut o.y0);
+            self.offsets.outputs(compiled, inputs, &mut o.y0);
             let outputs = compiled.nonaffine_outputs();
             o.y0_max = max_abs(&o.y0, |k| outputs.binary_search(&(k as u32)).is_err());
         }
