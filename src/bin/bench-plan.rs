@@ -115,12 +115,14 @@ fn main() {
     };
     println!(
         "complete (servo valve) Jacobian, median of 5 alternating runs: every entry {:.2} us \
-         ({} passes of {} ops), constant entries fixed {:.2} us ({} passes, {} ops in all)",
+         ({} passes of {} ops), constant entries fixed {:.2} us ({} groups: {} ops as dual passes, {} as a value pass \
+         and tangent sweeps)",
         median(&mut t_full),
         full.jacobian_colours(),
         full.derivative_plan_len(),
         median(&mut t_fixed),
         fixed.variable_jacobian_colours(),
+        fixed.variable_jacobian_pass_ops(),
         fixed.variable_jacobian_ops(),
     );
 }

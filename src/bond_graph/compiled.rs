@@ -19,6 +19,7 @@ use super::element::NonlinearLaw;
 use super::energy::{PowerTerm, Storage};
 use super::plan::{Op, NONE};
 use super::structure::Structure;
+use super::tangent;
 
 /// A compiled bond graph: state equations `dx/dt = f(x, u)` and outputs `y = g(x, u)` as a flat
 /// plan of operations over slots, with exact derivatives.
@@ -53,9 +54,37 @@ pub struct CompiledModel {
     pub(super) constant_entries: Option<DMatrix<f64>>,
 }
 
+/// The offsets `f_i(0, u)` of the affine rows and `y_k(0, u)` of the affine outputs as forms
+/// ([`CompiledModel::affine_offset_forms`]).
+#[derive(Clone, Debug, Default)]
+pub struct AffineOffsets {
+    rows: super::NonaffineForms,
+    outputs: super::NonaffineForms,
+}
+
+impl AffineOffsets {
+    /// The affine rows' offsets `f_i(0, u)` into their places in `dx` (the other entries left
+    /// as they are), at the inputs `u` of `m`, the model the forms were made from.
+    pub fn rows(&self, m: &CompiledModel, u: &[f64], dx: &mut [f64]) {
+        assert_eq!(u.len(), m.n_inputs(), "input vector length");
+        assert_eq!(dx.len(), m.n_states(), "derivative vector length");
+        self.rows.evaluate(m, None, u, dx);
+    }
+
+    /// The affine outputs' offsets `y_k(0, u)` into their places in `y` (the other entries
+    /// left as they are), at the inputs `u` of `m`, the model the forms were made from.
+    pub fn outputs(&self, m: &CompiledModel, u: &[f64], y: &mut [f64]) {
+        assert_eq!(u.len(), m.n_inputs(), "input vector length");
+        assert_eq!(y.len(), m.n_outputs(), "output vector length");
+        self.outputs.evaluate(m, None, u, y);
+    }
+}
+
 thread_local! {
     static WS_F64: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static WS_DUAL: RefCell<Vec<Dual>> = const { RefCell::new(Vec::new()) };
+    static WS_SWEEP: RefCell<(Vec<f64>, Vec<tangent::Lanes>)> =
+        const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
 impl CompiledModel {
@@ -280,6 +309,47 @@ impl CompiledModel {
         })
     }
 
+    /// The rows that are not affine ([`CompiledModel::nonaffine_rows`]) as sparse linear forms
+    /// over the states, the inputs and the results of the nonlinear operations they need:
+    /// [`NonaffineForms::derivatives`] gives the values of
+    /// [`CompiledModel::nonaffine_derivatives`] to rounding, with a few dot products instead
+    /// of a pass through the plan.
+    pub fn nonaffine_forms(&self) -> super::NonaffineForms {
+        let st = &self.structure;
+        let rows: Vec<(u32, u32)> = st
+            .nonaffine_rows
+            .iter()
+            .map(|&i| (i, self.deriv_slots[i as usize]))
+            .collect();
+        super::NonaffineForms::new(self, &st.nonaffine_ops, &rows)
+    }
+
+    /// The offsets of the affine rows and outputs as forms: [`AffineOffsets::rows`] and
+    /// [`AffineOffsets::outputs`] give [`CompiledModel::affine_offsets`] and
+    /// [`CompiledModel::affine_output_offsets`] to rounding, with a few dot products over the inputs and the nonlinear results they need
+    /// instead of passes through the plan.
+    pub fn affine_offset_forms(&self) -> AffineOffsets {
+        let st = &self.structure;
+        let affine = |slots: &[u32], nonaffine: &[u32]| -> Vec<(u32, u32)> {
+            (0..slots.len() as u32)
+                .filter(|i| nonaffine.binary_search(i).is_err())
+                .map(|i| (i, slots[i as usize]))
+                .collect()
+        };
+        AffineOffsets {
+            rows: super::NonaffineForms::new(
+                self,
+                &st.affine_ops,
+                &affine(&self.deriv_slots, &st.nonaffine_rows),
+            ),
+            outputs: super::NonaffineForms::new(
+                self,
+                &st.affine_output_ops,
+                &affine(&self.output_slots, &st.nonaffine_outputs),
+            ),
+        }
+    }
+
     /// The derivatives of the affine rows at x = 0, `f_i(0, u)`, into their places in `dx` (the
     /// entries of the other rows are left as they are): the offsets of `f_i = J_i x + f_i(0, u)`.
     pub fn affine_offsets(&self, u: &[f64], dx: &mut [f64]) {
@@ -444,12 +514,70 @@ impl CompiledModel {
             }
             Some(fixed) => {
                 jac.copy_from(fixed);
-                let passes = st.variable_colours.iter().zip(&st.variable_row_column);
-                for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
-                    self.jacobian_pass(ops, group, row_column, x, u, jac);
-                }
+                self.varying_entries(x, u, jac);
             }
         }
+    }
+
+    /// The varying entries into `jac`: by the value pass and tangent sweeps of
+    /// [`CompiledModel::jacobian_varying_by_sweeps`], or by the dual passes where that
+    /// declines.
+    fn varying_entries(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
+        if !self.jacobian_varying_by_sweeps(x, u, jac) {
+            self.jacobian_varying_by_passes(x, u, jac);
+        }
+    }
+
+    /// The varying entries into `jac` by one dual-number pass per group of the variable
+    /// colouring, each through the operations the rows it reads need: the reference for
+    /// [`CompiledModel::jacobian_varying_by_sweeps`].
+    #[doc(hidden)]
+    pub fn jacobian_varying_by_passes(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) {
+        let n = self.n_states();
+        assert_eq!(jac.shape(), (n, n), "jacobian shape");
+        let st = &self.structure;
+        let passes = st.variable_colours.iter().zip(&st.variable_row_column);
+        for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
+            self.jacobian_pass(ops, group, row_column, x, u, jac);
+        }
+    }
+
+    /// The varying entries into `jac` with the bits of
+    /// [`CompiledModel::jacobian_varying_by_passes`], from one value pass and tangent sweeps
+    /// of [`LANES`](tangent::LANES) groups at a time (`tangent.rs`): the values and the laws' partial derivatives are
+    /// computed once, and each sweep carries tangents only through the operations its seeds
+    /// reach. Returns false, with `jac` as it was, where a zero tangent is NaN (a value that
+    /// is not finite, or 0/0): then the dual passes must give the entries.
+    #[doc(hidden)]
+    pub fn jacobian_varying_by_sweeps(&self, x: &[f64], u: &[f64], jac: &mut DMatrix<f64>) -> bool {
+        self.check_dims(x, u);
+        let n = self.n_states();
+        assert_eq!(jac.shape(), (n, n), "jacobian shape");
+        let sw = &self.structure.tangents;
+        let slots = self.n_slots;
+        WS_SWEEP.with(|ws| {
+            let mut ws = ws.borrow_mut();
+            let (values, lanes) = &mut *ws;
+            if values.len() < 3 * slots {
+                values.resize(3 * slots, 0.0);
+            }
+            if lanes.len() < 2 * slots + 1 {
+                lanes.resize(2 * slots + 1, [0.0; tangent::LANES]);
+            }
+            let (v, rest) = values.split_at_mut(slots);
+            let (pdx, pdm) = rest.split_at_mut(slots);
+            let pdm = &mut pdm[..slots];
+            let t = &mut lanes[..2 * slots + 1];
+            if !tangent::value_pass(&sw.value_ops, &self.terms, &self.laws, x, u, v, t, pdx, pdm) {
+                return false;
+            }
+            for sweep in &sw.sweeps {
+                tangent::run_sweep(sweep, &sw.terms, (v, pdx, pdm), t, |i, j, d| {
+                    jac[(i, j)] = d;
+                });
+            }
+            true
+        })
     }
 
     /// Overwrites only the Jacobian's varying entries (the passes over the variable columns of
@@ -467,12 +595,9 @@ impl CompiledModel {
             self.constant_entries.is_some(),
             "jacobian_varying before fix_constant_entries"
         );
-        let st = &self.structure;
-        let passes = st.variable_colours.iter().zip(&st.variable_row_column);
-        for ((group, row_column), ops) in passes.zip(&st.variable_ops) {
-            self.jacobian_pass(ops, group, row_column, x, u, jac);
-        }
-        st.varying
+        self.varying_entries(x, u, jac);
+        self.structure
+            .varying
             .iter()
             .enumerate()
             .all(|(i, row)| row.iter().all(|&j| jac[(i, j as usize)].is_finite()))
@@ -592,10 +717,19 @@ impl CompiledModel {
         self.structure.variable_colours.len()
     }
 
-    /// Number of operations those passes run in all (each runs the operations the rows it
-    /// reads need); a full Jacobian runs [`CompiledModel::jacobian_colours`] times
-    /// [`CompiledModel::derivative_plan_len`].
+    /// Number of operations a Jacobian runs once the constant entries are fixed: those of
+    /// the value pass and of the tangent sweeps (one per group, each through the operations of
+    /// the rows it reads that its seeds reach; see
+    /// [`CompiledModel::jacobian_varying_by_sweeps`]); a full Jacobian runs
+    /// [`CompiledModel::jacobian_colours`] times [`CompiledModel::derivative_plan_len`].
     pub fn variable_jacobian_ops(&self) -> usize {
+        let sweeps = &self.structure.tangents;
+        sweeps.value_ops.len() + sweeps.len()
+    }
+
+    /// Number of operations the dual passes over the variable columns run in all (each runs
+    /// the operations the rows it reads need): the work the tangent sweeps replace.
+    pub fn variable_jacobian_pass_ops(&self) -> usize {
         self.structure.variable_ops.iter().map(Vec::len).sum()
     }
 

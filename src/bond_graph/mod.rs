@@ -100,10 +100,12 @@ mod validate;
 // Compilation, in pipeline order: causality, lowering to equations, sorting, the flat plan, the
 // structure read off it.
 mod causality;
+mod forms;
 mod lower;
 mod plan;
 mod sort;
 mod structure;
+mod tangent;
 // The compiled model: evaluation (values and dual numbers), energy, linearisation.
 mod compiled;
 mod discretisation;
@@ -113,7 +115,7 @@ mod linearization;
 // Drawing.
 mod dot;
 
-pub use compiled::CompiledModel;
+pub use compiled::{AffineOffsets, CompiledModel};
 pub use discretisation::ExactDiscretisation;
 pub use element::{
     Bond, BondId, Element, ElementId, ElementKind, Law, LawFn, Modulus, NonlinearLaw, OutputDef,
@@ -121,5 +123,6 @@ pub use element::{
 };
 pub use energy::PowerBalance;
 pub use error::BondGraphError;
+pub use forms::NonaffineForms;
 pub use graph::BondGraph;
 pub use linearization::Linearization;

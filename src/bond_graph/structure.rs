@@ -43,6 +43,7 @@
 //!   Each of these passes runs only the operations the rows it reads need.
 
 use super::plan::{Op, NONE};
+use super::tangent::{self, TangentSweeps};
 
 /// What the structure of the plan says about `f` and its Jacobian.
 #[derive(Clone, Debug)]
@@ -68,6 +69,8 @@ pub(crate) struct Structure {
     /// For each group of `variable_colours`, the operations the rows read in its pass need, in
     /// plan order (a subset of `deriv_ops`).
     pub variable_ops: Vec<Vec<Op>>,
+    /// The same passes as one value pass and a tangent sweep per group (`tangent.rs`).
+    pub tangents: TangentSweeps,
     /// The rows `i` whose derivative is not affine in x with coefficients independent of x and
     /// u (`s(x, u) = g x + s(0, u)`: its gradient in x does not vary), ascending.
     pub nonaffine_rows: Vec<u32>,
@@ -109,7 +112,7 @@ fn for_each_read(op: &Op, terms: &[(f64, u32)], mut read: impl FnMut(u32)) {
     }
 }
 
-fn dst(op: &Op) -> u32 {
+pub(super) fn dst(op: &Op) -> u32 {
     match *op {
         Op::Const { dst, .. }
         | Op::Copy { dst, .. }
@@ -261,7 +264,17 @@ pub(crate) fn analyse(
                 .collect();
             needed_ops(&deriv_ops, terms, n_slots, &rows)
         })
-        .collect();
+        .collect::<Vec<_>>();
+    let tangents = tangent::build(
+        &deriv_ops,
+        terms,
+        n_slots,
+        deriv_slots,
+        &variable_colours,
+        &variable_row_column,
+        &variable_ops,
+        |ops, targets| needed_ops(ops, terms, n_slots, targets),
+    );
     let (affine_derivs, nonaffine_derivs) = split_by_affinity(deriv_slots, &jvar);
     let slots_of = |rows: &[(usize, u32)]| rows.iter().map(|&(_, d)| d).collect::<Vec<u32>>();
     let nonaffine_ops = needed_ops(&deriv_ops, terms, n_slots, &slots_of(&nonaffine_derivs));
@@ -289,6 +302,7 @@ pub(crate) fn analyse(
         variable_colours,
         variable_row_column,
         variable_ops,
+        tangents,
     }
 }
 

@@ -11,7 +11,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::CompiledModel;
+use crate::bond_graph::{AffineOffsets, CompiledModel, NonaffineForms};
 
 /// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
 /// as (column, value).
@@ -110,8 +110,9 @@ impl BlockRows {
 pub(super) const MAX_AFFINE_OUTPUTS: usize = 64;
 
 /// `dx_i/dt = J_i x + f_i(0, u)` for the rows `i` of `f` that are affine in x (every row of the
-/// LOES with the plate, whose Jacobian J is constant; all but the servo valve's 7 with the full
-/// valve), the other rows through the part of the plan they need; likewise `y_k = C_k x +
+/// LOES with the plate, whose Jacobian J is constant; all but the servo valve's 7 and, with the
+/// air drag, the plate's modes with the full valve), the other rows as forms over the states,
+/// inputs and the results of the nonlinear operations they need ([`NonaffineForms`]); likewise `y_k = C_k x +
 /// y_k(0, u)` for the outputs that are affine, the others through the plan.
 ///
 /// An affine row has coefficients `J_i` that depend on neither x nor u (they are among the
@@ -119,13 +120,18 @@ pub(super) const MAX_AFFINE_OUTPUTS: usize = 64;
 /// plan's. J is 1–5 % dense (the plate's modes meet only at the hub and the torsion bar), so
 /// the product over its nonzeros costs a fraction of a pass through the plan, which also
 /// evaluates every bond variable on the way. The offsets `f(0, u)` and `y(0, u)` are evaluated
-/// through the plan whenever the held inputs change.
+/// whenever the held inputs change, as forms over the inputs and the nonlinear results they
+/// need ([`AffineOffsets`]: the plan's values to rounding).
 #[derive(Clone, Debug)]
 pub(super) struct Affine {
     /// The affine rows of J (the other rows empty).
     pub(super) jac: SparseRows,
     /// Some rows are not affine (their entries in `offset` are unused).
     pub(super) partial: bool,
+    /// The rows that are not affine as forms over the states, inputs and nonlinear results.
+    nonaffine: NonaffineForms,
+    /// The offsets `f(0, u)` and `y(0, u)` as forms over the inputs and nonlinear results.
+    offsets: AffineOffsets,
     /// `f(0, u)` at the held inputs.
     pub(super) offset: Vec<f64>,
     /// The largest `|f_i(0, u)|` of the affine rows (+inf if one is not finite).
@@ -205,6 +211,12 @@ impl Affine {
             jac_row_sum: jac.max_abs_row_sum(),
             jac,
             partial,
+            nonaffine: if partial {
+                compiled.nonaffine_forms()
+            } else {
+                NonaffineForms::default()
+            },
+            offsets: compiled.affine_offset_forms(),
             offset: vec![0.0; jac_rows],
             offset_max: 0.0,
             outputs,
@@ -214,11 +226,11 @@ impl Affine {
     }
 
     pub(super) fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
-        compiled.affine_offsets(inputs, &mut self.offset);
+        self.offsets.rows(compiled, inputs, &mut self.offset);
         let rows = compiled.nonaffine_rows();
         self.offset_max = max_abs(&self.offset, |i| rows.binary_search(&(i as u32)).is_err());
         if let Some(o) = &mut self.outputs {
-            compiled.affine_output_offsets(inputs, &mut o.y0);
+            self.offsets.outputs(compiled, inputs, &mut o.y0);
             let outputs = compiled.nonaffine_outputs();
             o.y0_max = max_abs(&o.y0, |k| outputs.binary_search(&(k as u32)).is_err());
         }
@@ -262,7 +274,7 @@ impl Affine {
             *d = self.jac.row_times(i, x, self.offset[i]);
         }
         if self.partial {
-            compiled.nonaffine_derivatives(x, u, dx);
+            self.nonaffine.derivatives(compiled, x, u, dx);
         }
     }
 }
