@@ -149,7 +149,7 @@ def main():
         f"x86-64 machine, headless Chromium {version}, {args.rounds} rounds; median (range).",
         "",
         f"Size: `hsp.wasm` {wasm:,} bytes; `hsp.wasm.js` (the same as base64, for pages opened "
-        f"from the disk) {script:,} bytes.".replace(",", " "),
+        f"from the disk) {script:,} bytes.".replace(",", " ").replace("base64 ", "base64,"),
         "",
         "| page from | run | first result on screen (ms after navigation) | module ready (ms) | "
         "× real time in the page | × real time, model only | native × real time | "
@@ -175,13 +175,14 @@ def main():
         "1 ms steps, 5 s): the largest difference of any recorded output over the run, relative to "
         "that output's range.",
         "",
-        "| preset | settings the page adds | largest difference / range | output | bit-identical | "
+        "| preset | settings the page adds | largest difference / range | worst output | bit-identical | "
         "validity warnings |",
         "| --- | --- | ---: | --- | --- | ---: |",
     ]
     for preset, run, worst, d, identical, warnings in agreement:
         command = "move" if run["request"]["settings"]["reference.angle"] != 0 else "step of r"
-        lines.append(f"| {preset} | the controls' values, {command} | {d:.1e} | {worst} | "
+        lines.append(f"| {preset} | the controls' values, {command} | {d:.1e} | "
+                     f"{worst if d > 0 else '–'} | "
                      f"{'yes' if identical else 'no'} | {warnings} |")
     pathlib.Path(args.out).write_text("\n".join(lines) + "\n")
     print(f"wrote {args.out} and {args.screenshot}")
