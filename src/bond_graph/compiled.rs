@@ -311,7 +311,7 @@ impl CompiledModel {
 
     /// The rows that are not affine ([`CompiledModel::nonaffine_rows`]) as sparse linear forms
     /// over the states, the inputs and the results of the nonlinear operations they need:
-    /// [`NonaffineForms::derivatives`] gives the values of
+    /// [`super::NonaffineForms::derivatives`] gives the values of
     /// [`CompiledModel::nonaffine_derivatives`] to rounding, with a few dot products instead
     /// of a pass through the plan.
     pub fn nonaffine_forms(&self) -> super::NonaffineForms {
