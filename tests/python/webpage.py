@@ -37,9 +37,10 @@ def chrome(tmp, net_log=None, size="1400,1300"):
 
 
 def wait_for_run(driver, timeout=120):
-    """Waits until the page's current run is done (or failed to start) and returns its state."""
+    """Waits until the page's current run is done and drawn (or failed to start) and returns its
+    state."""
     WebDriverWait(driver, timeout).until(lambda d: d.execute_script(
-        "const p = window.hspPage; return !!p && (!!p.error || !!(p.run && p.run.done));"))
+        "const p = window.hspPage; return !!p && (!!p.error || !!(p.run && p.run.shown));"))
     return driver.execute_script("""
         const p = window.hspPage, r = p.run;
         return {error: p.error, failed: r && r.failed, request: r && r.request, samples: r && r.samples,
