@@ -24,9 +24,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import threading
-import functools
-import http.server
 
 import numpy as np
 
@@ -34,19 +31,13 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "python"))
 
 from selenium.webdriver.common.by import By  # noqa: E402
-from selenium.webdriver.support.ui import Select  # noqa: E402
 
-from webpage import RECORDED, chrome, deviation, native, wait_for_run  # noqa: E402
+from webpage import RECORDED, choose_preset, chrome, deviation, native, serve, wait_for_run  # noqa: E402
 
 PAGE = ROOT / "docs" / "web"
 FMU = ROOT / "fmu" / "HydraulicSlewingPlate.fmu"
 PRESETS = ["complete", "complete-hub-locked", "servo-valve-motor", "loes-motor", "paper-eq16",
            "paper-fig9b", "paper-fig10"]
-
-
-class Quiet(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, *args):
-        pass
 
 
 def median_range(values, fmt):
@@ -87,9 +78,7 @@ def main():
     subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "bench-web-native"],
                    cwd=ROOT, check=True)
 
-    server = http.server.ThreadingHTTPServer(
-        ("127.0.0.1", 0), functools.partial(Quiet, directory=str(PAGE)))
-    threading.Thread(target=server.serve_forever, daemon=True).start()
+    server = serve(PAGE)
     query = "index.html?speed=fast&stop=10"
     sources = {"file": (PAGE / "index.html").as_uri() + query[len("index.html"):],
                "http": f"http://127.0.0.1:{server.server_port}/{query}"}
@@ -121,11 +110,7 @@ def main():
             wait_for_run(driver)
             for preset in PRESETS:
                 before = driver.execute_script("return hspPage.run.id")
-                select = Select(driver.find_element(By.ID, "preset"))
-                if select.first_selected_option.get_attribute("value") == preset:
-                    driver.find_element(By.ID, "run").click()
-                else:
-                    select.select_by_value(preset)
+                choose_preset(driver, preset)
                 run = wait_for_run(driver)
                 assert run["id"] > before
                 dev = deviation(run["samples"], native(str(FMU), run))
@@ -134,7 +119,7 @@ def main():
                 warnings = sum(1 for m in run["messages"] if m["status"] == "warning")
                 agreement.append((preset, run, worst, dev[worst][0], identical, warnings))
                 print(f"{preset}: {dev[worst][0]:.1e} ({worst}), bit-identical {identical}", flush=True)
-            Select(driver.find_element(By.ID, "preset")).select_by_value("complete")
+            choose_preset(driver, "complete")
             wait_for_run(driver)
             driver.save_screenshot(args.screenshot)
         finally:

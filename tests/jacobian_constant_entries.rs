@@ -4,47 +4,22 @@
 //! at every point, and the Jacobian with the fixed entries has the bits of a full evaluation.
 
 use hydraulic_slewing_plate::bond_graph::CompiledModel;
-use hydraulic_slewing_plate::fmu::{Experiment, Values};
-use hydraulic_slewing_plate::model::parameters::Parameters;
+#[path = "common/points.rs"]
+mod points;
+
 use hydraulic_slewing_plate::model::presets;
-use hydraulic_slewing_plate::model::variables::VARIABLES;
 use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
 use nalgebra::DMatrix;
-
-fn parameters(preset: &str) -> Parameters {
-    parameters_with(preset, &[])
-}
-
-/// The preset with `sets` applied after it.
-fn parameters_with(preset: &str, sets: &[(&str, &str)]) -> Parameters {
-    let mut values = Values::from_start(&VARIABLES);
-    presets::apply(&mut values, preset).unwrap();
-    for (n, v) in sets {
-        hydraulic_slewing_plate::model::parameters::set_by_name(&mut values, n, v).unwrap();
-    }
-    Parameters::from_values(&values, &Experiment::default()).unwrap()
-}
+use points::{parameters, parameters_with};
 
 /// `count` points `(x, u)` around the rest state: each state off rest by up to `spread` times
 /// its nominal value, inputs in [-1, 1], scattered by the sines of unrelated integers.
 fn points(system: &Assembled, count: usize, spread: f64, seed: u64) -> Vec<(Vec<f64>, Vec<f64>)> {
     let mut k = seed;
-    let mut next = || {
+    points::around_rest(system, count, spread, move || {
         k += 1;
         ((k * 7919) as f64).sin()
-    };
-    let rest = system.initial_state();
-    (0..count)
-        .map(|_| {
-            let x = rest
-                .iter()
-                .zip(system.nominal())
-                .map(|(r, n)| r + spread * n * next())
-                .collect();
-            let u = (0..system.compiled().n_inputs()).map(|_| next()).collect();
-            (x, u)
-        })
-        .collect()
+    })
 }
 
 fn jacobian(m: &CompiledModel, x: &[f64], u: &[f64]) -> DMatrix<f64> {

@@ -3,41 +3,24 @@
 //! varying entries (the bits of the dual-number passes) and the forms that give the rows of `f`
 //! that are not affine (the plan's values to rounding).
 
-use hydraulic_slewing_plate::fmu::{Experiment, Values};
-use hydraulic_slewing_plate::model::parameters::Parameters;
+#[path = "common/points.rs"]
+mod points;
+
 use hydraulic_slewing_plate::model::presets;
-use hydraulic_slewing_plate::model::variables::VARIABLES;
 use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
 use nalgebra::DMatrix;
-
-fn parameters(preset: &str) -> Parameters {
-    let mut values = Values::from_start(&VARIABLES);
-    presets::apply(&mut values, preset).unwrap();
-    Parameters::from_values(&values, &Experiment::default()).unwrap()
-}
+use points::parameters;
 
 /// `count` points `(x, u)`: each state off rest by up to `spread` times its nominal value,
 /// inputs in [-1, 1], from a xorshift generator.
 fn points(system: &Assembled, count: usize, spread: f64, seed: u64) -> Vec<(Vec<f64>, Vec<f64>)> {
     let mut s = seed | 1;
-    let mut next = || {
+    points::around_rest(system, count, spread, move || {
         s ^= s << 13;
         s ^= s >> 7;
         s ^= s << 17;
         (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
-    let rest = system.initial_state();
-    (0..count)
-        .map(|_| {
-            let x = rest
-                .iter()
-                .zip(system.nominal())
-                .map(|(r, n)| r + spread * n * next())
-                .collect();
-            let u = (0..system.compiled().n_inputs()).map(|_| next()).collect();
-            (x, u)
-        })
-        .collect()
+    })
 }
 
 /// The sweeps (one value pass, tangents of several groups at a time through the operations the seeds

@@ -129,6 +129,7 @@ function newRun() {
     steps: Math.round(stop / STEP),
     command,
     // A step of r: the potentiometer voltage of the angle, from t_start.
+    kPot, // the potentiometer's gain [V/rad]
     rStep: command === "step" ? kPot * Number($("angle").value) / DEG : 0,
     tStart: Number($("t_start").value),
     samples: { t: [] },
@@ -441,8 +442,7 @@ function drawPlate(run) {
   const k = exaggeration(run, wmaxRun);
   const theta = run.samples.theta_hub[run.samples.theta_hub.length - 1];
   const ref = run.samples["controller.reference"];
-  const [kPot] = [run.kPot || (run.kPot = page.sim.get(["controller.k_pot"])[0])];
-  const thetaRef = ref[ref.length - 1] / kPot;
+  const thetaRef = ref[ref.length - 1] / run.kPot;
 
   // Top view: the hub at the centre, the arm at the hub angle, bent in the plane of the slew by
   // the deflection of its centre line (exaggerated).

@@ -90,7 +90,7 @@ pub(crate) struct Structure {
 }
 
 /// Calls `read` with every slot `op` reads.
-fn for_each_read(op: &Op, terms: &[(f64, u32)], mut read: impl FnMut(u32)) {
+pub(super) fn for_each_read(op: &Op, terms: &[(f64, u32)], mut read: impl FnMut(u32)) {
     match *op {
         Op::Const { .. } => {}
         Op::Copy { src, .. } => read(src),

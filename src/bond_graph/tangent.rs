@@ -32,6 +32,7 @@
 
 use super::element::NonlinearLaw;
 use super::plan::{Op, NONE};
+use super::structure::for_each_read;
 
 /// Groups per sweep: sixteen doubles, four 256-bit vectors (the complete system has 15 groups:
 /// one sweep; the chains of additions of four vectors overlap).
@@ -109,29 +110,6 @@ impl TangentSweeps {
     }
 }
 
-/// Calls `read` with every slot `op` reads.
-fn reads(op: &Op, terms: &[(f64, u32)], mut read: impl FnMut(u32)) {
-    match *op {
-        Op::Const { .. } => {}
-        Op::Copy { src, .. } => read(src),
-        Op::Lin { start, end, .. } => {
-            for &(_, s) in &terms[start as usize..end as usize] {
-                read(s);
-            }
-        }
-        Op::Law { arg, m, .. } => {
-            read(arg);
-            if m != NONE {
-                read(m);
-            }
-        }
-        Op::Mul { a, b, .. } | Op::Div { a, b, .. } => {
-            read(a);
-            read(b);
-        }
-    }
-}
-
 /// Builds the value pass and the sweeps for the groups `colours` (their columns are the seeds)
 /// with the entries `row_column` (per group, the column each row delivers, or `NONE`) and the
 /// operations each group's pass runs, `group_ops` (plan order, subsets of `deriv_ops`, each
@@ -190,7 +168,7 @@ pub(super) fn build(
         let mut ops = Vec::new();
         for (op, _) in deriv_ops.iter().zip(&in_sweep).filter(|(_, &i)| i) {
             let mut any = false;
-            reads(op, terms, |s| any |= reached[s as usize]);
+            for_each_read(op, terms, |s| any |= reached[s as usize]);
             if !any {
                 continue;
             }

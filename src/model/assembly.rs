@@ -88,7 +88,7 @@ impl Assembled {
     pub fn new(p: &Parameters) -> Result<Self, String> {
         let graph = bond_graph(p)?;
         let mut compiled = graph.compile().map_err(|e| e.to_string())?;
-        let position = |name: &str| VARIABLES.iter().position(|v| v.name == name);
+        let position = super::variables::position;
         let input_index = compiled
             .input_names()
             .iter()

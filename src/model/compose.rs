@@ -10,7 +10,7 @@ use crate::fragments::{
 };
 
 use super::parameters::{HydraulicsModel, Parameters};
-use super::variables::VARIABLES;
+use super::variables::position;
 
 /// The bond graph of the whole model for a parameter set.
 ///
@@ -160,10 +160,7 @@ pub fn write_plate_frequencies(p: &Parameters, values: &mut Values) -> Result<()
     let modes = plate_modes(p)?;
     for i in 0..PLATE_FREQUENCIES {
         let name = format!("plate.f[{}]", i + 1);
-        let index = VARIABLES
-            .iter()
-            .position(|v| v.name == name)
-            .ok_or_else(|| format!("{name} is not an FMU variable"))?;
+        let index = position(&name).ok_or_else(|| format!("{name} is not an FMU variable"))?;
         values.set_real(index, modes.get(i).map_or(0.0, |m| m.f_hz));
     }
     Ok(())

@@ -423,10 +423,8 @@ pub fn set_by_name(values: &mut Values, name: &str, text: &str) -> Result<(), St
 /// variable's type and declared range (the model's own checks, [`check`], come on top): the one
 /// reader of settings as text, for `--set`, the presets and the browser build.
 pub fn parse_setting(name: &str, text: &str) -> Result<(usize, Value), String> {
-    let index = VARIABLES
-        .iter()
-        .position(|v| v.name == name)
-        .ok_or_else(|| format!("unknown variable '{name}'"))?;
+    let index =
+        super::variables::position(name).ok_or_else(|| format!("unknown variable '{name}'"))?;
     let var = &VARIABLES[index];
     if !var.settable_before_initialization() {
         return Err(format!("'{name}' is not a parameter or input"));

@@ -196,7 +196,7 @@ pub fn apply(values: &mut Values, name: &str) -> Result<(), String> {
 /// point for a Real), for importers such as the Python tests.
 pub fn presets_json() -> serde_json::Value {
     let typed = |name: &str, v: &str| -> serde_json::Value {
-        let kind = VARIABLES.iter().find(|x| x.name == name).map(|x| x.kind);
+        let kind = super::variables::position(name).map(|i| VARIABLES[i].kind);
         match (kind, v) {
             (_, "true") => true.into(),
             (_, "false") => false.into(),

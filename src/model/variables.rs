@@ -6,3 +6,8 @@
 use crate::fmu::variables::{Causality, EnumerationType, Item, Kind, Variability, Variable};
 
 include!(concat!(env!("OUT_DIR"), "/variables.rs"));
+
+/// The position in [`VARIABLES`] of the variable named `name`.
+pub fn position(name: &str) -> Option<usize> {
+    VARIABLES.iter().position(|v| v.name == name)
+}

@@ -25,7 +25,7 @@ use crate::fragments::plate::PlateModel;
 use crate::fragments::validity::Monitor;
 use crate::model::parameters::parse_setting;
 use crate::model::presets;
-use crate::model::variables::VARIABLES;
+use crate::model::variables::{position, VARIABLES};
 use crate::model::HydraulicSlewingPlate;
 
 #[cfg(target_family = "wasm")]
@@ -81,6 +81,10 @@ struct DeflectionGrid {
     ny: usize,
     /// `(nx ny) x n_plate`: row `i + nx j` is the point `(a i / (nx - 1), b j / (ny - 1))`.
     map: DMatrix<f64>,
+    /// The value references of the plate's coordinates (`x.plate.C[k].q`), read to draw it.
+    coordinates: Vec<u32>,
+    /// Their values (allocated once).
+    eta: Vec<f64>,
 }
 
 /// One simulation: a co-simulation instance of the model, set up from a preset and settings,
@@ -97,19 +101,12 @@ pub struct Simulation {
     /// The preset and settings it was made from, for [`Simulation::reset`].
     preset: String,
     settings: Vec<(String, String)>,
-    /// The value references of the plate's coordinates (`x.plate.C[k].q`), read to draw it.
-    plate_coordinates: Vec<u32>,
     grid: Option<DeflectionGrid>,
-    /// Scratch for the coordinates (allocated once).
-    eta: Vec<f64>,
 }
 
 /// The value reference of the variable `name`.
 pub fn value_reference(name: &str) -> Option<u32> {
-    VARIABLES
-        .iter()
-        .find(|v| v.name == name)
-        .map(|v| v.value_reference)
+    position(name).map(|i| VARIABLES[i].value_reference)
 }
 
 impl Simulation {
@@ -134,9 +131,7 @@ impl Simulation {
             inbox,
             preset: preset.to_string(),
             settings: settings.to_vec(),
-            plate_coordinates: Vec::new(),
             grid: None,
-            eta: Vec::new(),
         };
         sim.start()?;
         Ok(sim)
@@ -165,9 +160,6 @@ impl Simulation {
         self.call("create", |i| i.setup_experiment(None, 0.0, None))?;
         self.call("create", |i| i.enter_initialization_mode())?;
         self.call("create", |i| i.exit_initialization_mode())?;
-        self.plate_coordinates = (1..)
-            .map_while(|k| value_reference(&format!("x.plate.C[{k}].q")))
-            .collect();
         self.grid = None;
         Ok(())
     }
@@ -325,22 +317,20 @@ impl Simulation {
                 out.len()
             ));
         }
-        let grid = match self.grid.take() {
+        let mut grid = match self.grid.take() {
             Some(g) if g.nx == nx && g.ny == ny => g,
             _ => self.deflection_grid(nx, ny)?,
         };
-        let n = grid.map.ncols();
-        self.eta.resize(n, 0.0);
-        let vrs = std::mem::take(&mut self.plate_coordinates);
-        let mut eta = std::mem::take(&mut self.eta);
-        let read = self.get_reals(&vrs[..n], &mut eta);
-        (self.plate_coordinates, self.eta) = (vrs, eta);
-        read?;
-        for (k, w) in out.iter_mut().enumerate() {
-            *w = (0..n).map(|c| grid.map[(k, c)] * self.eta[c]).sum();
+        let read = self.get_reals(&grid.coordinates, &mut grid.eta);
+        if read.is_ok() {
+            for (k, w) in out.iter_mut().enumerate() {
+                *w = (0..grid.eta.len())
+                    .map(|c| grid.map[(k, c)] * grid.eta[c])
+                    .sum();
+            }
         }
         self.grid = Some(grid);
-        Ok(())
+        read
     }
 
     fn deflection_grid(&self, nx: usize, ny: usize) -> Result<DeflectionGrid, String> {
@@ -353,10 +343,13 @@ impl Simulation {
         let (model, displacement) = PlateModel::with_displacements(p)?;
         let first = model.first_plate();
         let n = model.dim() - first;
-        if n > self.plate_coordinates.len() {
+        let declared: Vec<u32> = (1..)
+            .map_while(|k| value_reference(&format!("x.plate.C[{k}].q")))
+            .collect();
+        if n > declared.len() {
             return Err(format!(
                 "deflection: the plate has {n} coordinates, the variables show the first {}",
-                self.plate_coordinates.len()
+                declared.len()
             ));
         }
         let mut map = DMatrix::zeros(nx * ny, n);
@@ -370,7 +363,13 @@ impl Simulation {
                 }
             }
         }
-        Ok(DeflectionGrid { nx, ny, map })
+        Ok(DeflectionGrid {
+            nx,
+            ny,
+            map,
+            coordinates: declared[..n].to_vec(),
+            eta: vec![0.0; n],
+        })
     }
 }
 

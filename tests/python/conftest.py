@@ -85,13 +85,19 @@ def preset(name, **extra):
     return {**_presets()[name], **extra}
 
 
-def apply_preset(slave, md, name):
-    """Sets a preset on a low-level instance (before initialisation), each value with its type."""
+def set_values(slave, md, values):
+    """Sets `values` ({name: value}) on a low-level instance, each with its variable's type (an
+    Enumeration as an Integer, as FMI 2.0 does)."""
     kinds = {v.name: (v.type, v.valueReference) for v in md.modelVariables}
-    for var, value in _presets()[name].items():
+    for var, value in values.items():
         kind, ref = kinds[var]
         {"Real": slave.setReal, "Integer": slave.setInteger, "Enumeration": slave.setInteger,
          "Boolean": slave.setBoolean}[kind]([ref], [value])
+
+
+def apply_preset(slave, md, name):
+    """Sets a preset on a low-level instance (before initialisation), each value with its type."""
+    set_values(slave, md, _presets()[name])
 
 
 class Recorder:

@@ -9,10 +9,7 @@ on both sides: only libm's last bits may differ, the browser's WebAssembly build
 own libm and the native build the system's); which presets agree to the bit is printed and
 written in docs/web.md from bench/web_speed.py's run."""
 
-import functools
-import http.server
 import json
-import threading
 import zipfile
 
 import numpy as np
@@ -20,20 +17,11 @@ import pytest
 
 from selenium.webdriver.common.by import By
 from selenium.webdriver.common.keys import Keys
-from selenium.webdriver.support.ui import Select, WebDriverWait
+from selenium.webdriver.support.ui import WebDriverWait
 
 from conftest import ROOT, page_requests
 from figures import assert_png
-from webpage import AGREEMENT, chrome, deviation, native, wait_for_run
-
-def choose_preset(driver, preset):
-    """Chooses a preset, which starts a new run (the Run button when it is already chosen)."""
-    select = Select(driver.find_element(By.ID, "preset"))
-    if select.first_selected_option.get_attribute("value") == preset:
-        driver.find_element(By.ID, "run").click()
-    else:
-        select.select_by_value(preset)
-
+from webpage import AGREEMENT, choose_preset, chrome, deviation, native, serve, wait_for_run
 
 def go_fast(driver):
     driver.find_element(By.CSS_SELECTOR, 'input[name="speed"][value="fast"]').click()
@@ -166,16 +154,9 @@ def test_no_request_leaves_the_machine(browser, first_run):
     assert page_requests(browser["net_log"]) == []
 
 
-class QuietHandler(http.server.SimpleHTTPRequestHandler):
-    def log_message(self, *args):
-        pass
-
-
 def test_served_over_http_the_page_fetches_the_wasm_and_gives_the_same_run(page_dir, tmp_path,
                                                                             fmu_path):
-    handler = functools.partial(QuietHandler, directory=str(page_dir))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
+    server = serve(page_dir)
     driver = chrome(tmp_path)
     try:
         driver.get(f"http://127.0.0.1:{server.server_port}/index.html?speed=fast")

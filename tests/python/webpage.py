@@ -3,14 +3,17 @@ chromium driven by Selenium, the page's run as the page keeps it, the same run t
 native FMU, and their comparison."""
 
 import functools
+import http.server
 import shutil
+import threading
 
 import numpy as np
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
-from selenium.webdriver.support.ui import WebDriverWait
+from selenium.webdriver.common.by import By
+from selenium.webdriver.support.ui import Select, WebDriverWait
 
-from conftest import apply_preset, make_slave
+from conftest import apply_preset, make_slave, set_values
 
 STEP = 1e-3
 # The outputs the page records at every communication point (RECORDED in docs/web/page.js).
@@ -61,23 +64,20 @@ def native(fmu_path, run):
     outputs at every point."""
     request = run["request"]
     md, unzipped = _md_and_dir(fmu_path)
-    kinds = {v.name: (v.type, v.valueReference) for v in md.modelVariables}
+    vr = {v.name: v.valueReference for v in md.modelVariables}
     slave = make_slave(md, unzipped, name="native")
     try:
         if request["preset"]:
             apply_preset(slave, md, request["preset"])
-        for name, value in request["settings"].items():
-            kind, ref = kinds[name]
-            {"Real": slave.setReal, "Integer": slave.setInteger, "Enumeration": slave.setInteger,
-             "Boolean": slave.setBoolean}[kind]([ref], [value])
+        set_values(slave, md, request["settings"])
         slave.setupExperiment(startTime=0.0)
         slave.enterInitializationMode()
         slave.exitInitializationMode()
-        refs = [kinds[n][1] for n in RECORDED]
+        refs = [vr[n] for n in RECORDED]
         rows = [slave.getReal(refs)]
         t = 0.0
         for r in run["inputs"]:
-            slave.setReal([kinds["r"][1]], [r])
+            slave.setReal([vr["r"]], [r])
             slave.doStep(t, STEP)
             t += STEP  # the FMU's own time, as the page reads it (the same sum of steps)
             rows.append(slave.getReal(refs))
@@ -98,3 +98,26 @@ def deviation(page_samples, native_rows):
         diff = np.max(np.abs(p - n))
         out[name] = (diff / span if span > 0 else diff, bool(np.array_equal(p, n)))
     return out
+
+
+def choose_preset(driver, preset):
+    """Chooses a preset, which starts a new run (the Run button when it is already chosen)."""
+    select = Select(driver.find_element(By.ID, "preset"))
+    if select.first_selected_option.get_attribute("value") == preset:
+        driver.find_element(By.ID, "run").click()
+    else:
+        select.select_by_value(preset)
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+def serve(directory):
+    """A static HTTP server of `directory` on 127.0.0.1 (a free port) in a thread; call
+    shutdown() when done."""
+    handler = functools.partial(_QuietHandler, directory=str(directory))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
