@@ -124,6 +124,72 @@ fn forms_of_the_nonaffine_rows_are_the_plans_values() {
     assert!(presets_with_rows >= 3, "{presets_with_rows} presets");
 }
 
+/// The forms of a communication point (the outputs and rows that are not affine) give the
+/// plan's values to rounding: the same outputs and rows, each within 1e-12 of its largest
+/// magnitude over the points, on every preset with such rows.
+#[test]
+fn forms_of_a_communication_point_are_the_plans_values() {
+    let mut presets_with_rows = 0;
+    for preset in presets::PRESETS {
+        let system = Assembled::new(&parameters(preset.name)).unwrap();
+        let m = system.compiled();
+        if m.nonaffine_rows().is_empty() {
+            continue;
+        }
+        presets_with_rows += 1;
+        let forms = m.nonaffine_point_forms();
+        let mut pts = points(&system, 20, 0.1, 11);
+        pts.extend(points(&system, 20, 1.0, 13));
+        // (output, value) and (row, value) as each reports them, outputs first.
+        let mut plan = Vec::new();
+        let mut by_forms = Vec::new();
+        for (x, u) in &pts {
+            let named = |names: &[String], v: &mut Vec<(String, f64)>, k: usize, value| {
+                v.push((names[k].clone(), value))
+            };
+            let (mut a, mut a_rows, mut b, mut b_rows) = (vec![], vec![], vec![], vec![]);
+            m.for_each_nonaffine_output_and_derivative(
+                x,
+                u,
+                |k, v| named(m.output_names(), &mut a, k, v),
+                |i, v| named(m.state_names(), &mut a_rows, i, v),
+            );
+            forms.for_each(
+                m,
+                x,
+                u,
+                |k, v| named(m.output_names(), &mut b, k, v),
+                |i, v| named(m.state_names(), &mut b_rows, i, v),
+            );
+            a.extend(a_rows);
+            b.extend(b_rows);
+            let names = |v: &[(String, f64)]| v.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+            assert_eq!(names(&a), names(&b), "{}", preset.name);
+            assert_eq!(
+                a.len(),
+                m.nonaffine_outputs().len() + m.nonaffine_rows().len()
+            );
+            plan.push(a);
+            by_forms.push(b);
+        }
+        for i in 0..plan[0].len() {
+            let scale = plan.iter().fold(0.0_f64, |s, a| s.max(a[i].1.abs()));
+            assert!(scale.is_finite(), "{}: {}", preset.name, plan[0][i].0);
+            for (k, (a, b)) in plan.iter().zip(&by_forms).enumerate() {
+                assert!(
+                    (a[i].1 - b[i].1).abs() <= 1e-12 * scale,
+                    "{}: {} at point {k}: plan {:e}, forms {:e}",
+                    preset.name,
+                    a[i].0,
+                    a[i].1,
+                    b[i].1
+                );
+            }
+        }
+    }
+    assert!(presets_with_rows >= 3, "{presets_with_rows} presets");
+}
+
 /// The forms of the affine rows' and outputs' offsets give the plan's `f_i(0, u)` and
 /// `y_k(0, u)` to rounding: within 1e-12 of the largest magnitude over the inputs tried, on
 /// every preset.

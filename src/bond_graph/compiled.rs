@@ -387,6 +387,24 @@ impl CompiledModel {
         })
     }
 
+    /// The outputs and rows of [`CompiledModel::for_each_nonaffine_output_and_derivative`] as
+    /// sparse linear forms ([`super::PointForms`]): the same values to rounding, with a few dot
+    /// products instead of a pass through the plan.
+    pub fn nonaffine_point_forms(&self) -> super::PointForms {
+        let st = &self.structure;
+        let outputs: Vec<(u32, u32)> = st
+            .nonaffine_outputs
+            .iter()
+            .map(|&k| (k, self.output_slots[k as usize]))
+            .collect();
+        let rows: Vec<(u32, u32)> = st
+            .nonaffine_rows
+            .iter()
+            .map(|&i| (i, self.deriv_slots[i as usize]))
+            .collect();
+        super::PointForms::new(self, &st.nonaffine_point_ops, &outputs, &rows)
+    }
+
     /// The affine outputs at x = 0, `y_k(0, u)`, into their places in `y` (the others left as
     /// they are): the offsets of `y_k = C_k x + y_k(0, u)`.
     pub fn affine_output_offsets(&self, u: &[f64], y: &mut [f64]) {

@@ -199,6 +199,17 @@ impl NonaffineForms {
         u: &[f64],
         out: &mut [f64],
     ) {
+        self.evaluate_each(m, x, u, |i, v| out[i as usize] = v);
+    }
+
+    /// [`NonaffineForms::evaluate`], each target's value given to `each(index, value)`.
+    fn evaluate_each(
+        &self,
+        m: &CompiledModel,
+        x: Option<&[f64]>,
+        u: &[f64],
+        mut each: impl FnMut(u32, f64),
+    ) {
         let n = self.known - u.len();
         WS.with(|ws| {
             let mut ws = ws.borrow_mut();
@@ -228,8 +239,67 @@ impl NonaffineForms {
                 };
             }
             for (i, f) in &self.rows {
-                out[*i as usize] = dot(w, f);
+                each(*i, dot(w, f));
             }
         })
+    }
+}
+
+/// The outputs and the rows of `f` that are not affine in x, as forms (see the module
+/// documentation): what a communication point computes at once when the rest is affine.
+/// [`PointForms::for_each`] gives the values of
+/// [`CompiledModel::for_each_nonaffine_output_and_derivative`] to rounding, with a few dot
+/// products per nonlinear operation instead of a pass through the operations they need.
+#[derive(Clone, Debug, Default)]
+pub struct PointForms {
+    /// Targets below `outputs` are the outputs; the others the rows, offset by `outputs`.
+    forms: NonaffineForms,
+    outputs: u32,
+}
+
+impl PointForms {
+    /// The forms of `m`'s outputs that are not affine (`(output, slot)`) and of its rows that
+    /// are not (`(row, slot)`), through `ops`, the operations they need.
+    pub(super) fn new(
+        m: &CompiledModel,
+        ops: &[Op],
+        outputs: &[(u32, u32)],
+        rows: &[(u32, u32)],
+    ) -> Self {
+        let n_outputs = m.n_outputs() as u32;
+        let targets: Vec<(u32, u32)> = outputs
+            .iter()
+            .copied()
+            .chain(rows.iter().map(|&(i, s)| (n_outputs + i, s)))
+            .collect();
+        PointForms {
+            forms: NonaffineForms::new(m, ops, &targets),
+            outputs: n_outputs,
+        }
+    }
+
+    /// Calls `output(k, y_k)` for every output that is not affine and `derivative(i, dx_i/dt)`
+    /// for every row that is not, at the states `x` and inputs `u` of `m`, the model the forms
+    /// were made from.
+    pub fn for_each(
+        &self,
+        m: &CompiledModel,
+        x: &[f64],
+        u: &[f64],
+        mut output: impl FnMut(usize, f64),
+        mut derivative: impl FnMut(usize, f64),
+    ) {
+        assert_eq!(
+            x.len() + u.len(),
+            self.forms.known,
+            "state and input lengths"
+        );
+        self.forms.evaluate_each(m, Some(x), u, |i, v| {
+            if i < self.outputs {
+                output(i as usize, v);
+            } else {
+                derivative((i - self.outputs) as usize, v);
+            }
+        });
     }
 }

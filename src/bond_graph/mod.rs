@@ -123,6 +123,6 @@ pub use element::{
 };
 pub use energy::PowerBalance;
 pub use error::BondGraphError;
-pub use forms::NonaffineForms;
+pub use forms::{NonaffineForms, PointForms};
 pub use graph::BondGraph;
 pub use linearization::Linearization;

@@ -11,7 +11,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{AffineOffsets, CompiledModel, NonaffineForms};
+use crate::bond_graph::{AffineOffsets, CompiledModel, NonaffineForms, PointForms};
 
 /// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
 /// as (column, value).
@@ -130,6 +130,8 @@ pub(super) struct Affine {
     pub(super) partial: bool,
     /// The rows that are not affine as forms over the states, inputs and nonlinear results.
     nonaffine: NonaffineForms,
+    /// The outputs and rows that are not affine, as a communication point computes them.
+    pub(super) point: PointForms,
     /// The offsets `f(0, u)` and `y(0, u)` as forms over the inputs and nonlinear results.
     offsets: AffineOffsets,
     /// `f(0, u)` at the held inputs.
@@ -215,6 +217,11 @@ impl Affine {
                 compiled.nonaffine_forms()
             } else {
                 NonaffineForms::default()
+            },
+            point: if partial {
+                compiled.nonaffine_point_forms()
+            } else {
+                PointForms::default()
             },
             offsets: compiled.affine_offset_forms(),
             offset: vec![0.0; jac_rows],

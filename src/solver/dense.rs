@@ -84,8 +84,13 @@ impl DenseInverse {
 
     /// Solves M x = rhs in place (`scratch` of length n is overwritten).
     pub fn solve(&self, rhs: &mut [f64], scratch: &mut [f64]) {
-        product(&self.inv, self.n, None, rhs, scratch);
+        self.apply(rhs, scratch);
         rhs.copy_from_slice(&scratch[..self.n]);
+    }
+
+    /// x = M⁻¹ b into `x` (`b` and `x` of length n).
+    pub fn apply(&self, b: &[f64], x: &mut [f64]) {
+        product(&self.inv, self.n, None, b, x);
     }
 }
 

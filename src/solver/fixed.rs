@@ -10,7 +10,9 @@
 //!
 //! * one f evaluation at the step's start and one Jacobian (for a system with a constant
 //!   Jacobian, the kept one: see [`OdeSystem::constant_jacobian`]),
-//! * one factorisation of W = I/(hγ) − J (for a constant J, a kept one while h is unchanged),
+//! * one factorisation of W = I/(hγ) − J (for a constant J, a kept one while h is unchanged;
+//!   for a J that varies in at most half its rows, only the varying rows' Schur complement,
+//!   the constant rows eliminated once per step size: [`VaryingRows`](super::linalg::VaryingRows)),
 //! * seven further f evaluations and eight solves with W (Rodas5P's eight stages),
 //!
 //! and nothing else: no error test, no rejection, no step-size control, no allocation once warm.

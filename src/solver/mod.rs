@@ -156,6 +156,14 @@ pub trait OdeSystem {
     fn jacobian_varying(&self, _t: f64, _x: &[f64], _jac: &mut DMatrix<f64>) -> bool {
         false
     }
+    /// For each row i, the columns j whose entry may vary with (t, x) under the stamp of
+    /// [`OdeSystem::jacobian_constant_part`] (the others are the constant part); a row with
+    /// none is constant. With it the fixed-step driver ([`Method::Rodas5PFixed`]) eliminates
+    /// the constant rows of its iteration matrix once and factorises only the varying rows'
+    /// Schur complement at every step ([`linalg::VaryingRows`]). Default `None`.
+    fn jacobian_varying_pattern(&self) -> Option<&[Vec<u32>]> {
+        None
+    }
     /// Where J may be nonzero: for each row i, the columns j for which ∂f_i/∂x_j is not zero
     /// at some point (a structural pattern, such as a compiled model knows; the diagonal need
     /// not be listed). With it, the block partition of the iteration matrices ([`linalg`]) is

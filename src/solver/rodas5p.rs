@@ -28,7 +28,9 @@
 //! # Solves
 //!
 //! Each stage solves with W. A varying J is factorised at every step with the structured LU of
-//! [`super::linalg`]. A constant J ([`OdeSystem::constant_jacobian`]) keeps its factorisations
+//! [`super::linalg`] (by the fixed-step driver, when J varies in at most half its rows, by
+//! [`VaryingRows`]: the constant rows eliminated once per step size, the varying rows' Schur
+//! complement at every step). A constant J ([`OdeSystem::constant_jacobian`]) keeps its factorisations
 //! for the step sizes in use, and for a system of up to 128 states (`step_map::MAX_DIM`) each one
 //! comes with W⁻¹ made from it (n solves, once per factorisation): the eight solves of a step
 //! are then dense products (`dense::DenseInverse`), which on the LOES with the plate (blocks of one or
@@ -48,9 +50,9 @@ use super::common::{
 use super::dense::DenseInverse;
 use super::integrator::{front_factorisation, Integrator};
 use super::jacobian;
-use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache};
+use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache, VaryingRows};
 use super::step_map;
-use super::{OdeSystem, SolverError, SolverErrorKind};
+use super::{Method, OdeSystem, SolverError, SolverErrorKind};
 
 /// Number of stages.
 pub const STAGES: usize = 8;
@@ -365,6 +367,20 @@ pub(crate) struct Factor {
     h: f64,
     lu: Factorisation<f64>,
     inverse: DenseInverse,
+    /// For the fixed-step driver, a J whose constant rows are kept: their elimination (see
+    /// [`KeptRows`]), which the solves use while `by_rows` (else `lu` or `inverse`).
+    rows: Option<KeptRows>,
+    by_rows: bool,
+}
+
+/// The elimination of a J's constant rows for one shift c = 1/(h γ) ([`VaryingRows`]), kept
+/// across the steps of the fixed-step driver: the constant part `stamp`
+/// ([`OdeSystem::jacobian_constant_part`]) and c it was made for, and None if its constant
+/// block was singular (the general LU then serves, without retrying at every step).
+struct KeptRows {
+    stamp: u64,
+    c: f64,
+    elimination: Option<VaryingRows>,
 }
 
 impl Factor {
@@ -373,12 +389,16 @@ impl Factor {
     fn refactor(&mut self, part: &Arc<Partition>, jac: &DMatrix<f64>, h: f64) -> bool {
         self.h = h;
         self.inverse.clear();
+        self.by_rows = false;
         factor_into(&mut self.lu, part, jac, h)
     }
 
     /// Solves W x = rhs in place.
     fn solve(&self, rhs: &mut [f64], scratch: &mut [f64]) {
-        if self.inverse.is_built() {
+        let rows = self.rows.as_ref().and_then(|k| k.elimination.as_ref());
+        if let (true, Some(rows)) = (self.by_rows, rows) {
+            rows.solve(rhs, scratch);
+        } else if self.inverse.is_built() {
             self.inverse.solve(rhs, scratch);
         } else {
             self.lu.solve(rhs, scratch);
@@ -416,6 +436,8 @@ fn factor(
         h,
         lu: Factorisation::new(Arc::clone(part)),
         inverse: DenseInverse::default(),
+        rows: None,
+        by_rows: false,
     });
     f.refactor(part, jac, h).then_some(f)
 }
@@ -487,6 +509,11 @@ fn factorise<S: OdeSystem + ?Sized>(
                 lus.extend(w.spare.take());
             }
             lus.truncate(1);
+            if integ.options.method == Method::Rodas5PFixed {
+                if let Some(done) = factorise_by_rows(integ, sys, w, lus, h) {
+                    return done;
+                }
+            }
             let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
             let ok = match lus.first_mut() {
                 Some(f) => f.refactor(part, &w.jac, h),
@@ -498,6 +525,61 @@ fn factorise<S: OdeSystem + ?Sized>(
             (h, ok)
         }
     }
+}
+
+/// For the fixed-step driver, W = I/(h γ) − J for a J that varies in at most half its rows,
+/// at the front of `lus`, by the elimination of J's constant rows kept across steps
+/// ([`VaryingRows`]): per step only the varying rows' Schur complement is factorised. The step
+/// size is a kept one within `SAME_STEP` of `h` (the integrator's saved list, so that a
+/// restored integrator rebuilds the same elimination, bit for bit). Returns the step size and
+/// false if W is singular, or None where this does not apply (no constant part held in
+/// `w.jac`, no varying pattern, too many varying rows, more than `step_map::MAX_DIM` states,
+/// or a singular constant block): the general LU then factorises.
+fn factorise_by_rows<S: OdeSystem + ?Sized>(
+    integ: &mut Integrator,
+    sys: &S,
+    w: &mut Work,
+    lus: &mut Vec<Factor>,
+    h: f64,
+) -> Option<(f64, bool)> {
+    let stamp = sys.jacobian_constant_part()?;
+    let varying = sys.jacobian_varying_pattern()?;
+    let n = w.jac.nrows();
+    let r = varying.iter().filter(|v| !v.is_empty()).count();
+    if w.jac_holds != Some(stamp) || n > step_map::MAX_DIM || 2 * r > n {
+        return None;
+    }
+    let h_lu = integ
+        .counted
+        .factorisation_step(h, &mut integ.stats, 0, false);
+    let c = 1.0 / (h_lu * GAMMA);
+    if lus.is_empty() {
+        lus.push(Factor {
+            h: h_lu,
+            lu: Factorisation::new(Arc::new(Partition::dense(n))),
+            inverse: DenseInverse::default(),
+            rows: None,
+            by_rows: false,
+        });
+    }
+    let f = &mut lus[0];
+    if !f
+        .rows
+        .as_ref()
+        .is_some_and(|k| k.stamp == stamp && k.c == c)
+    {
+        f.rows = Some(KeptRows {
+            stamp,
+            c,
+            elimination: VaryingRows::new(&w.jac, c, varying, sys.jacobian_pattern()),
+        });
+    }
+    let elimination = f.rows.as_mut()?.elimination.as_mut()?;
+    let ok = elimination.factor(&w.jac);
+    f.h = h_lu;
+    f.inverse.clear();
+    f.by_rows = true;
+    Some((h_lu, ok))
 }
 
 /// One step from the current point, with f0, J (and ∂f/∂t) there already in `w`: W factorised

@@ -42,6 +42,11 @@ impl OdeSystem for Assembled {
         self.constant_part.is_some() && self.compiled.jacobian_varying(x, &self.inputs, jac)
     }
 
+    fn jacobian_varying_pattern(&self) -> Option<&[Vec<u32>]> {
+        self.constant_part
+            .map(|_| self.compiled.jacobian_varying_pattern())
+    }
+
     fn jacobian_pattern(&self) -> Option<&[Vec<u32>]> {
         // The compiled plan's structural dependencies: J is zero outside them at every point.
         Some(self.compiled.jacobian_pattern())

@@ -26,8 +26,9 @@ impl Assembled {
                     }
                 }
                 if affine.partial {
-                    // The valve's outputs and rows through their part of the plan.
-                    self.compiled.for_each_nonaffine_output_and_derivative(
+                    // The valve's outputs and rows, as forms.
+                    affine.point.for_each(
+                        &self.compiled,
                         x,
                         &self.inputs,
                         |k, v| y[k] = v,
@@ -82,7 +83,7 @@ impl Assembled {
 
     /// Writes what a communication point at state `x` needs at once and leaves the rest until it
     /// is read ([`Assembled::write_on_demand`]): writes the outputs and derivatives that are not
-    /// affine (the servo valve's, from their part of the plan) and the stored energy if a
+    /// affine (the servo valve's, as forms: [`crate::bond_graph::PointForms`]) and the stored energy if a
     /// storage is nonlinear, and returns true, when the affine outputs and derivatives (and the
     /// energy of linear storages) are shown to be finite at `x` (`Affine::finite_within`,
     /// `CompiledModel::stored_energy_bound`), so that none of them can turn out infinite when
@@ -105,12 +106,9 @@ impl Assembled {
         }
         if affine.partial {
             self.write_plan_values(values, |output, derivative| {
-                self.compiled.for_each_nonaffine_output_and_derivative(
-                    x,
-                    &self.inputs,
-                    output,
-                    derivative,
-                )
+                affine
+                    .point
+                    .for_each(&self.compiled, x, &self.inputs, output, derivative)
             });
         }
         if self.energy_bound.is_none() {

@@ -37,7 +37,9 @@
 //! The module is split by job: [`Scalar`] (the entries' type), the partition's layout
 //! (`partition`) and its search ([`Partition::detect`], `detect`), the block elimination and
 //! solves ([`Factorisation`], `factorisation`), the dense LU kernels of a block (`lu`), and the
-//! cache of the last Jacobian's partition (`pattern`).
+//! cache of the last Jacobian's partition (`pattern`). [`VaryingRows`] is the other
+//! elimination, for a fixed step size whose Jacobian varies in a few rows only: the constant
+//! rows eliminated once, a small Schur complement of the varying ones at every step.
 
 // Index loops mirror the elimination formulas.
 #![allow(clippy::needless_range_loop)]
@@ -50,9 +52,11 @@ mod pattern;
 mod scalar;
 #[cfg(test)]
 mod testing;
+mod varying_rows;
 
 pub(crate) use factorisation::factor_with_fallback;
 pub use factorisation::Factorisation;
 pub use partition::Partition;
 pub(crate) use pattern::PatternCache;
 pub use scalar::Scalar;
+pub use varying_rows::VaryingRows;
