@@ -31,6 +31,12 @@
 //!
 //! The clock reads are inside every figure (reading the thread's CPU clock is a system call; its
 //! cost was not measured apart).
+//!
+//! A second table tells where the slow steps come from: the share of steps slower than 1.5 ×
+//! p50, the CPU time between successive ones, and the rate of the machine's local timer
+//! interrupts during the run. A periodic interrupt (the scheduler's tick) is handled on the
+//! running thread's time, so it lengthens one step in every tick period; the tick's rate and
+//! the slow steps' spacing show whether that is what sets p99.9 and the maximum.
 
 #[allow(dead_code)]
 #[path = "../hsp/loader.rs"]
@@ -118,6 +124,46 @@ struct Figures {
     wall_p50: f64,
     wall_p999: f64,
     wall_max: f64,
+    /// The share of the timed steps slower than [`SLOW`] × p50.
+    slow_share: f64,
+    /// The median thread CPU time from one such slow step to the next, ns (NaN for fewer than
+    /// two).
+    slow_spacing: f64,
+    /// Local timer interrupts per second of wall time over the timed steps, all processors
+    /// (`/proc/interrupts`, `LOC`; NaN where it cannot be read).
+    timer_rate: f64,
+}
+
+/// A step slower than this multiple of the median counts as slow in [`Figures::slow_share`].
+const SLOW: f64 = 1.5;
+
+/// The local timer interrupts so far, summed over the processors (`LOC` in `/proc/interrupts`).
+fn timer_interrupts() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/interrupts").ok()?;
+    let line = text.lines().find(|l| l.trim_start().starts_with("LOC:"))?;
+    Some(
+        line.split_whitespace()
+            .skip(1)
+            .map_while(|v| v.parse::<u64>().ok())
+            .sum(),
+    )
+}
+
+/// The share of `cpu` (step times in run order) slower than [`SLOW`] × `p50`, and the median
+/// CPU time between successive slow steps (NaN for fewer than two).
+fn slow_steps(cpu: &[u64], p50: f64) -> (f64, f64) {
+    let mut elapsed = 0u64;
+    let mut at = Vec::new();
+    for &c in cpu {
+        if c as f64 > SLOW * p50 {
+            at.push(elapsed);
+        }
+        elapsed += c;
+    }
+    let mut spacing: Vec<f64> = at.windows(2).map(|w| (w[1] - w[0]) as f64).collect();
+    spacing.sort_by(f64::total_cmp);
+    let median = spacing.get(spacing.len() / 2).copied().unwrap_or(f64::NAN);
+    (at.len() as f64 / cpu.len().max(1) as f64, median)
 }
 
 fn now(clock: libc::clockid_t) -> u64 {
@@ -161,16 +207,23 @@ fn settings(config: &Config) -> Result<Vec<(String, String)>, String> {
 
 /// `n` communication steps of size `h`: `input(t)` sets the inputs (untimed), then `step(t)`
 /// takes the step, timed by the thread CPU clock and the wall clock; the times of the steps
-/// after the warm-up go into `times` (CPU, wall).
+/// after the warm-up go into `times` (CPU, wall), and the rate of local timer interrupts over
+/// them into its third member.
 fn closed_loop(
     n: usize,
     h: f64,
-    times: (&mut Vec<u64>, &mut Vec<u64>),
+    times: (&mut Vec<u64>, &mut Vec<u64>, &mut f64),
     mut input: impl FnMut(f64) -> Result<(), String>,
     mut step: impl FnMut(f64) -> Result<(), String>,
 ) -> Result<(), String> {
-    let (cpu, wall) = times;
+    let (cpu, wall, timer) = times;
+    let mut timer_start = None;
+    let mut wall_start = 0;
     for k in 0..n {
+        if k == WARM_UP {
+            timer_start = timer_interrupts();
+            wall_start = now(libc::CLOCK_MONOTONIC);
+        }
         let t = k as f64 * h;
         input(t)?;
         let (c0, w0) = (
@@ -188,6 +241,11 @@ fn closed_loop(
             wall.push(w1 - w0);
         }
     }
+    let seconds = (now(libc::CLOCK_MONOTONIC) - wall_start) as f64 * 1e-9;
+    *timer = match (timer_start, timer_interrupts()) {
+        (Some(a), Some(b)) if seconds > 0.0 => (b - a) as f64 / seconds,
+        _ => f64::NAN,
+    };
     Ok(())
 }
 
@@ -198,6 +256,7 @@ fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
     let stop = n as f64 * h;
     let mut cpu = Vec::with_capacity(steps);
     let mut wall = Vec::with_capacity(steps);
+    let mut timer_rate = f64::NAN;
     let sets = settings(config)?;
     match config.version {
         Version::Fmi2 => {
@@ -217,7 +276,7 @@ fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
                 s if s <= Fmi2Status::Warning => Ok(()),
                 s => Err(format!("fmi2DoStep returned {s:?} at t = {t}")),
             };
-            closed_loop(n, h, (&mut cpu, &mut wall), input, step)?;
+            closed_loop(n, h, (&mut cpu, &mut wall, &mut timer_rate), input, step)?;
             inst.terminate()?;
         }
         Version::Fmi3 => {
@@ -239,12 +298,18 @@ fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
                 s if s <= Fmi3Status::Warning => Ok(()),
                 s => Err(format!("fmi3DoStep returned {s:?} at t = {t}")),
             };
-            closed_loop(n, h, (&mut cpu, &mut wall), input, step)?;
+            closed_loop(n, h, (&mut cpu, &mut wall, &mut timer_rate), input, step)?;
         }
     }
-    cpu.sort_unstable();
+    let mut sorted = cpu.clone();
+    sorted.sort_unstable();
+    let (slow_share, slow_spacing) = slow_steps(&cpu, quantile(&sorted, 0.5));
+    let cpu = sorted;
     wall.sort_unstable();
     Ok(Figures {
+        slow_share,
+        slow_spacing,
+        timer_rate,
         p50: quantile(&cpu, 0.5),
         p99: quantile(&cpu, 0.99),
         p999: quantile(&cpu, 0.999),
@@ -400,12 +465,16 @@ fn main() {
             match run(&fmu, c, a.steps) {
                 Ok(f) => {
                     eprintln!(
-                        "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs",
+                        "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs; slow steps \
+                         {:.2} % every {:.1} ms of CPU, {:.0} timer interrupts/s",
                         round + 1,
                         name(c),
                         f.p50 / 1e3,
                         f.p999 / 1e3,
-                        f.max / 1e3
+                        f.max / 1e3,
+                        100.0 * f.slow_share,
+                        f.slow_spacing / 1e6,
+                        f.timer_rate
                     );
                     results[k].push(f);
                 }
@@ -462,6 +531,36 @@ fn main() {
             us(&pick(|f| f.wall_p999)),
             us(&pick(|f| f.wall_max)),
             rate
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\n## The slow steps\n\n\
+         The steps slower than {SLOW} × p50 of the same run: their share of the timed steps, the \
+         median thread CPU time of the timed steps from one to the next (ms), and the rate of \
+         the local timer interrupts over the run (`LOC` of `/proc/interrupts`, all processors, \
+         per second of wall time). Slow steps that recur about every 1 / (timer rate), less the \
+         loop's own time between the steps, are the interrupts' handling, charged to the \
+         thread that was running; they reach p99.9 when they hit more than 0.1 % of the \
+         steps, that is when a step lasts more than about 0.001 / (timer rate).\n\n\
+         | plant | step | solver | call | slow steps | spacing (ms of CPU) | timer interrupts / s |\n\
+         | --- | ---: | --- | --- | ---: | ---: | ---: |"
+    );
+    for (c, figures) in configs.iter().zip(&results) {
+        let pick = |f: fn(&Figures) -> f64| figures.iter().map(f).collect::<Vec<f64>>();
+        let (share, _, _) = median_range(&pick(|f| f.slow_share));
+        let (spacing, _, _) = median_range(&pick(|f| f.slow_spacing));
+        let (timer, _, _) = median_range(&pick(|f| f.timer_rate));
+        let _ = writeln!(
+            md,
+            "| {} | {} ms | {} | {} | {:.2} % | {:.1} | {:.0} |",
+            c.plant.0,
+            c.step * 1e3,
+            c.solver.0,
+            c.version.name(),
+            100.0 * share,
+            spacing / 1e6,
+            timer
         );
     }
     print!("{md}");

@@ -28,6 +28,7 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
         "jacobian": {
             "nonzeros": nonzeros,
             "varying_entries": varying,
+            "varying_rows": m.jacobian_varying_pattern().iter().filter(|r| !r.is_empty()).count(),
             "variable_columns": names(&m.jacobian_variable_columns()),
             "constant": m.jacobian_is_constant(),
             "passes_full": m.jacobian_colours(),
@@ -77,10 +78,12 @@ pub fn text(system: &Assembled) -> String {
         m.nonaffine_point_plan_len()
     ));
     s.push_str(&format!(
-        "Jacobian   {} structural nonzeros of {}; {} vary with (x, u), in {} variable columns{}\n",
+        "Jacobian   {} structural nonzeros of {}; {} vary with (x, u), in {} rows and {} \
+         variable columns{}\n",
         j["nonzeros"],
         n * n,
         j["varying_entries"],
+        j["varying_rows"],
         variable.len(),
         if m.jacobian_is_constant() {
             " (J is constant)"
@@ -97,8 +100,8 @@ pub fn text(system: &Assembled) -> String {
         format!("passes     {full}, once per parameter set\n")
     } else {
         format!(
-            "passes     {full} for every entry; {} passes, {} operations in all, once the \
-             constant entries are fixed (each step)\n",
+            "passes     {full} for every entry; once the constant entries are fixed, each \
+             step: one value pass and tangent sweeps over {} column groups, {} operations in all\n",
             m.variable_jacobian_colours(),
             m.variable_jacobian_ops()
         )

@@ -55,6 +55,10 @@ pub struct VaryingRows {
     q: DenseInverse,
     /// −X = −M_PP⁻¹ M_PR, column-major p × r.
     minus_x: Vec<f64>,
+    /// −X again, row-major (p × r): the factorisation's sums run along its rows.
+    minus_x_rows: Vec<f64>,
+    /// A row of S under construction (r).
+    s_row: Vec<f64>,
     /// LU of S (r × r, column-major) and its interchanges.
     s: Vec<f64>,
     piv: Vec<usize>,
@@ -127,6 +131,12 @@ impl VaryingRows {
             q.apply(&column, &mut minus_x[b * p..(b + 1) * p]);
         }
         let n_couplings = couplings.len();
+        let mut minus_x_rows = vec![0.0; p * r];
+        for k in 0..p {
+            for b in 0..r {
+                minus_x_rows[k * r + b] = minus_x[k + b * p];
+            }
+        }
         Some(VaryingRows {
             c,
             rows,
@@ -136,6 +146,8 @@ impl VaryingRows {
             coupling_values: vec![0.0; n_couplings],
             q,
             minus_x,
+            minus_x_rows,
+            s_row: vec![0.0; r],
             s: vec![0.0; r * r],
             piv: vec![0; r],
         })
@@ -155,7 +167,7 @@ impl VaryingRows {
     /// was made from (only its varying rows are read): the Schur complement S and its LU.
     /// False if S, and so M, is singular.
     pub fn factor(&mut self, jac: &DMatrix<f64>) -> bool {
-        let (p, r) = (self.kept.len(), self.rows.len());
+        let r = self.rows.len();
         for (a, &i) in self.rows.iter().enumerate() {
             let span = self.coupling_start[a]..self.coupling_start[a + 1];
             for (v, &(_, j)) in self.coupling_values[span.clone()]
@@ -165,13 +177,25 @@ impl VaryingRows {
                 *v = jac[(i, j as usize)];
             }
         }
-        // S_ab = M_{R_a R_b} − Σ_k M_{R_a, P_k} X_{k b} = c δ_ab − J_{R_a R_b} − Σ_k J_{R_a P_k} (−X)_{k b}.
-        for (b, &j) in self.rows.iter().enumerate() {
-            let minus_x = &self.minus_x[b * p..(b + 1) * p];
-            for (a, &i) in self.rows.iter().enumerate() {
-                let sum = self.coupling_dot(a, minus_x);
+        // S_ab = M_{R_a R_b} − Σ_k M_{R_a, P_k} X_{k b}
+        //      = c δ_ab − J_{R_a R_b} − Σ_k J_{R_a P_k} (−X)_{k b}, a row of S at a time: the
+        // sum over the couplings k of row a, each adding a row of −X (contiguous).
+        for (a, &i) in self.rows.iter().enumerate() {
+            self.s_row.fill(0.0);
+            let span = self.coupling_start[a]..self.coupling_start[a + 1];
+            for (&(k, _), &v) in self.couplings[span.clone()]
+                .iter()
+                .zip(&self.coupling_values[span])
+            {
+                let k = k as usize;
+                let x_row = &self.minus_x_rows[k * r..(k + 1) * r];
+                for (acc, &x) in self.s_row.iter_mut().zip(x_row) {
+                    *acc += v * x;
+                }
+            }
+            for (b, &j) in self.rows.iter().enumerate() {
                 let diagonal = if i == j { self.c } else { 0.0 };
-                self.s[a + b * r] = diagonal - jac[(i, j)] - sum;
+                self.s[a + b * r] = diagonal - jac[(i, j)] - self.s_row[b];
             }
         }
         lu_in_place(&mut self.s, r, &mut self.piv, 0.0)
