@@ -126,7 +126,8 @@ fn forms_of_the_nonaffine_rows_are_the_plans_values() {
 
 /// The forms of a communication point (the outputs and rows that are not affine) give the
 /// plan's values to rounding: the same outputs and rows, each within 1e-12 of its largest
-/// magnitude over the points, on every preset with such rows.
+/// magnitude over the points, near rest and far from it (up to 1000 times the nominals, where
+/// an explicit method's divergence takes the states), on every preset with such rows.
 #[test]
 fn forms_of_a_communication_point_are_the_plans_values() {
     let mut presets_with_rows = 0;
@@ -140,6 +141,8 @@ fn forms_of_a_communication_point_are_the_plans_values() {
         let forms = m.nonaffine_point_forms();
         let mut pts = points(&system, 20, 0.1, 11);
         pts.extend(points(&system, 20, 1.0, 13));
+        pts.extend(points(&system, 20, 10.0, 15));
+        pts.extend(points(&system, 20, 1000.0, 19));
         // (output, value) and (row, value) as each reports them, outputs first.
         let mut plan = Vec::new();
         let mut by_forms = Vec::new();

@@ -109,8 +109,8 @@ fn deviations(run: &Run, reference: &Run) -> [f64; 5] {
 /// with four, agrees with the adaptive Rodas5P at rtol 1e-10 (`solver.atol` 1e-12) to within
 /// 1e-10 of each compared output's range.
 ///
-/// The bound is the one docs/realtime.md states; `bench-latency --accuracy` measured 4.3e-12 and
-/// 4.0e-12 (bench/realtime_accuracy.md; `--nocapture` prints this run's). The reference's own
+/// The bound is the one docs/realtime.md states; `bench-latency --accuracy` measured 4.0e-12 and
+/// 5.6e-12 (bench/realtime_accuracy.md; `--nocapture` prints this run's). The reference's own
 /// error is of the order of 1e-12 of the ranges: at the FMU's default tolerances tightened to
 /// rtol 1e-8 alone it was 7.5e-8 of `p_load`'s range and hid the method's error.
 #[test]

@@ -27,7 +27,7 @@
 #                                           Apple SDK needed
 #            wasm32-unknown-unknown     the browser build (docs/web/hsp.wasm, `hsp web`)
 #   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest,
-#            selenium, and
+#            pytest-timeout, selenium, and
 #            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17;
 #            ziglang's libSystem.tbd for the macOS binaries)
 set -euo pipefail
@@ -83,7 +83,7 @@ done
 
 venv_complete() {
     [ -x .venv/bin/python ] && [ -x .venv/bin/cargo-zigbuild ] &&
-        .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, distributed, matplotlib, selenium" 2>/dev/null &&
+        .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, pytest_timeout, distributed, matplotlib, selenium" 2>/dev/null &&
         .venv/bin/python -m ziglang version >/dev/null 2>&1
 }
 if ! venv_complete; then
