@@ -36,8 +36,8 @@ fi
 
 cargo test "${test_profile[@]}" --no-fail-fast
 rust=$?
-# A test that hangs fails after 10 minutes with its name and stacks (the slowest, the Wine and
-# qemu runs of test_portable.py, take about a minute), so the other tests still run and CI ends.
+# A test that hangs fails after 10 minutes with its name and stacks, so the other tests still
+# run and CI ends (the slowest test, the qemu run of test_portable.py, takes about 11 s).
 .venv/bin/python -m pytest tests/python -q --durations=10 --timeout=600 "${pytest_skip[@]}"
 python=$?
 
