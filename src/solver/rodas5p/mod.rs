@@ -24,12 +24,13 @@
 //!
 //! Dense output (same source): with K_r = Σ_j H_rj U_j (r = 1, 2, 3) and θ = (t - t0)/h,
 //! y(θ) = (1-θ) y0 + θ (y1 + (1-θ) (K_1 + θ (K_2 + θ K_3))).
+//! (`src/solver/rodas5p/dense_output.rs`).
 //!
 //! # Solves
 //!
-//! Each stage solves with W. A varying J is factorised at every step with the structured LU of
+//! Each stage solves with W (its factorisations: `src/solver/rodas5p/factor.rs`). A varying J is factorised at every step with the structured LU of
 //! [`super::linalg`] (by the fixed-step driver, when J varies in at most half its rows, by
-//! [`VaryingRows`]: the constant rows eliminated once per step size, the varying rows' Schur
+//! [`VaryingRows`](super::linalg::VaryingRows): the constant rows eliminated once per step size, the varying rows' Schur
 //! complement at every step). A constant J ([`OdeSystem::constant_jacobian`]) keeps its factorisations
 //! for the step sizes in use, and for a system of up to 128 states (`step_map::MAX_DIM`) each one
 //! comes with W⁻¹ made from it (n solves, once per factorisation): the eight solves of a step
@@ -39,20 +40,25 @@
 // Index loops over stages and components mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use std::sync::Arc;
-
 use nalgebra::{DMatrix, DVector};
+
+mod dense_output;
+mod factor;
+
+pub(crate) use dense_output::dense;
+use dense_output::dense_coefficients;
+pub(super) use dense_output::interpolate;
+use factor::factorise;
+pub(crate) use factor::Factor;
 
 use super::common::{
     all_finite, eval, initial_step, jacobian_here, plan_step, rms, scale_into, with_kept_memory,
     NextStep, Outputs, Workspace,
 };
-use super::dense::DenseInverse;
-use super::integrator::{front_factorisation, Integrator};
+use super::integrator::Integrator;
 use super::jacobian;
-use super::linalg::{factor_with_fallback, Factorisation, Partition, PatternCache, VaryingRows};
-use super::step_map;
-use super::{Method, OdeSystem, SolverError, SolverErrorKind};
+use super::linalg::PatternCache;
+use super::{OdeSystem, SolverError, SolverErrorKind};
 
 /// Number of stages.
 pub const STAGES: usize = 8;
@@ -360,88 +366,6 @@ impl Workspace for Work {
     }
 }
 
-/// The LU of W = I/(h γ) - J for the step size `h`, and for a constant J of a small system
-/// (n ≤ [`step_map::MAX_DIM`]) its explicit inverse, with which the step's eight solves are
-/// dense products ([`DenseInverse`]).
-pub(crate) struct Factor {
-    h: f64,
-    lu: Factorisation<f64>,
-    inverse: DenseInverse,
-    /// For the fixed-step driver, a J whose constant rows are kept: their elimination (see
-    /// [`KeptRows`]), which the solves use while `by_rows` (else `lu` or `inverse`).
-    rows: Option<KeptRows>,
-    by_rows: bool,
-}
-
-/// The elimination of a J's constant rows for one shift c = 1/(h γ) ([`VaryingRows`]), kept
-/// across the steps of the fixed-step driver: the constant part `stamp`
-/// ([`OdeSystem::jacobian_constant_part`]) and c it was made for, and None if its constant
-/// block was singular (the general LU then serves, without retrying at every step).
-struct KeptRows {
-    stamp: u64,
-    c: f64,
-    elimination: Option<VaryingRows>,
-}
-
-impl Factor {
-    /// Refactorises for step size `h` in this factorisation's memory (its inverse, made from
-    /// the old factors, is dropped); false if W is singular.
-    fn refactor(&mut self, part: &Arc<Partition>, jac: &DMatrix<f64>, h: f64) -> bool {
-        self.h = h;
-        self.inverse.clear();
-        self.by_rows = false;
-        factor_into(&mut self.lu, part, jac, h)
-    }
-
-    /// Solves W x = rhs in place.
-    fn solve(&self, rhs: &mut [f64], scratch: &mut [f64]) {
-        let rows = self.rows.as_ref().and_then(|k| k.elimination.as_ref());
-        if let (true, Some(rows)) = (self.by_rows, rows) {
-            rows.solve(rhs, scratch);
-        } else if self.inverse.is_built() {
-            self.inverse.solve(rhs, scratch);
-        } else {
-            self.lu.solve(rhs, scratch);
-        }
-    }
-}
-
-/// Factorises W = I/(h γ) - J into `lu` (reusing its memory) with the partition `part` of J;
-/// false if W is singular.
-fn factor_into(
-    lu: &mut Factorisation<f64>,
-    part: &Arc<Partition>,
-    jac: &DMatrix<f64>,
-    h: f64,
-) -> bool {
-    let fac = 1.0 / (h * GAMMA);
-    factor_with_fallback(lu, part, |i, j| {
-        if i == j {
-            fac - jac[(i, j)]
-        } else {
-            -jac[(i, j)]
-        }
-    })
-}
-
-/// A factorisation of W for step size `h` (in the memory of `old` if given); None if W is
-/// singular.
-fn factor(
-    jac: &DMatrix<f64>,
-    part: &Arc<Partition>,
-    h: f64,
-    old: Option<Factor>,
-) -> Option<Factor> {
-    let mut f = old.unwrap_or_else(|| Factor {
-        h,
-        lu: Factorisation::new(Arc::clone(part)),
-        inverse: DenseInverse::default(),
-        rows: None,
-        by_rows: false,
-    });
-    f.refactor(part, jac, h).then_some(f)
-}
-
 /// J (and, for a non-autonomous system, ∂f/∂t) at the integrator's current point into `w`, with
 /// f0 = f(t, x) already in `w.f0`; an error if either is not finite.
 pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
@@ -464,122 +388,6 @@ pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
             "the Jacobian (or df/dt) is not finite at the current point",
         ))
     }
-}
-
-/// W = I/(h γ) - J for the step size `h`, at the front of `lus`, with the J that `w.jac` (or,
-/// for a constant Jacobian `stamp`, the integrator's cache) holds: for a constant J a kept
-/// factorisation if one was made for this step size (to within `SAME_STEP`) or, if `shorten`,
-/// for a step up to `SHORTER` times shorter, else a new one; for a J that changes from step to
-/// step a new one in the memory of the last. Returns the step size to take (that of the
-/// factorisation) and false if W is singular.
-fn factorise<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
-    sys: &S,
-    w: &mut Work,
-    lus: &mut Vec<Factor>,
-    stamp: Option<u64>,
-    h: f64,
-    shorten: bool,
-) -> (f64, bool) {
-    match stamp {
-        Some(_) => {
-            let h_lu = integ
-                .counted
-                .factorisation_step(h, &mut integ.stats, 1, shorten);
-            let jac = &integ.cache.jac;
-            let pattern = &mut w.pattern;
-            let ok = front_factorisation(
-                lus,
-                h_lu,
-                |f| f.h,
-                |old| {
-                    let mut f = factor(jac, pattern.partition(jac, stamp), h_lu, old)?;
-                    let n = jac.nrows();
-                    if n <= step_map::MAX_DIM {
-                        f.inverse.build(&f.lu, n, &mut w.scratch);
-                    }
-                    Some(f)
-                },
-            );
-            (h_lu, ok)
-        }
-        None => {
-            integ.stats.lu_decompositions += 1;
-            if lus.is_empty() {
-                lus.extend(w.spare.take());
-            }
-            lus.truncate(1);
-            if integ.options.method == Method::Rodas5PFixed {
-                if let Some(done) = factorise_by_rows(integ, sys, w, lus, h) {
-                    return done;
-                }
-            }
-            let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
-            let ok = match lus.first_mut() {
-                Some(f) => f.refactor(part, &w.jac, h),
-                None => {
-                    lus.extend(factor(&w.jac, part, h, None));
-                    !lus.is_empty()
-                }
-            };
-            (h, ok)
-        }
-    }
-}
-
-/// For the fixed-step driver, W = I/(h γ) − J for a J that varies in at most half its rows,
-/// at the front of `lus`, by the elimination of J's constant rows kept across steps
-/// ([`VaryingRows`]): per step only the varying rows' Schur complement is factorised. The step
-/// size is a kept one within `SAME_STEP` of `h` (the integrator's saved list, so that a
-/// restored integrator rebuilds the same elimination, bit for bit). Returns the step size and
-/// false if W is singular, or None where this does not apply (no constant part held in
-/// `w.jac`, no varying pattern, too many varying rows, more than `step_map::MAX_DIM` states,
-/// or a singular constant block): the general LU then factorises.
-fn factorise_by_rows<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
-    sys: &S,
-    w: &mut Work,
-    lus: &mut Vec<Factor>,
-    h: f64,
-) -> Option<(f64, bool)> {
-    let stamp = sys.jacobian_constant_part()?;
-    let varying = sys.jacobian_varying_pattern()?;
-    let n = w.jac.nrows();
-    let r = varying.iter().filter(|v| !v.is_empty()).count();
-    if w.jac_holds != Some(stamp) || n > step_map::MAX_DIM || 2 * r > n {
-        return None;
-    }
-    let h_lu = integ
-        .counted
-        .factorisation_step(h, &mut integ.stats, 0, false);
-    let c = 1.0 / (h_lu * GAMMA);
-    if lus.is_empty() {
-        lus.push(Factor {
-            h: h_lu,
-            lu: Factorisation::new(Arc::new(Partition::dense(n))),
-            inverse: DenseInverse::default(),
-            rows: None,
-            by_rows: false,
-        });
-    }
-    let f = &mut lus[0];
-    if !f
-        .rows
-        .as_ref()
-        .is_some_and(|k| k.stamp == stamp && k.c == c)
-    {
-        f.rows = Some(KeptRows {
-            stamp,
-            c,
-            elimination: VaryingRows::new(&w.jac, c, varying, sys.jacobian_pattern()),
-        });
-    }
-    let elimination = f.rows.as_mut()?.elimination.as_mut()?;
-    let ok = elimination.factor(&w.jac);
-    f.h = h_lu;
-    f.inverse.clear();
-    f.by_rows = true;
-    Some((h_lu, ok))
 }
 
 /// One step from the current point, with f0, J (and ∂f/∂t) there already in `w`: W factorised
@@ -713,54 +521,6 @@ fn step_body<S: OdeSystem + ?Sized>(
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += a * xi;
-    }
-}
-
-/// The dense output's three correction terms of component `i`: k_r = Σ_j H_rj U_j.
-fn corrections(u: &[Vec<f64>], i: usize) -> [f64; 3] {
-    let mut k = [0.0; 3];
-    for (r, kr) in k.iter_mut().enumerate() {
-        for j in 0..STAGES {
-            *kr += H[r][j] * u[j][i];
-        }
-    }
-    k
-}
-
-/// The order-4 continuous extension at θ ∈ [0, 1] of one component, from its values at the
-/// step's ends and its corrections.
-#[inline]
-fn extension(y0: f64, y1: f64, k: [f64; 3], theta: f64) -> f64 {
-    let t1 = 1.0 - theta;
-    t1 * y0 + theta * (y1 + t1 * (k[0] + theta * (k[1] + theta * k[2])))
-}
-
-/// Evaluate the dense output at θ into `buf` from y0, y1 and the stage vectors.
-pub(super) fn interpolate(y0: &[f64], y1: &[f64], u: &[Vec<f64>], theta: f64, buf: &mut [f64]) {
-    for i in 0..y0.len() {
-        buf[i] = extension(y0[i], y1[i], corrections(u, i), theta);
-    }
-}
-
-/// The corrections of every component into `coef` (k_0 for all components, then k_1, then
-/// k_2): the dense output of a step kept past the reported point.
-fn dense_coefficients(u: &[Vec<f64>], coef: &mut [f64]) {
-    let n = u[0].len();
-    for i in 0..n {
-        let k = corrections(u, i);
-        coef[i] = k[0];
-        coef[n + i] = k[1];
-        coef[2 * n + i] = k[2];
-    }
-}
-
-/// The dense output at θ of a kept step (see [`dense_coefficients`]) into `buf`: the same
-/// numbers as the output times of [`Integrator::advance_to_with_output`] get.
-pub(crate) fn dense(y0: &[f64], y1: &[f64], coef: &[f64], theta: f64, buf: &mut [f64]) {
-    let n = y0.len();
-    for i in 0..n {
-        let k = [coef[i], coef[n + i], coef[2 * n + i]];
-        buf[i] = extension(y0[i], y1[i], k, theta);
     }
 }
 
