@@ -1,4 +1,4 @@
-//! Measured convergence orders of Rodas5P (src/solver/rodas5p.rs) through the public API.
+//! Measured convergence orders of Rodas5P (src/solver/rodas5p/mod.rs) through the public API.
 //!
 //! One step of size h is taken with error control switched off (huge tolerances, first step
 //! = h, t_end = t0 + h); the reference is a tight Radau5 solution. Local error of an order-5

@@ -1,4 +1,4 @@
-//! Order conditions, consistency and stability of the Rodas5P tableau (src/solver/rodas5p.rs).
+//! Order conditions, consistency and stability of the Rodas5P tableau (src/solver/rodas5p/mod.rs).
 //!
 //! Rosenbrock order conditions via rooted trees (Hairer & Wanner II, Sec. IV.7): for a tree t,
 //! Φ(t) is built recursively; a vertex with exactly one child contributes the matrix
