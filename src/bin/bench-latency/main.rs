@@ -25,6 +25,10 @@
 //! sustains with a 2× margin, 1 / (2 max), of its thread CPU time; a configuration sustains its
 //! own period when that rate is at least 1 / period.
 //!
+//! With `--interrupts` it instead counts, step by step, the interrupts that reach the
+//! processor while a step runs, and times the steps without any apart; it writes
+//! `bench/latency_interrupts.md` (see [`interrupts`]).
+//!
 //! With `--accuracy` it instead compares the real-time method's results with the adaptive
 //! solver's and scans its stability, and writes `bench/realtime_accuracy.md` (see
 //! [`accuracy`]).
@@ -44,6 +48,7 @@ mod loader;
 
 mod accuracy;
 mod fmi3;
+mod interrupts;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -137,18 +142,6 @@ struct Figures {
 /// A step slower than this multiple of the median counts as slow in [`Figures::slow_share`].
 const SLOW: f64 = 1.5;
 
-/// The local timer interrupts so far, summed over the processors (`LOC` in `/proc/interrupts`).
-fn timer_interrupts() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/interrupts").ok()?;
-    let line = text.lines().find(|l| l.trim_start().starts_with("LOC:"))?;
-    Some(
-        line.split_whitespace()
-            .skip(1)
-            .map_while(|v| v.parse::<u64>().ok())
-            .sum(),
-    )
-}
-
 /// The share of `cpu` (step times in run order) slower than [`SLOW`] × `p50`, and the median
 /// CPU time between successive slow steps (NaN for fewer than two).
 fn slow_steps(cpu: &[u64], p50: f64) -> (f64, f64) {
@@ -205,27 +198,48 @@ fn settings(config: &Config) -> Result<Vec<(String, String)>, String> {
     Ok(sets)
 }
 
+/// What a run records of its timed steps: their thread CPU times and wall times (ns), the rate
+/// of local timer interrupts over them, and with a [`interrupts::Counter`] the interrupts each
+/// step's two reads enclosed.
+#[derive(Default)]
+struct Record {
+    cpu: Vec<u64>,
+    wall: Vec<u64>,
+    timer_rate: f64,
+    interrupts: Vec<u32>,
+}
+
 /// `n` communication steps of size `h`: `input(t)` sets the inputs (untimed), then `step(t)`
-/// takes the step, timed by the thread CPU clock and the wall clock; the times of the steps
-/// after the warm-up go into `times` (CPU, wall), and the rate of local timer interrupts over
-/// them into its third member.
+/// takes the step, timed by the thread CPU clock and the wall clock, and with a `counter`
+/// enclosed by two reads of the processor's interrupt count; the steps after the warm-up go
+/// into `record`.
 fn closed_loop(
     n: usize,
     h: f64,
-    times: (&mut Vec<u64>, &mut Vec<u64>, &mut f64),
+    record: &mut Record,
+    mut counter: Option<&mut interrupts::Counter>,
     mut input: impl FnMut(f64) -> Result<(), String>,
     mut step: impl FnMut(f64) -> Result<(), String>,
 ) -> Result<(), String> {
-    let (cpu, wall, timer) = times;
+    let Record {
+        cpu,
+        wall,
+        timer_rate: timer,
+        interrupts,
+    } = record;
     let mut timer_start = None;
     let mut wall_start = 0;
     for k in 0..n {
         if k == WARM_UP {
-            timer_start = timer_interrupts();
+            timer_start = interrupts::timer_interrupts();
             wall_start = now(libc::CLOCK_MONOTONIC);
         }
         let t = k as f64 * h;
         input(t)?;
+        let i0 = match counter.as_deref_mut() {
+            Some(c) => c.read()?,
+            None => 0,
+        };
         let (c0, w0) = (
             now(libc::CLOCK_THREAD_CPUTIME_ID),
             now(libc::CLOCK_MONOTONIC),
@@ -235,28 +249,44 @@ fn closed_loop(
             now(libc::CLOCK_THREAD_CPUTIME_ID),
             now(libc::CLOCK_MONOTONIC),
         );
+        let i1 = match counter.as_deref_mut() {
+            Some(c) => c.read()?,
+            None => 0,
+        };
         result?;
         if k >= WARM_UP {
             cpu.push(c1 - c0);
             wall.push(w1 - w0);
+            if counter.is_some() {
+                interrupts.push(u32::try_from(i1 - i0).unwrap_or(u32::MAX));
+            }
         }
     }
     let seconds = (now(libc::CLOCK_MONOTONIC) - wall_start) as f64 * 1e-9;
-    *timer = match (timer_start, timer_interrupts()) {
+    *timer = match (timer_start, interrupts::timer_interrupts()) {
         (Some(a), Some(b)) if seconds > 0.0 => (b - a) as f64 / seconds,
         _ => f64::NAN,
     };
     Ok(())
 }
 
-/// Runs one configuration: `steps` timed steps after the warm-up.
-fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
+/// Runs one configuration: `steps` timed steps after the warm-up, with a `counter` also
+/// counting the interrupts of each.
+fn run(
+    fmu: &Fmu,
+    config: &Config,
+    steps: usize,
+    mut counter: Option<&mut interrupts::Counter>,
+) -> Result<Record, String> {
     let n = WARM_UP + steps;
     let h = config.step;
     let stop = n as f64 * h;
-    let mut cpu = Vec::with_capacity(steps);
-    let mut wall = Vec::with_capacity(steps);
-    let mut timer_rate = f64::NAN;
+    let mut record = Record {
+        cpu: Vec::with_capacity(steps),
+        wall: Vec::with_capacity(steps),
+        timer_rate: f64::NAN,
+        interrupts: Vec::with_capacity(if counter.is_some() { steps } else { 0 }),
+    };
     let sets = settings(config)?;
     match config.version {
         Version::Fmi2 => {
@@ -276,7 +306,7 @@ fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
                 s if s <= Fmi2Status::Warning => Ok(()),
                 s => Err(format!("fmi2DoStep returned {s:?} at t = {t}")),
             };
-            closed_loop(n, h, (&mut cpu, &mut wall, &mut timer_rate), input, step)?;
+            closed_loop(n, h, &mut record, counter.as_deref_mut(), input, step)?;
             inst.terminate()?;
         }
         Version::Fmi3 => {
@@ -298,15 +328,26 @@ fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
                 s if s <= Fmi3Status::Warning => Ok(()),
                 s => Err(format!("fmi3DoStep returned {s:?} at t = {t}")),
             };
-            closed_loop(n, h, (&mut cpu, &mut wall, &mut timer_rate), input, step)?;
+            closed_loop(n, h, &mut record, counter, input, step)?;
         }
     }
+    Ok(record)
+}
+
+/// The main table's figures of a run.
+fn figures(record: Record) -> Figures {
+    let Record {
+        cpu,
+        mut wall,
+        timer_rate,
+        ..
+    } = record;
     let mut sorted = cpu.clone();
     sorted.sort_unstable();
     let (slow_share, slow_spacing) = slow_steps(&cpu, quantile(&sorted, 0.5));
     let cpu = sorted;
     wall.sort_unstable();
-    Ok(Figures {
+    Figures {
         slow_share,
         slow_spacing,
         timer_rate,
@@ -317,7 +358,7 @@ fn run(fmu: &Fmu, config: &Config, steps: usize) -> Result<Figures, String> {
         wall_p50: quantile(&wall, 0.5),
         wall_p999: quantile(&wall, 0.999),
         wall_max: quantile(&wall, 1.0),
-    })
+    }
 }
 
 /// The median of the rounds' values, and their range.
@@ -351,6 +392,17 @@ fn ratio(values: &[f64]) -> String {
     }
 }
 
+/// A configuration's row label: "plant | step | solver | call".
+fn name(c: &Config) -> String {
+    format!(
+        "{} | {} ms | {} | {}",
+        c.plant.0,
+        c.step * 1e3,
+        c.solver.0,
+        c.version.name()
+    )
+}
+
 fn cpu_model() -> String {
     std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -369,6 +421,7 @@ struct Args {
     only: Option<String>,
     out: Option<PathBuf>,
     accuracy: bool,
+    interrupts: bool,
 }
 
 fn args() -> Args {
@@ -377,6 +430,7 @@ fn args() -> Args {
         rounds: DEFAULT_ROUNDS,
         only: None,
         accuracy: false,
+        interrupts: false,
         out: Some(PathBuf::from(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/bench/latency.md"
@@ -391,8 +445,10 @@ fn args() -> Args {
             "--only" => a.only = Some(value("a name")),
             "--print" => a.out = None,
             "--accuracy" => a.accuracy = true,
+            "--interrupts" => a.interrupts = true,
             _ => panic!(
-                "unknown argument {arg}; expected --steps N, --rounds N, --only TEXT, --print or --accuracy"
+                "unknown argument {arg}; expected --steps N, --rounds N, --only TEXT, --print, \
+                 --interrupts or --accuracy"
             ),
         }
     }
@@ -447,22 +503,29 @@ fn main() {
             }
         }
     }
-    let name = |c: &Config| {
-        format!(
-            "{} | {} ms | {} | {}",
-            c.plant.0,
-            c.step * 1e3,
-            c.solver.0,
-            c.version.name()
-        )
-    };
     if let Some(only) = &a.only {
         configs.retain(|c| name(c).contains(only.as_str()));
+    }
+    if a.interrupts {
+        // Each step costs two reads of /proc/interrupts more: the complete system's
+        // configurations and the real-time mode's.
+        configs.retain(|c| c.plant.1 == presets::COMPLETE || c.solver.1 == 3);
+        let md = interrupts::report(&fmu, &configs, a.steps, a.rounds).unwrap_or_else(|e| {
+            eprintln!("{e}");
+            std::process::exit(1)
+        });
+        print!("{md}");
+        if a.out.is_some() {
+            let out = concat!(env!("CARGO_MANIFEST_DIR"), "/bench/latency_interrupts.md");
+            std::fs::write(out, &md).unwrap_or_else(|e| panic!("{out}: {e}"));
+            eprintln!("wrote {out}");
+        }
+        return;
     }
     let mut results: Vec<Vec<Figures>> = vec![Vec::new(); configs.len()];
     for round in 0..a.rounds {
         for (k, c) in configs.iter().enumerate() {
-            match run(&fmu, c, a.steps) {
+            match run(&fmu, c, a.steps, None).map(figures) {
                 Ok(f) => {
                     eprintln!(
                         "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs; slow steps \
