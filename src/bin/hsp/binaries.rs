@@ -120,12 +120,23 @@ pub enum Portability {
 
 /// Runs one build and says on stderr how long it took (docs/platforms.md quotes these times).
 pub(super) fn timed<T>(what: &str, build: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    timed_optional(what, || build().map(Some)).map(|built| built.expect("always built"))
+}
+
+/// [`timed`] for a build that a missing toolchain skips (`None`): only a made binary's time is
+/// said (the skip has its warning).
+fn timed_optional<T>(
+    what: &str,
+    build: impl FnOnce() -> Result<Option<T>, String>,
+) -> Result<Option<T>, String> {
     let start = std::time::Instant::now();
     let result = build()?;
-    eprintln!(
-        "hsp package: {what}: {:.0} s",
-        start.elapsed().as_secs_f64()
-    );
+    if result.is_some() {
+        eprintln!(
+            "hsp package: {what}: {:.0} s",
+            start.elapsed().as_secs_f64()
+        );
+    }
     Ok(result)
 }
 
@@ -141,7 +152,7 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
         return Ok(binaries);
     }
     let require_portable = portability == Portability::Required;
-    let aarch64 = timed("binaries/aarch64-linux", || {
+    let aarch64 = timed_optional("binaries/aarch64-linux", || {
         build_linux_aarch64(require_portable)
     })?;
     if let Some(path) = aarch64 {
@@ -152,7 +163,7 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
             path,
         });
     }
-    if let Some(path) = timed("binaries/win64", || build_win64(require_portable))? {
+    if let Some(path) = timed_optional("binaries/win64", || build_win64(require_portable))? {
         binaries.push(Binary {
             fmi2: Some("win64"),
             fmi3: Some("x86_64-windows"),
@@ -160,7 +171,7 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
             path,
         });
     }
-    let macos = timed("the macOS binaries", || build_macos(require_portable))?;
+    let macos = timed_optional("the macOS binaries", || build_macos(require_portable))?;
     if let Some([universal, x86_64, aarch64]) = macos {
         for (fmi2, fmi3, path) in [
             (Some("darwin64"), None, universal),
@@ -222,6 +233,20 @@ fn zigbuild_command(program: &Path, path: &std::ffi::OsStr, target: &str) -> Com
     command
 }
 
+/// What is missing when the Rust `targets` (one or more) are absent, and the command that adds them.
+pub(super) fn not_installed(targets: &[&str]) -> String {
+    let (noun, verb) = if targets.len() == 1 {
+        ("target", "is")
+    } else {
+        ("targets", "are")
+    };
+    format!(
+        "the Rust {noun} {} {verb} not installed (`rustup target add {}`)",
+        targets.join(" and "),
+        targets.join(" ")
+    )
+}
+
 /// cargo-zigbuild and the Rust `targets`, or what is missing (the FMU then lacks `what`).
 fn zig_toolchain(
     targets: &[&str],
@@ -237,11 +262,7 @@ fn zig_toolchain(
     let problem = match (&zig, absent.is_empty()) {
         (Some(_), true) => return Ok(zig),
         (None, _) => NO_ZIGBUILD.to_string(),
-        (Some(_), false) => format!(
-            "the Rust target {} is not installed (`rustup target add {}`)",
-            absent.join(" and "),
-            absent.join(" ")
-        ),
+        (Some(_), false) => not_installed(&absent),
     };
     missing(
         format!("{problem}, so the FMU gets no {what}; `bash tests/setup.sh` installs it"),
@@ -324,10 +345,8 @@ fn build_macos(require_portable: bool) -> Result<Option<[PathBuf; 3]>, String> {
     if !absent.is_empty() {
         return missing(
             format!(
-                "the Rust target {} is not installed (`rustup target add {}`), so the FMU gets \
-                 no {what}; `bash tests/setup.sh` installs it",
-                absent.join(" and "),
-                absent.join(" ")
+                "{}, so the FMU gets no {what}; `bash tests/setup.sh` installs it",
+                not_installed(&absent)
             ),
             require_portable,
         );
@@ -553,10 +572,7 @@ fn build_win64(require_portable: bool) -> Result<Option<PathBuf>, String> {
         .is_ok_and(|o| o.status.success());
     let problem = match (has_rust_target(WINDOWS_TARGET), has_linker) {
         (true, true) => None,
-        (false, _) => Some(format!(
-            "the Rust target {WINDOWS_TARGET} is not installed (`rustup target add \
-             {WINDOWS_TARGET}`)"
-        )),
+        (false, _) => Some(not_installed(&[WINDOWS_TARGET])),
         (true, false) => Some(format!(
             "the mingw-w64 linker {MINGW_GCC} is not installed (Debian: gcc-mingw-w64-x86-64)"
         )),

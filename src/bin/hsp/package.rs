@@ -3,7 +3,8 @@
 //! `binaries/win64/HydraulicSlewingPlate.dll`, `binaries/darwin64/HydraulicSlewingPlate.dylib` (one
 //! universal binary for x86-64 and arm64 Macs; where the binaries come from: [`binaries`]) and
 //! `documentation/` (the page and its figures, made by [`docpage`] from this very FMU, and the
-//! interactive page with the browser build in `documentation/web/`, see [`web`]), and the
+//! interactive page with the browser build in `documentation/web/`, see [`web`], when the
+//! toolchain has the WebAssembly target), and the
 //! ecosystem's formats ([`ecosystem`]): `extra/org.fmi-standard.fmi-ls-ref/` (the default
 //! experiment's result, the presets as SSP parameter sets) and the icon `model.png`.
 //!
@@ -52,7 +53,47 @@ pub fn ssp_path(fmi2: &Path) -> PathBuf {
 /// [`fmi3_path`]) and the example SSP system (see [`ssp_path`]), with the binaries `portability`
 /// asks for (see [`binaries`]).
 /// Returns the three paths.
+///
+/// The browser page is optional like the cross binaries: without the WebAssembly target (and
+/// without `--require-portable`) it is skipped with one warning, the FMUs carry no
+/// `documentation/web/` and `docs/web/` keeps what it has. Nothing half-written is left behind:
+/// the archives are written under temporary names, renamed when all three are complete, and
+/// removed when anything fails.
 pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3], String> {
+    let out = if Path::new(output).is_absolute() {
+        PathBuf::from(output)
+    } else {
+        root().join(output)
+    };
+    let partial = [
+        out.with_extension("fmu.partial"),
+        fmi3_path(&out).with_extension("fmu.partial"),
+        ssp_path(&out).with_extension("ssp.partial"),
+    ];
+    let result = write_all(&out, &partial, portability);
+    if result.is_err() {
+        for path in &partial {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    result
+}
+
+/// [`package_with`]'s work: `partial` holds the temporary names of the FMI 2.0 FMU, the FMI 3.0
+/// FMU and the SSP file.
+fn write_all(
+    out: &Path,
+    partial: &[PathBuf; 3],
+    portability: Portability,
+) -> Result<[String; 3], String> {
+    let with_web = portability == Portability::Required || web::available();
+    if !with_web {
+        let consequence = format!(
+            "the FMUs carry no browser page (documentation/web/) and {} is not rebuilt",
+            web::PAGE_DIR
+        );
+        eprintln!("warning: {}", web::missing_target(&consequence));
+    }
     let binaries = binaries::build(portability)?;
     let xml_path = root().join("modelDescription/modelDescription.xml");
     let xml = std::fs::read(&xml_path).map_err(|e| format!("{}: {e}", xml_path.display()))?;
@@ -68,11 +109,6 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
             files3.push((name(platform), data));
         }
     }
-    let out = if Path::new(output).is_absolute() {
-        PathBuf::from(output)
-    } else {
-        root().join(output)
-    };
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
@@ -82,9 +118,15 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
     // Write to a temporary name and rename, so that a reader never sees half an archive. The
     // documentation's figures come from running this very FMU: a first archive without them is
     // run, then the complete one is written.
-    let tmp = out.with_extension("fmu.partial");
-    write_archive(&tmp, &entries)?;
-    let docs = docpage::documentation(&tmp, &xml_text, &platforms(&entries), &platforms(&files3))?;
+    let [tmp, tmp3, tmp_ssp] = partial;
+    write_archive(tmp, &entries)?;
+    let docs = docpage::documentation(
+        tmp,
+        &xml_text,
+        &platforms(&entries),
+        &platforms(&files3),
+        with_web,
+    )?;
     // What both FMUs carry besides the model description and the binaries.
     let mut shared: Vec<(String, Vec<u8>)> = docs
         .files
@@ -93,12 +135,14 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
         .collect();
     shared.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
     // The interactive page with the browser build, in the FMUs and beside its sources.
-    let page = web::page_files()?;
-    web::write(&page, &root().join(web::PAGE_DIR))?;
-    shared.extend(
-        page.into_iter()
-            .map(|(name, bytes)| (format!("documentation/web/{name}"), bytes)),
-    );
+    if with_web {
+        let page = web::page_files()?;
+        web::write(&page, &root().join(web::PAGE_DIR))?;
+        shared.extend(
+            page.into_iter()
+                .map(|(name, bytes)| (format!("documentation/web/{name}"), bytes)),
+        );
+    }
     entries.extend(shared.iter().cloned());
 
     // FMI 3.0: its own model description, the binaries under its platform names, the same
@@ -112,20 +156,18 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
         .chain(terminals_and_icons)
         .collect();
     entries.extend(ecosystem::fmi2_only()?);
-    write_archive(&tmp, &entries)?;
-    let out3 = fmi3_path(&out);
+    write_archive(tmp, &entries)?;
+    let out3 = fmi3_path(out);
     if let Some(dir) = out3.parent() {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    let tmp3 = out3.with_extension("fmu.partial");
-    write_archive(&tmp3, &entries3)?;
-    let fmu2 = std::fs::read(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-    let ssp = ssp_path(&out);
-    let tmp_ssp = ssp.with_extension("ssp.partial");
-    write_archive(&tmp_ssp, &ecosystem::ssp::archive(fmu2)?)?;
-    std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
-    std::fs::rename(&tmp3, &out3).map_err(|e| format!("{}: {e}", out3.display()))?;
-    std::fs::rename(&tmp_ssp, &ssp).map_err(|e| format!("{}: {e}", ssp.display()))?;
+    write_archive(tmp3, &entries3)?;
+    let fmu2 = std::fs::read(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    let ssp = ssp_path(out);
+    write_archive(tmp_ssp, &ecosystem::ssp::archive(fmu2)?)?;
+    std::fs::rename(tmp, out).map_err(|e| format!("{}: {e}", out.display()))?;
+    std::fs::rename(tmp3, &out3).map_err(|e| format!("{}: {e}", out3.display()))?;
+    std::fs::rename(tmp_ssp, &ssp).map_err(|e| format!("{}: {e}", ssp.display()))?;
     Ok([
         out.display().to_string(),
         out3.display().to_string(),

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use super::binaries::{built, cargo, has_rust_target, run, target_dir, timed};
+use super::binaries::{built, cargo, has_rust_target, not_installed, run, target_dir, timed};
 use super::package::root;
 
 /// The Rust target of the browser build.
@@ -20,12 +20,24 @@ pub const PAGE_DIR: &str = "docs/web";
 /// The page's sources (in [`PAGE_DIR`]).
 const SOURCES: [&str; 4] = ["index.html", "page.js", "page.css", "hsp.js"];
 
+/// What is missing when the browser build cannot be made, what that means (`consequence`), and
+/// how to add it.
+pub fn missing_target(consequence: &str) -> String {
+    format!(
+        "{}, so {consequence}; `bash tests/setup.sh` installs it",
+        not_installed(&[TARGET])
+    )
+}
+
+/// Whether this toolchain can make the browser build.
+pub fn available() -> bool {
+    has_rust_target(TARGET)
+}
+
 /// Builds the `.wasm` and returns its bytes.
 pub fn build_wasm() -> Result<Vec<u8>, String> {
-    if !has_rust_target(TARGET) {
-        return Err(format!(
-            "the Rust target {TARGET} is missing (`rustup target add {TARGET}`; tests/setup.sh adds it)"
-        ));
+    if !available() {
+        return Err(missing_target("the browser page cannot be built"));
     }
     let path = timed("browser build (wasm32)", || {
         let mut command = Command::new(cargo());

@@ -49,10 +49,11 @@ pub fn documentation(
     xml: &str,
     platforms2: &[String],
     platforms3: &[String],
+    web: bool,
 ) -> Result<Documentation, String> {
     let work = std::env::temp_dir().join(format!("hsp-doc-{}", std::process::id()));
     std::fs::create_dir_all(&work).map_err(|e| format!("{}: {e}", work.display()))?;
-    let result = make(fmu, xml, [platforms2, platforms3], &work);
+    let result = make(fmu, xml, [platforms2, platforms3], web, &work);
     let _ = std::fs::remove_dir_all(&work);
     result
 }
@@ -61,6 +62,7 @@ fn make(
     fmu: &Path,
     xml: &str,
     platforms: [&[String]; 2],
+    web: bool,
     work: &Path,
 ) -> Result<Documentation, String> {
     let md = ModelDescription::parse(xml)?;
@@ -82,7 +84,7 @@ fn make(
         let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
         files.push((name, bytes));
     }
-    let page = page::page(&md, platforms, &summary, &bode.caption)?;
+    let page = page::page(&md, platforms, &summary, &bode.caption, web)?;
     files.insert(0, ("index.html".into(), page.into_bytes()));
     Ok(Documentation {
         files,

@@ -26,14 +26,24 @@ const EXTERNAL: &str =
     Modelica, Python) closes the loop on the outputs <code>y_pot</code>, \
     <code>theta_hub</code>, the torsion-bar torque and the accelerometers.</p>\n";
 
+/// The section on the browser page, for an FMU that carries it in `documentation/web/`.
+const WEB: &str = "<h2>Try it in the browser</h2>\n<p><a href=\"web/index.html\">The model live</a>: \
+    this FMU's model and its integrator compiled to WebAssembly, in an interactive page (in \
+    <code>documentation/web/</code> beside this page). Choose a preset, change the move, the loop \
+    gains, the torsion bar, the damping or the motor, and watch the hub, the potentiometer, the \
+    pressures and the plate bend, at real time or as fast as the browser goes. It runs offline; \
+    nothing leaves your machine.</p>\n\n";
+
 /// The page: `md` is the FMU's model description, `platforms` the `binaries/` folders of the FMI 2.0
 /// and of the FMI 3.0 FMU (both carry the page), `summary` what `hsp run` printed for the default
-/// experiment, `bode_caption` the Bode plot's caption.
+/// experiment, `bode_caption` the Bode plot's caption, `web` whether the FMU carries the browser
+/// page (`documentation/web/`; not when the toolchain lacks the WebAssembly target).
 pub fn page(
     md: &ModelDescription,
     platforms: [&[String]; 2],
     summary: &str,
     bode_caption: &str,
+    web: bool,
 ) -> Result<String, String> {
     let attr = |k: &str| escape(md.attribute(k).unwrap_or("?"));
     let model = attr("modelName");
@@ -126,6 +136,7 @@ pub fn page(
             ("me_plate_modes", &me_plate_modes.to_string()),
             ("presets", &tables::presets()),
             ("external", external),
+            ("web", if web { WEB } else { "" }),
             ("tables", &tables::variables(md)),
         ],
     )
@@ -204,11 +215,19 @@ mod tests {
             [&["linux64".into()], &["x86_64-linux".into()]],
             "summary",
             "caption",
+            true,
         )
         .unwrap();
         assert!(!page.contains("{{"), "a placeholder is left");
+        assert!(page.contains("href=\"web/index.html\""));
+        let without = page_without_web(&md);
+        assert!(!without.contains("{{") && !without.contains("web/index.html"));
         assert!(page.contains(md.attribute("guid").unwrap()));
         assert!(page.contains("<h3>Parameters</h3>"));
+    }
+
+    fn page_without_web(md: &ModelDescription) -> String {
+        page(md, [&[], &[]], "summary", "caption", false).unwrap()
     }
 
     #[test]
