@@ -31,6 +31,7 @@ mod binaries;
 mod docpage;
 mod ecosystem;
 mod info;
+mod licenses;
 mod loader;
 // The one reader of modelDescription.xml, shared with build.rs.
 #[path = "../../../tools/model_description.rs"]

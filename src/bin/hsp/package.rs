@@ -6,7 +6,9 @@
 //! interactive page with the browser build in `documentation/web/`, see [`web`], when the
 //! toolchain has the WebAssembly target), and the
 //! ecosystem's formats ([`ecosystem`]): `extra/org.fmi-standard.fmi-ls-ref/` (the default
-//! experiment's result, the presets as SSP parameter sets) and the icon `model.png`.
+//! experiment's result, the presets as SSP parameter sets) and the icon `model.png`, and the
+//! licences of the FMU and of everything compiled into it in `documentation/licenses/`
+//! ([`licenses`]).
 //!
 //! Beside it, in `fmi3/` of the same folder, the FMI 3.0 FMU: the same binaries (they export the
 //! `fmi3*` functions too) under FMI 3.0's platform names (`x86_64-linux`, `x86_64-windows`), with
@@ -22,7 +24,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::binaries::{self, Portability};
-use super::{docpage, ecosystem, web};
+use super::{docpage, ecosystem, licenses, web};
 use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
 
 pub const DEFAULT_FMU: &str = "fmu/HydraulicSlewingPlate.fmu";
@@ -134,6 +136,8 @@ fn write_all(
         .map(|(name, bytes)| (format!("documentation/{name}"), bytes))
         .collect();
     shared.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
+    let windows = binaries.iter().any(|b| b.extension == "dll");
+    shared.extend(licenses::entries(windows)?);
     // The interactive page with the browser build, in the FMUs and beside its sources.
     if with_web {
         let page = web::page_files()?;
