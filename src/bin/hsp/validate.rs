@@ -674,15 +674,32 @@ fn cannot_agree(fig9b_peaks: &[f64]) -> Result<String, String> {
             num(mode_hz(m, (3, 1))?)
         ))
     };
+    // The consistent formulation's neighbours of 56.8 Hz.
+    let consistent_below = consistent
+        .iter()
+        .filter(|m| m.1 < 56.8)
+        .map(|m| m.1)
+        .fold(0.0, f64::max);
+    let consistent_above = consistent
+        .iter()
+        .filter(|m| m.1 > 56.8)
+        .map(|m| m.1)
+        .fold(f64::INFINITY, f64::min);
     let mut s = String::new();
     let _ = writeln!(
         s,
         "- **56.8 Hz of eq. 16.** Eq. 21's diagonal stiffness gives no frequency between {} and {} \
-         Hz (`hsp modes --preset paper-eq16`); a full-energy Rayleigh–Ritz model (Kirchhoff \
-         strain energy with the ν and 2(1−ν) twist terms, coupled mass and stiffness) puts the \
-         (3,2) torsion mode there (docs/model-notes.md). The paper's formulation cannot show it.",
+         Hz (`hsp modes --preset paper-eq16`). The consistent formulation, a full-energy \
+         Rayleigh–Ritz model (Kirchhoff strain energy with the ν and 2(1−ν) twist terms, coupled \
+         mass and stiffness), puts the (3,2) torsion mode at {} Hz and has nothing between {} and \
+         {} Hz (`hsp modes --preset paper-eq16 --set plate.formulation=2`). No mode of either \
+         formulation is at 56.8 Hz; where the paper's value comes from is not known \
+         (docs/model-notes.md, item 2).",
         num(below),
-        num(above)
+        num(above),
+        num(mode_hz(&consistent, (3, 2))?),
+        num(consistent_below),
+        num(consistent_above)
     );
     let _ = writeln!(
         s,
