@@ -637,19 +637,22 @@ fn table1(
     ))
 }
 
+/// Eq. 16's frequency that no mode of the model has, Hz.
+const EQ16_UNASSIGNED: f64 = 56.8;
+
+/// The highest frequency of `modes` below `f_hz` and the lowest above it.
+fn neighbours(modes: &[((usize, usize), f64)], f_hz: f64) -> (f64, f64) {
+    let below = modes.iter().map(|m| m.1).filter(|&f| f < f_hz);
+    let above = modes.iter().map(|m| m.1).filter(|&f| f > f_hz);
+    (
+        below.fold(0.0, f64::max),
+        above.fold(f64::INFINITY, f64::min),
+    )
+}
+
 /// The cases where model and paper cannot agree, with the numbers that show why.
 fn cannot_agree(fig9b_peaks: &[f64]) -> Result<String, String> {
-    let eq16_modes = modes("paper-eq16", &[])?;
-    let below = eq16_modes
-        .iter()
-        .filter(|m| m.1 < 56.8)
-        .map(|m| m.1)
-        .fold(0.0, f64::max);
-    let above = eq16_modes
-        .iter()
-        .filter(|m| m.1 > 56.8)
-        .map(|m| m.1)
-        .fold(f64::INFINITY, f64::min);
+    let (below, above) = neighbours(&modes("paper-eq16", &[])?, EQ16_UNASSIGNED);
     let highest = fig9b_peaks.iter().copied().fold(0.0, f64::max);
     let consistent = modes("paper-eq16", &["plate.formulation=2"])?;
     let locked = modes("paper-fig10", &[])?;
@@ -674,17 +677,7 @@ fn cannot_agree(fig9b_peaks: &[f64]) -> Result<String, String> {
             num(mode_hz(m, (3, 1))?)
         ))
     };
-    // The consistent formulation's neighbours of 56.8 Hz.
-    let consistent_below = consistent
-        .iter()
-        .filter(|m| m.1 < 56.8)
-        .map(|m| m.1)
-        .fold(0.0, f64::max);
-    let consistent_above = consistent
-        .iter()
-        .filter(|m| m.1 > 56.8)
-        .map(|m| m.1)
-        .fold(f64::INFINITY, f64::min);
+    let (consistent_below, consistent_above) = neighbours(&consistent, EQ16_UNASSIGNED);
     let mut s = String::new();
     let _ = writeln!(
         s,
