@@ -11,9 +11,16 @@ FMU's message; the sweep goes on.
 The FMU's bytes are sent to every worker once (a worker plugin), and each worker extracts them once
 into its local directory, so a cluster needs no shared file system.
 
+Each run is the FMU's default experiment unless told otherwise: the stop time and the
+communication step of the model description's <DefaultExperiment> (``--stop``, ``--step``), no
+input (``--input r=1`` adds a constant 1 V to the reference), the built-in move of the command
+generator. The settings used are printed first. A settling time is reported only when the run
+shows the quantity settled (it stays in its band over the last 10 % of the run); otherwise it is
+"not settled" (an empty cell in the CSV, NaN in the rows).
+
 Runs on a LocalCluster by default (``--workers N``), or on any running scheduler
-(``--scheduler tcp://host:8786``). Writes a CSV (``--out``) and, with ``--plot METRIC``, a picture
-of one metric against one or two swept parameters.
+(``--scheduler tcp://host:8786``). Prints a table of the points, writes a CSV (``--out``) and, with
+``--plot METRIC``, a picture of one metric against one or two swept parameters.
 
 Example:
 
@@ -75,12 +82,16 @@ def extract(fmu_bytes: bytes, directory: str) -> str:
     return target
 
 
+#: The tail of a run over which the residual is taken and a settled quantity must stay in its band.
+TAIL = 0.1
+
+
 def settling_time(t, y, band=0.02):
-    """First time after which y stays within `band` of the size of its change around its final
-    value; NaN when y does not change."""
+    """First time after which y stays within `band` of the size of its change (|y[-1] - y[0]|)
+    around its final value; t[0] when y does not change. NaN ("not settled") when y is still
+    outside that band in the last `TAIL` of the run: the run ended before y settled (a signal
+    still moving at the end is near its own final value only in the last few samples)."""
     final, change = y[-1], abs(y[-1] - y[0])
-    if change <= 1e-12 * max(abs(final), 1e-300) or change == 0.0:
-        return math.nan
     tol = band * change
     last_out = None
     for i in range(len(y) - 1, -1, -1):
@@ -89,7 +100,8 @@ def settling_time(t, y, band=0.02):
             break
     if last_out is None:
         return t[0]
-    return t[last_out + 1] if last_out + 1 < len(t) else math.nan
+    settled = t[last_out + 1]
+    return math.nan if settled > t[-1] - TAIL * (t[-1] - t[0]) else settled
 
 
 def metrics(t, series, stats, wall):
@@ -97,7 +109,7 @@ def metrics(t, series, stats, wall):
     last 10 % of the run), settling times (2 %), final hub angle, peak |p_load|, solver
     statistics and wall time."""
     w = series["w_tip"]
-    n_tail = max(1, len(t) // 10)
+    n_tail = max(1, int(len(t) * TAIL))
     row = {
         "peak_w_tip": max(abs(v) for v in w),
         "residual_w_tip": max(abs(v) for v in w[-n_tail:]),
@@ -110,6 +122,51 @@ def metrics(t, series, stats, wall):
     for name, value in zip(SOLVER_STATS, stats):
         row[name.replace(".", "_")] = value
     return row
+
+
+def default_experiment(fmu_path):
+    """The stop time and communication step of the FMU's <DefaultExperiment>."""
+    from fmpy import read_model_description
+
+    e = read_model_description(str(fmu_path)).defaultExperiment
+    if e is None or e.stopTime is None or e.stepSize is None:
+        raise SystemExit(f"{fmu_path}: no DefaultExperiment stopTime and stepSize; give --stop and --step")
+    return float(e.stopTime), float(e.stepSize)
+
+
+def describe(options, fixed, default):
+    """The settings of a sweep as one printed line; `default` is the DefaultExperiment's
+    (stop, step)."""
+    def mark(value, own):
+        return f"{value:g} s" + (" (DefaultExperiment)" if value == own else "")
+
+    inputs = ", ".join(f"{k}={v}" for k, v in options["inputs"].items()) or "none"
+    tol = options.get("tolerance")
+    return (f"settings: stop {mark(options['stop'], default[0])}, step {mark(options['step'], default[1])}, "
+            f"tolerance {'%g' % tol if tol else 'solver.rtol'}, inputs {inputs}, "
+            f"fixed {', '.join(f'{k}={v}' for k, v in fixed.items()) or 'none'}")
+
+
+def format_table(rows, names):
+    """The rows as a text table: the swept parameters, the status and the main metrics; a
+    settling time that the run does not reach reads "not settled"."""
+    def settle(v):
+        return "not settled" if math.isnan(v) else f"{v:.3f}"
+
+    cols = [("status", 7), ("peak w_tip [mm]", 16), ("residual [mm]", 14),
+            ("settling hub [s]", 17), ("settling y_pot [s]", 19), ("final hub [deg]", 16)]
+    widths = [max(len(n), 10) + 2 for n in names]
+    lines = ["".join(f"{n:>{w}s}" for n, w in zip(names, widths))
+             + "".join(f"{c:>{w}s}" for c, w in cols)]
+    for r in rows:
+        line = "".join(f"{str(r[n]):>{w}s}" for n, w in zip(names, widths)) + f"{r['status']:>7s}"
+        if r["status"] != "ok":
+            lines.append(line + "  " + r["message"])
+            continue
+        lines.append(line + f"{r['peak_w_tip'] * 1e3:16.3f}{r['residual_w_tip'] * 1e3:14.3f}"
+                     f"{settle(r['settling_time_theta_hub']):>17s}{settle(r['settling_time_y_pot']):>19s}"
+                     f"{math.degrees(r['final_theta_hub']):16.3f}")
+    return "\n".join(lines)
 
 
 def run_point(unzipdir: str, params: dict, options: dict) -> dict:
@@ -285,8 +342,9 @@ def write_csv(path, rows, parameter_names):
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
         w.writeheader()
-        for r in rows:
-            w.writerow({c: r.get(c, "") for c in columns})
+        for r in rows:  # NaN (a settling time not reached) is an empty cell
+            w.writerow({c: "" if isinstance(r.get(c), float) and math.isnan(r[c]) else r.get(c, "")
+                        for c in columns})
 
 
 def plot(rows, metric, x, y, path):
@@ -332,9 +390,10 @@ def main(argv=None):
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="a parameter fixed for every point")
     ap.add_argument("--input", action="append", default=[], metavar="NAME=VALUE",
-                    help="a constant input from t = 0 (default: r=1, a 1 V step of the reference)")
-    ap.add_argument("--stop", type=float, default=1.0, help="stop time, s")
-    ap.add_argument("--step", type=float, default=1e-3, help="communication step, s")
+                    help="a constant input from t = 0, such as r=1 (a 1 V step of the reference "
+                    "added to the built-in move); default: none")
+    ap.add_argument("--stop", type=float, help="stop time, s (default: the FMU's DefaultExperiment)")
+    ap.add_argument("--step", type=float, help="communication step, s (default: the FMU's DefaultExperiment)")
     ap.add_argument("--tolerance", type=float, help="relative tolerance for fmi2SetupExperiment")
     ap.add_argument("--scheduler", metavar="ADDRESS",
                     help="a running Dask scheduler (tcp://host:8786); default: a LocalCluster")
@@ -378,8 +437,11 @@ def main(argv=None):
         names = [g[0] for g in grids]
     fixed = dict(parse_assignment(s, "--set") for s in a.set)
     points = [dict(fixed, **p) for p in points]
-    inputs = dict(parse_assignment(s, "--input") for s in a.input) or {"r": "1.0"}
-    options = {"inputs": inputs, "stop": a.stop, "step": a.step, "tolerance": a.tolerance}
+    inputs = dict(parse_assignment(s, "--input") for s in a.input)
+    stop, step = default_experiment(a.fmu)
+    options = {"inputs": inputs, "stop": stop if a.stop is None else a.stop,
+               "step": step if a.step is None else a.step, "tolerance": a.tolerance}
+    print(describe(options, fixed, (stop, step)), flush=True)
 
     from distributed import Client, LocalCluster
 
@@ -401,6 +463,7 @@ def main(argv=None):
             cluster.close()
     write_csv(a.out, rows, list(fixed) + names)
     failed = sum(r["status"] != "ok" for r in rows)
+    print(format_table(rows, names))
     print(f"{len(rows)} points ({failed} failed) in {time.perf_counter() - started:.1f} s -> {a.out}")
     if a.plot:
         if a.plot not in METRICS:

@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""Your own position loop from Python, on the co-simulation FMU (fmpy's FMU2Slave).
+
+With `controller.external = true` the FMU's analog controller is out and the input `e_in` [V]
+drives the servo-valve coil. The script closes the loop itself at a 1 ms communication step,
+    e_in = Kp (r - y_pot) + Kd (dr/dt - k_pot omega_motor),
+y_pot = k_pot theta_motor being the potentiometer voltage [V] and r [V] the FMU's default move
+(minimum jerk, 30 deg of motor angle over 2 s from t = 0.5 s: the start values of reference.*)
+computed here (reference.angle = 0: no built-in move), over the default experiment (6 s).
+Kp = A1 A2 = 20 is the analog loop's gain, so that run must match the FMU's own analog loop (run
+too, with its built-in move of the same shape); the last run adds a derivative term.
+Prints k_pot (from the model description), then per run the final motor angle, the overshoot,
+the settling time (within 2 % of the move, from its start) and the peak |w_tip|; and the largest
+gaps between the P loop and the analog loop.  Run: .venv/bin/python examples/closed_loop.py [--fmu FMU]
+"""
+import argparse
+import math
+import pathlib
+import shutil
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+ap = argparse.ArgumentParser()
+ap.add_argument("--fmu", default=str(pathlib.Path(__file__).parents[1] / "fmu" / "HydraulicSlewingPlate.fmu"))
+fmu = ap.parse_args().fmu
+md = read_model_description(fmu)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start is not None}
+k_pot = start["controller.k_pot"]  # V/rad
+# The built-in move's amplitude, start and duration; the default experiment's stop time.
+MOVE, T0, DUR = start["reference.angle"], start["reference.t_start"], start["reference.duration"]
+STOP, H = float(md.defaultExperiment.stopTime), 1e-3
+KP = start["controller.A1"] * start["controller.A2"]  # the analog loop's gain: 20
+print(f"k_pot = {k_pot:.6f} V/rad (10 V / 150 deg = {10 / math.radians(150):.6f})")
+
+
+def run(kp=None, kd=0.0):  # kp None: the FMU's analog loop and built-in move
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier)
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0, stopTime=STOP)
+    if kp is not None:
+        slave.setBoolean([vr["controller.external"]], [True])
+        slave.setReal([vr["reference.angle"]], [0.0])
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    rows = []
+    for i in range(round(STOP / H) + 1):
+        theta, omega, y, w = slave.getReal([vr[n] for n in ("theta_motor", "omega_motor", "y_pot", "w_tip")])
+        rows.append((i * H, theta, w))
+        s = min(max((i * H - T0) / DUR, 0.0), 1.0)  # minimum jerk: r [V] and dr/dt [V/s]
+        r = k_pot * MOVE * (10 * s**3 - 15 * s**4 + 6 * s**5)
+        dr = k_pot * MOVE * (30 * s**2 - 60 * s**3 + 30 * s**4) / DUR
+        if kp is not None:
+            slave.setReal([vr["e_in"]], [kp * (r - y) + kd * (dr - k_pot * omega)])
+        if i < round(STOP / H):
+            slave.doStep(currentCommunicationPoint=i * H, communicationStepSize=H)
+    slave.terminate()
+    slave.freeInstance()
+    return np.array(rows)
+
+
+unzipped = extract(fmu)
+runs = {"analog loop (FMU)": run(), f"P, Kp = {KP:g} (Python)": run(kp=KP),
+        "PD, Kd = 1 s (Python)": run(kp=KP, kd=1.0)}
+shutil.rmtree(unzipped, ignore_errors=True)
+print(f"{'':24s}{'final':>10s}{'overshoot':>11s}{'settling':>11s}{'peak w_tip':>11s}")
+print(f"{'':24s}{'[deg]':>10s}{'[%]':>11s}{'[s]':>11s}{'[mm]':>11s}")
+for label, (t, theta, w) in ((k, x.T) for k, x in runs.items()):
+    last_out = np.nonzero(np.abs(theta - MOVE) > 0.02 * MOVE)[0][-1]
+    settle = f"{t[last_out + 1] - T0:.3f}" if last_out + 1 < len(t) else "not settled"
+    print(f"{label:24s}{math.degrees(theta[-1]):10.3f}{100 * (theta.max() - MOVE) / MOVE:11.3f}"
+          f"{settle:>11s}{1e3 * np.abs(w).max():11.3f}")
+gap = np.abs(runs[f"P, Kp = {KP:g} (Python)"] - runs["analog loop (FMU)"]).max(axis=0)
+print(f"P loop - analog loop: max |theta_motor| {math.degrees(gap[1]):.4f} deg, max |w_tip| {1e3 * gap[2]:.3f} mm")
