@@ -15,8 +15,9 @@ Each run is the FMU's default experiment unless told otherwise: the stop time an
 communication step of the model description's <DefaultExperiment> (``--stop``, ``--step``), no
 input (``--input r=1`` adds a constant 1 V to the reference), the built-in move of the command
 generator. The settings used are printed first. A settling time is reported only when the run
-shows the quantity settled (it stays in its band over the last 10 % of the run); otherwise it is
-"not settled" (an empty cell in the CSV, NaN in the rows).
+shows the quantity settled: the run goes on past the end of the built-in move and the quantity
+stays in its band over at least the last 10 % of the run; otherwise it is "not settled" (an empty
+cell in the CSV, NaN in the rows).
 
 Runs on a LocalCluster by default (``--workers N``), or on any running scheduler
 (``--scheduler tcp://host:8786``). Prints a table of the points, writes a CSV (``--out``) and, with
@@ -104,17 +105,22 @@ def settling_time(t, y, band=0.02):
     return math.nan if settled > t[-1] - TAIL * (t[-1] - t[0]) else settled
 
 
-def metrics(t, series, stats, wall):
+def metrics(t, series, stats, wall, move_end=None):
     """The summary metrics of one run: tip deflection peak and residual (largest |w_tip| over the
-    last 10 % of the run), settling times (2 %), final hub angle, peak |p_load|, solver
+    last 10 % of the run), settling times (2 %; NaN when the run ends before the quantity settles
+    or before `move_end`, the end of the built-in move), final hub angle, peak |p_load|, solver
     statistics and wall time."""
     w = series["w_tip"]
-    n_tail = max(1, int(len(t) * TAIL))
+    n_tail = max(1, len(t) // 10)  # the last TAIL of the run
+
+    def settling(y):
+        return math.nan if move_end is not None and t[-1] < move_end else settling_time(t, y)
+
     row = {
         "peak_w_tip": max(abs(v) for v in w),
         "residual_w_tip": max(abs(v) for v in w[-n_tail:]),
-        "settling_time_theta_hub": settling_time(t, series["theta_hub"]),
-        "settling_time_y_pot": settling_time(t, series["y_pot"]),
+        "settling_time_theta_hub": settling(series["theta_hub"]),
+        "settling_time_y_pot": settling(series["y_pot"]),
         "final_theta_hub": series["theta_hub"][-1],
         "peak_p_load": max(abs(v) for v in series["p_load"]),
         "wall_s": wall,
@@ -122,6 +128,19 @@ def metrics(t, series, stats, wall):
     for name, value in zip(SOLVER_STATS, stats):
         row[name.replace(".", "_")] = value
     return row
+
+
+def move_end(variables, values):
+    """The end of the command generator's move (reference.t_start + reference.duration) with
+    `values` (name -> value) set, or None when there is no move (reference.angle = 0 or
+    controller.external = true)."""
+    def value(name):
+        v = values.get(name, variables[name].start)
+        return str(v).strip().lower() == "true" if variables[name].type == "Boolean" else float(v)
+
+    if value("controller.external") or value("reference.angle") == 0:
+        return None
+    return value("reference.t_start") + value("reference.duration")
 
 
 def default_experiment(fmu_path):
@@ -159,7 +178,8 @@ def format_table(rows, names):
     lines = ["".join(f"{n:>{w}s}" for n, w in zip(names, widths))
              + "".join(f"{c:>{w}s}" for c, w in cols)]
     for r in rows:
-        line = "".join(f"{str(r[n]):>{w}s}" for n, w in zip(names, widths)) + f"{r['status']:>7s}"
+        line = "".join(f"{r[n]:>{w}.6g}" if isinstance(r[n], float) else f"{str(r[n]):>{w}s}"
+                       for n, w in zip(names, widths)) + f"{r['status']:>7s}"
         if r["status"] != "ok":
             lines.append(line + "  " + r["message"])
             continue
@@ -219,7 +239,8 @@ def run_point(unzipdir: str, params: dict, options: dict) -> dict:
         series = {name: [v[k] for v in values] for k, name in enumerate(names)}
         for name in RECORDED:
             series.setdefault(name, [0.0] * len(t))
-        row.update(metrics(t, series, stats, time.perf_counter() - started))
+        end = move_end(variables, params)
+        row.update(metrics(t, series, stats, time.perf_counter() - started, end))
     except Exception as e:  # a failed point is a row, never a lost sweep
         detail = "; ".join(messages)
         row["status"] = "error"
@@ -443,6 +464,9 @@ def main(argv=None):
                "step": step if a.step is None else a.step, "tolerance": a.tolerance}
     print(describe(options, fixed, (stop, step)), flush=True)
 
+    if a.plot and a.plot not in METRICS:
+        raise SystemExit(f"--plot {a.plot}: not a metric ({', '.join(METRICS)})")
+
     from distributed import Client, LocalCluster
 
     started = time.perf_counter()
@@ -464,15 +488,15 @@ def main(argv=None):
     write_csv(a.out, rows, list(fixed) + names)
     failed = sum(r["status"] != "ok" for r in rows)
     print(format_table(rows, names))
-    print(f"{len(rows)} points ({failed} failed) in {time.perf_counter() - started:.1f} s -> {a.out}")
+    print(f"{len(rows)} points, {failed} failed")
+    written = [a.out]
     if a.plot:
-        if a.plot not in METRICS:
-            raise SystemExit(f"--plot {a.plot}: not a metric ({', '.join(METRICS)})")
         x = a.plot_x or names[0]
         by = a.plot_by or (names[1] if len(names) > 1 and a.sample is None else None)
-        out = str(pathlib.Path(a.out).with_suffix("")) + f"_{a.plot}.png"
-        plot(rows, a.plot, x, by, out)
-        print(f"plot -> {out}")
+        written.append(str(pathlib.Path(a.out).with_suffix("")) + f"_{a.plot}.png")
+        plot(rows, a.plot, x, by, written[-1])
+    shown = [os.path.relpath(w) if not os.path.relpath(w).startswith("..") else w for w in written]
+    print(f"wrote {' and '.join(shown)} (wall-clock {time.perf_counter() - started:.1f} s)")
     return 1 if failed == len(rows) else 0
 
 

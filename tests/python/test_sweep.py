@@ -1,13 +1,19 @@
 """tools/sweep.py on a Dask LocalCluster of 2 worker processes over 8 points: the table equals the
 same points run serially in this process, failed points are rows with the FMU's message, each
-worker extracts the FMU once; and the command line writes the CSV and the plot."""
+worker extracts the FMU once; the command line writes the CSV and the plot, runs the FMU's
+default experiment unless told otherwise and prints its settings, and reports "not settled" for a
+run that stops before the move has settled."""
 
 import csv
 import importlib.util
 import math
 import pathlib
+import re
+import shlex
 import subprocess
 import sys
+import xml.etree.ElementTree as ET
+import zipfile
 
 import pytest
 
@@ -101,17 +107,120 @@ def test_each_worker_extracts_the_fmu_once(cluster_rows):
     assert max(per_worker.values()) > 1, per_worker
 
 
+def command_line(fmu_path, out, *args):
+    """Runs tools/sweep.py on 2 workers; returns what it printed and the CSV's rows."""
+    done = subprocess.run([sys.executable, str(ROOT / "tools" / "sweep.py"), "--fmu", fmu_path,
+                           "--workers", "2", "--out", str(out), *args],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    print(done.stdout)
+    with open(out) as f:
+        return done.stdout, list(csv.DictReader(f))
+
+
+def default_experiment(fmu_path):
+    """(stopTime, stepSize) of the DefaultExperiment, read from the FMU's modelDescription.xml."""
+    with zipfile.ZipFile(fmu_path) as z:
+        e = ET.fromstring(z.read("modelDescription.xml")).find("DefaultExperiment")
+    return float(e.get("stopTime")), float(e.get("stepSize"))
+
+
+def printed_rows(out, n_params):
+    """The rows of the printed table: parameters, status, then the five metrics as text."""
+    rows = []
+    for line in out.splitlines():
+        cells = re.split(r"\s{2,}", line.strip().replace("not settled", "not_settled"))
+        if len(cells) == n_params + 6 and cells[n_params] == "ok":
+            rows.append(cells)
+    return rows
+
+
 def test_command_line_writes_csv_and_plot(fmu_path, tmp_path):
     out = tmp_path / "sweep.csv"
-    done = subprocess.run(
-        [sys.executable, str(ROOT / "tools" / "sweep.py"), "--fmu", fmu_path, "--workers", "2",
-         "--grid", "plate.zeta=0.005,0.02", "--grid", "torsion_bar.k=1000,5000",
-         *[a for k, v in FIXED.items() for a in ("--set", f"{k}={v}")],
-         "--stop", "0.2", "--out", str(out), "--plot", "peak_w_tip"],
-        capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr[-3000:]
-    with open(out) as f:
-        table = list(csv.DictReader(f))
+    printed, table = command_line(
+        fmu_path, out, "--grid", "plate.zeta=0.005,0.02", "--grid", "torsion_bar.k=1000,5000",
+        *[a for k, v in FIXED.items() for a in ("--set", f"{k}={v}")],
+        "--input", "r=1.0", "--stop", "0.2", "--step", "0.001", "--plot", "peak_w_tip")
+    assert "settings: stop 0.2 s, step 0.001 s, tolerance solver.rtol, inputs r=1.0, fixed " in printed
     assert len(table) == 4 and all(r["status"] == "ok" for r in table)
     assert {"plate.zeta", "torsion_bar.k", "peak_w_tip", "solver_steps", "message"} <= set(table[0])
     assert_png((tmp_path / "sweep_peak_w_tip.png").read_bytes(), min_width=600)
+
+
+def test_defaults_are_the_fmus_default_experiment(fmu_path, md, tmp_path):
+    """No --stop, --step or --input: the whole default experiment (the built-in move, no added
+    step of r), its settings printed; every quantity settles within it."""
+    printed, table = command_line(fmu_path, tmp_path / "sweep.csv", "--grid", "torsion_bar.k=1000,5000")
+    stop, step = default_experiment(fmu_path)
+    assert (f"settings: stop {stop:g} s (DefaultExperiment), step {step:g} s (DefaultExperiment), "
+            "tolerance solver.rtol, inputs none, fixed none") in printed
+    start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start}
+    move = start["reference.angle"]
+    move_end = start["reference.t_start"] + start["reference.duration"]
+    assert move_end < 0.9 * stop  # the run goes on past the move, beyond the last 10 %
+    rows = printed_rows(printed, 1)
+    assert [r[0] for r in rows] == ["1000", "5000"], printed
+    for row, saved in zip(rows, table):
+        # The hub ends in the 2 % band of the move; the hub and y_pot settle after the move starts
+        # and before the last 10 % of the run, as printed and as saved.
+        assert abs(float(saved["final_theta_hub"]) - move) < 0.02 * move, saved
+        for name, text in (("settling_time_theta_hub", row[4]), ("settling_time_y_pot", row[5])):
+            value = float(saved[name])
+            assert start["reference.t_start"] < value < 0.9 * stop, (name, saved)
+            assert text == f"{value:.3f}", (text, value)
+        # The run's samples are the default step's: the settling times fall on its grid.
+        assert abs(float(saved["settling_time_theta_hub"]) / step
+                   - round(float(saved["settling_time_theta_hub"]) / step)) < 1e-6
+
+
+def test_a_run_that_stops_mid_move_is_not_settled(fmu_path, md, tmp_path):
+    """Stopped at 1 s, a quarter of the way into the move (0.5 s to 2.5 s): the hub is still
+    turning, so no settling time (the words "not settled", an empty CSV cell), where the old rule
+    (the last time outside the band of the final value) gave a time near the stop time."""
+    start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start}
+    stop = 1.0
+    assert start["reference.t_start"] < stop < start["reference.t_start"] + start["reference.duration"]
+    printed, table = command_line(fmu_path, tmp_path / "sweep.csv", "--grid", "torsion_bar.k=1000,5000",
+                                  "--stop", str(stop))
+    rows = printed_rows(printed, 1)
+    assert len(rows) == 2 and all(r[4] == r[5] == "not_settled" for r in rows), printed
+    for saved in table:
+        assert saved["status"] == "ok"
+        assert saved["settling_time_theta_hub"] == "" and saved["settling_time_y_pot"] == ""
+        # The hub has turned only part of the move (minimum jerk at a quarter of its time: 10 %).
+        assert 0 < float(saved["final_theta_hub"]) < 0.2 * start["reference.angle"], saved
+        assert float(saved["peak_w_tip"]) > 0
+
+
+def test_settling_time_against_closed_forms():
+    """A first-order step response settles where exp(-t/tau) reaches 2 % of its change; a ramp
+    cut off while rising does not settle; a constant has settled from the start."""
+    tau, h, stop = 0.2, 1e-3, 3.0
+    t = [i * h for i in range(round(stop / h) + 1)]
+    y = [1 - math.exp(-ti / tau) for ti in t]
+    final = y[-1]
+    # |y - final| = exp(-t/tau) - exp(-stop/tau) <= 0.02 final: the first sample at or after t*.
+    t_star = -tau * math.log(0.02 * final + math.exp(-stop / tau))
+    assert t_star <= sweep.settling_time(t, y) < t_star + h
+    assert math.isnan(sweep.settling_time(t, [ti for ti in t]))  # a ramp: still moving at the end
+    assert math.isnan(sweep.settling_time(t, [min(ti, 0.95 * stop) for ti in t]))  # settles too late
+    # A ramp to 1.5 and flat after: within 2 % of 1.5 from t = 0.98 x 1.5, the first sample after.
+    t_ramp = 0.98 * 0.5 * stop
+    assert t_ramp - 1e-9 <= sweep.settling_time(t, [min(ti, 0.5 * stop) for ti in t]) <= t_ramp + h + 1e-9
+    assert sweep.settling_time(t, [0.3] * len(t)) == 0.0
+
+
+def test_first_example_prints_what_the_docs_quote(fmu_path, tmp_path):
+    """docs/sweeps.md's first command prints the block the page quotes under it (the line with
+    the wall-clock time aside), so the page's figures are this FMU's."""
+    text = (ROOT / "docs" / "sweeps.md").read_text()
+    command, quoted = re.search(r"```sh\n(.*?)```.*?```text\n(.*?)```", text, re.S).groups()
+    args = shlex.split(command.replace("\\\n", " "), comments=True)
+    assert args[:2] == [".venv/bin/python", "tools/sweep.py"], args
+    printed, table = command_line(fmu_path, tmp_path / "sweep.csv", *args[2:])
+    assert len(table) == 6 and all(r["status"] == "ok" for r in table)
+
+    def lines(t):
+        return [line for line in t.splitlines() if "wall-clock" not in line]
+
+    assert lines(printed) == lines(quoted), f"docs/sweeps.md quotes another output: paste this one\n{printed}"
