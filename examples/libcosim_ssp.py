@@ -29,19 +29,21 @@ ssp = ap.parse_args().ssp
 SSD = "{http://ssp-standard.org/SSP1/SystemStructureDescription}"
 with zipfile.ZipFile(ssp) as z:
     ssd = ET.fromstring(z.read("SystemStructure.ssd"))
-    source = ssd.find(f".//{SSD}ParameterBinding").get("source")
+    component = ssd.find(f".//{SSD}Component")  # the one FMU instance and its parameter set
+    source = component.find(f".//{SSD}ParameterBinding").get("source")
     values = {p.get("name"): p[0] for p in ET.fromstring(z.read(source)).iter(
         "{http://ssp-standard.org/SSP1/SystemStructureParameterValues}Parameter")}
-    fmu_bytes = z.read("resources/HydraulicSlewingPlate.fmu")
+    fmu_bytes = z.read(component.get("source"))
 kind = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true"}
 values = {n: kind[e.tag.split("}")[1]](e.get("value")) for n, e in values.items()}
 stop = float(ssd.find(f"{SSD}DefaultExperiment").get("stopTime"))
 step = float(ssd.find(".//{http://opensimulationplatform.com/SSP/OSPAnnotations}FixedStepAlgorithm").get("baseStepSize"))
-print(f"system {ssd.get('name')}: {source} ({len(values)} values), 0 to {stop:g} s at {step * 1e3:g} ms, r = 1 V")
+print(f"system {ssd.get('name')}: instance {component.get('name')}, {source} ({len(values)} values), "
+      f"0 to {stop:g} s at {step * 1e3:g} ms, r = 1 V")
 
 log_output_level(CosimLogLevel.ERROR)
 execution = CosimExecution.from_ssp_file(ssp)
-plate = execution.slave_index_from_instance_name("plate")
+plate = execution.slave_index_from_instance_name(component.get("name"))
 refs = {v.name.decode(): v.reference for v in execution.slave_variables(plate)}
 execution.real_initial_value(plate, refs["r"], 1.0)
 observer = CosimObserver.create_last_value()
