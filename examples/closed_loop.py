@@ -1,17 +1,15 @@
 #!/usr/bin/env python3
 """Your own position loop from Python, on the co-simulation FMU (fmpy's FMU2Slave).
 
-With `controller.external = true` the FMU's analog controller is out and the input `e_in` [V]
-drives the servo-valve coil. The script closes the loop itself at a 1 ms communication step,
-    e_in = Kp (r - y_pot) + Kd (dr/dt - k_pot omega_motor),
-y_pot = k_pot theta_motor being the potentiometer voltage [V] and r [V] the FMU's default move
-(minimum jerk, 30 deg of motor angle over 2 s from t = 0.5 s: the start values of reference.*)
-computed here (reference.angle = 0: no built-in move), over the default experiment (6 s).
-Kp = A1 A2 = 20 is the analog loop's gain, so that run must match the FMU's own analog loop (run
-too, with its built-in move of the same shape); the last run adds a derivative term.
-Prints k_pot (from the model description), then per run the final motor angle, the overshoot,
-the settling time (within 2 % of the move, from its start) and the peak |w_tip|; and the largest
-gaps between the P loop and the analog loop.  Run: .venv/bin/python examples/closed_loop.py [--fmu FMU]
+With `controller.external = true` the analog controller is out and the input `e_in` [V] drives
+the servo-valve coil. This loop runs at a 1 ms communication step:
+    e_in = Kp (r - y_pot) + Kd (dr/dt - k_pot omega_motor),   y_pot = k_pot theta_motor [V],
+r [V] being the FMU's default move (minimum jerk, 30 deg of motor angle over 2 s from 0.5 s: the
+start values of reference.*) computed here; reference.angle = 0 turns the built-in one off.
+With Kp = A1 A2 = 20, the analog loop's gain, it must match the FMU's own analog loop (run too);
+the last run adds a derivative term. Prints k_pot, then per run the final motor angle, overshoot,
+settling time (2 % of the move, from its start) and peak |w_tip|; and the P loop's largest gaps
+to the analog loop.  Run: .venv/bin/python examples/closed_loop.py [--fmu FMU]
 """
 import argparse
 import math
@@ -33,7 +31,6 @@ k_pot = start["controller.k_pot"]  # V/rad
 MOVE, T0, DUR = start["reference.angle"], start["reference.t_start"], start["reference.duration"]
 STOP, H = float(md.defaultExperiment.stopTime), 1e-3
 KP = start["controller.A1"] * start["controller.A2"]  # the analog loop's gain: 20
-print(f"k_pot = {k_pot:.6f} V/rad (10 V / 150 deg = {10 / math.radians(150):.6f})")
 
 
 def run(kp=None, kd=0.0):  # kp None: the FMU's analog loop and built-in move
@@ -48,7 +45,7 @@ def run(kp=None, kd=0.0):  # kp None: the FMU's analog loop and built-in move
     rows = []
     for i in range(round(STOP / H) + 1):
         theta, omega, y, w = slave.getReal([vr[n] for n in ("theta_motor", "omega_motor", "y_pot", "w_tip")])
-        rows.append((i * H, theta, w))
+        rows.append((i * H, theta, w, y))
         s = min(max((i * H - T0) / DUR, 0.0), 1.0)  # minimum jerk: r [V] and dr/dt [V/s]
         r = k_pot * MOVE * (10 * s**3 - 15 * s**4 + 6 * s**5)
         dr = k_pot * MOVE * (30 * s**2 - 60 * s**3 + 30 * s**4) / DUR
@@ -65,9 +62,12 @@ unzipped = extract(fmu)
 runs = {"analog loop (FMU)": run(), f"P, Kp = {KP:g} (Python)": run(kp=KP),
         "PD, Kd = 1 s (Python)": run(kp=KP, kd=1.0)}
 shutil.rmtree(unzipped, ignore_errors=True)
+_, theta, _, y = runs["analog loop (FMU)"][-1]  # the FMU's outputs at the end of the run
+print(f"k_pot = {k_pot:.6f} V/rad (10 V / 150 deg = {10 / math.radians(150):.6f}; "
+      f"y_pot / theta_motor at {STOP:g} s: {y / theta:.6f})")
 print(f"{'':24s}{'final':>10s}{'overshoot':>11s}{'settling':>11s}{'peak w_tip':>11s}")
 print(f"{'':24s}{'[deg]':>10s}{'[%]':>11s}{'[s]':>11s}{'[mm]':>11s}")
-for label, (t, theta, w) in ((k, x.T) for k, x in runs.items()):
+for label, (t, theta, w, _) in ((k, x.T) for k, x in runs.items()):
     last_out = np.nonzero(np.abs(theta - MOVE) > 0.02 * MOVE)[0][-1]
     settle = f"{t[last_out + 1] - T0:.3f}" if last_out + 1 < len(t) else "not settled"
     print(f"{label:24s}{math.degrees(theta[-1]):10.3f}{100 * (theta.max() - MOVE) / MOVE:11.3f}"

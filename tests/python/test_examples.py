@@ -142,9 +142,12 @@ def test_closed_loop_from_python_matches_the_analog_loop(fmu_path, md):
     start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start}
     move, t0, duration = (start[f"reference.{n}"] for n in ("angle", "t_start", "duration"))
     # k_pot: the model description's start value, and the closed form 10 V over 150 deg.
-    k_pot, closed = find(r"k_pot = " + NUMBER + r" V/rad \(10 V / 150 deg = " + NUMBER, out)
+    # k_pot: the model description's start value, the closed form 10 V over 150 deg, and the ratio
+    # of the FMU's outputs y_pot and theta_motor (eq. 1b).
+    k_pot, closed, ratio = find(r"k_pot = " + NUMBER + r" V/rad \(10 V / 150 deg = " + NUMBER
+                                + r"; y_pot / theta_motor at \S+ s: " + NUMBER, out)
     assert abs(k_pot - start["controller.k_pot"]) < 1e-6 and abs(closed - 10 / math.radians(150)) < 1e-6
-    assert abs(k_pot - 10 / math.radians(150)) < 1e-6
+    assert abs(k_pot - 10 / math.radians(150)) < 1e-6 and abs(ratio - k_pot) < 1e-6
     rows = {label: find("(?m)^" + re.escape(label) + r"\s+" + r"\s+".join([NUMBER] * 4) + "$", out)
             for label in ["analog loop (FMU)", "P, Kp = 20 (Python)", "PD, Kd = 1 s (Python)"]}
     for label, (final, overshoot, settling, peak_w) in rows.items():
