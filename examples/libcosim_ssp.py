@@ -4,12 +4,13 @@
 fmu/HydraulicSlewingPlate.ssp (written by `hsp package`) holds SystemStructure.ssd, the FMU and
 the parameter set resources/servo-valve-motor.ssv (the full servo valve on the motor alone, no
 built-in move). libcosim loads it with the set bound to the instance `plate`, reads the 10 ms
-fixed step and the 2 s stop time from the .ssd, and runs it with a 1 V step of the reference r
-(its log level lowered to errors: at its default it prints ~1000 debug lines, and at warnings
-one per FMI 2.0 Enumeration it cannot set). fmpy then runs
-the same FMU with the values read from the same .ssv, the same step and the same input.
-Prints the system, whether the Enumerations libcosim skips are the FMU's defaults anyway, the response of y_pot [V] and p_load (final, peak) from both, and their
-largest difference.  Run: .venv/bin/python examples/libcosim_ssp.py [--ssp SSP]
+fixed step and the 2 s stop time from the .ssd, and runs it with a 1 V step of the reference r;
+its log level is lowered to errors (at its default it prints ~1000 debug lines, at warnings one
+per FMI 2.0 Enumeration it cannot set). fmpy then runs the same FMU with the values read from
+the same .ssv, the same step and the same input.
+Prints the system; whether the Enumerations libcosim skips are the FMU's defaults anyway; y_pot
+[V] and p_load (final, peak) from both tools; their largest difference.
+Run: .venv/bin/python examples/libcosim_ssp.py [--ssp SSP]
 """
 import argparse
 import pathlib
@@ -37,7 +38,8 @@ with zipfile.ZipFile(ssp) as z:
 kind = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true"}
 values = {n: kind[e.tag.split("}")[1]](e.get("value")) for n, e in values.items()}
 stop = float(ssd.find(f"{SSD}DefaultExperiment").get("stopTime"))
-step = float(ssd.find(".//{http://opensimulationplatform.com/SSP/OSPAnnotations}FixedStepAlgorithm").get("baseStepSize"))
+OSP = "{http://opensimulationplatform.com/SSP/OSPAnnotations}"
+step = float(ssd.find(f".//{OSP}FixedStepAlgorithm").get("baseStepSize"))
 print(f"system {ssd.get('name')}: instance {component.get('name')}, {source} ({len(values)} values), "
       f"0 to {stop:g} s at {step * 1e3:g} ms, r = 1 V")
 
@@ -51,14 +53,16 @@ execution.add_observer(observer)
 cosim = []
 for _ in range(round(stop / step)):
     assert execution.step()
-    cosim.append(observer.last_real_values(slave_index=plate, variable_references=[refs["y_pot"], refs["p_load"]]))
+    cosim.append(observer.last_real_values(plate, [refs["y_pot"], refs["p_load"]]))
 cosim = np.array(cosim)
 
 with tempfile.TemporaryDirectory() as d:  # fmpy runs the FMU the .ssp carries
     fmu = pathlib.Path(d) / "HydraulicSlewingPlate.fmu"
     fmu.write_bytes(fmu_bytes)
-    enums = {v.name: int(v.start) for v in read_model_description(str(fmu)).modelVariables if v.type == "Enumeration"}
-    r = np.array([(0.0, 1.0, 0, 0, 0), (stop, 1.0, 0, 0, 0)], dtype=[(n, float) for n in ("time", "r", "e_in", "F1", "F2")])
+    enums = {v.name: int(v.start) for v in read_model_description(str(fmu)).modelVariables
+             if v.type == "Enumeration"}
+    r = np.array([(0.0, 1.0, 0, 0, 0), (stop, 1.0, 0, 0, 0)],  # every input: r = 1 V, the others 0
+                 dtype=[(n, float) for n in ("time", "r", "e_in", "F1", "F2")])
     res = simulate_fmu(str(fmu), stop_time=stop, output_interval=step, input=r,
                        output=["y_pot", "p_load"], start_values=values)
 skipped = [n for n in values if n in enums]  # libcosim cannot set FMI 2.0 Enumerations
