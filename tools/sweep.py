@@ -144,13 +144,13 @@ def move_end(variables, values):
 
 
 def default_experiment(fmu_path):
-    """The stop time and communication step of the FMU's <DefaultExperiment>."""
+    """The stop time and communication step of the FMU's <DefaultExperiment> (None where it
+    gives none)."""
     from fmpy import read_model_description
 
     e = read_model_description(str(fmu_path)).defaultExperiment
-    if e is None or e.stopTime is None or e.stepSize is None:
-        raise SystemExit(f"{fmu_path}: no DefaultExperiment stopTime and stepSize; give --stop and --step")
-    return float(e.stopTime), float(e.stepSize)
+    return tuple(None if e is None or getattr(e, a) is None else float(getattr(e, a))
+                 for a in ("stopTime", "stepSize"))
 
 
 def describe(options, fixed, default):
@@ -462,6 +462,8 @@ def main(argv=None):
     stop, step = default_experiment(a.fmu)
     options = {"inputs": inputs, "stop": stop if a.stop is None else a.stop,
                "step": step if a.step is None else a.step, "tolerance": a.tolerance}
+    if options["stop"] is None or options["step"] is None:
+        raise SystemExit(f"{a.fmu}: no DefaultExperiment stopTime and stepSize; give --stop and --step")
     print(describe(options, fixed, (stop, step)), flush=True)
 
     if a.plot and a.plot not in METRICS:
