@@ -47,6 +47,9 @@ const MACOS_TARGETS: [&str; 2] = ["x86_64-apple-darwin", "aarch64-apple-darwin"]
 /// Where the universal macOS binary is written, under the target directory.
 const MACOS_UNIVERSAL_DIR: &str = "universal-apple-darwin/release";
 const MINGW_GCC: &str = "x86_64-w64-mingw32-gcc";
+/// Where the x86-64 Linux library for this machine's glibc is built, under the target directory
+/// (without zig, and with `--host-only`).
+const HOST_FMU_DIR: &str = "fmu-host";
 /// The library's file stem as cargo names it.
 const CRATE_LIB: &str = "hydraulic_slewing_plate";
 
@@ -293,20 +296,23 @@ fn build_linux64(portability: Portability) -> Result<PathBuf, String> {
         ),
         Portability::HostOnly => {}
     }
+    // A target directory of its own: the FMU's library (without the `cli` feature) and the one
+    // `hsp` links (with it) share one fingerprint in cargo's `target/release`, so building one
+    // there made cargo rebuild the other at the next `cargo run --bin hsp`, minutes each time.
+    let host_dir = target_dir().join(HOST_FMU_DIR);
     let mut command = Command::new(cargo());
-    command.args([
-        "build",
-        "--release",
-        "--lib",
-        "--no-default-features",
-        "--quiet",
-    ]);
+    command
+        .args([
+            "build",
+            "--release",
+            "--lib",
+            "--no-default-features",
+            "--quiet",
+        ])
+        .arg("--target-dir")
+        .arg(&host_dir);
     run(command, "cargo build --release --lib")?;
-    built(
-        target_dir()
-            .join("release")
-            .join(format!("lib{CRATE_LIB}.so")),
-    )
+    built(host_dir.join("release").join(format!("lib{CRATE_LIB}.so")))
 }
 
 /// The aarch64 Linux binary (FMI 3.0's `aarch64-linux`), against glibc 2.17 like the x86-64 one.
