@@ -12,6 +12,7 @@ use hydraulic_slewing_plate::SOURCE_HASH;
 use nalgebra::{Complex, DMatrix};
 
 use super::super::{package, run, validate::num, Cli, Command, ModelArgs};
+use crate::model_description::ModelDescription;
 
 /// What a generator gives for a block.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,6 +58,12 @@ pub const GENERATORS: &[(&str, &str, Generate)] = &[
          eigenvalue pairs of the model linearised at rest (`hsp linearize`), with frequency and \
          damping ratio",
         slow_pairs,
+    ),
+    (
+        "model-description",
+        "`model-description states|variables|outputs`: how many the repository's FMI 2.0 \
+         `modelDescription.xml` declares (its `<Derivatives>`, its variables, its `<Outputs>`)",
+        model_description,
     ),
     (
         "run-summary",
@@ -279,6 +286,20 @@ fn slow_pairs(_: &Context, args: &[String]) -> Result<Output, String> {
         ));
     }
     Ok(Output::Text(chosen.join(", ")))
+}
+
+/// `model-description WHAT`.
+fn model_description(_: &Context, args: &[String]) -> Result<Output, String> {
+    let path = package::root().join("modelDescription/modelDescription.xml");
+    let xml = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let md = ModelDescription::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
+    let n = match args {
+        [w] if w == "states" => md.structure.derivatives.len(),
+        [w] if w == "variables" => md.variables.len(),
+        [w] if w == "outputs" => md.structure.outputs.len(),
+        _ => return Err("model-description needs one of states, variables, outputs".into()),
+    };
+    Ok(Output::Text(n.to_string()))
 }
 
 /// The packaged FMI 2.0 FMU under `root`, checked to be built from these sources.
