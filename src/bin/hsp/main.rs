@@ -195,6 +195,9 @@ enum Command {
         /// The repository whose README.md, CONTRIBUTING.md, docs/*.md and bench/*.md are read
         #[arg(long, value_name = "DIR")]
         root: Option<std::path::PathBuf>,
+        /// Print the generators a block can name, with their arguments, and nothing else
+        #[arg(long)]
+        list: bool,
     },
     /// Frequency response of the linearised model, with its resonance peaks
     Frf {
@@ -402,8 +405,10 @@ fn main() -> ExitCode {
                 .iter()
                 .for_each(|p| println!("{verb} {}", p.display()));
         }),
-        Command::Docs { check, root } => docs::run(&root.unwrap_or_else(package::root), check)
-            .map(|lines| lines.iter().for_each(|l| println!("{l}"))),
+        Command::Docs { check, root, list } => {
+            docs::run(&root.unwrap_or_else(package::root), check, list)
+                .map(|lines| lines.iter().for_each(|l| println!("{l}")))
+        }
         Command::SourceHash => {
             println!("{}", hydraulic_slewing_plate::SOURCE_HASH);
             Ok(())

@@ -55,6 +55,12 @@ fn files(root: &Path) -> Result<Vec<PathBuf>, String> {
         md.sort();
         all.extend(md);
     }
+    if all.is_empty() {
+        return Err(format!(
+            "{} has no README.md, CONTRIBUTING.md, docs/*.md or bench/*.md",
+            root.display()
+        ));
+    }
     Ok(all)
 }
 
@@ -212,8 +218,14 @@ fn pass(root: &Path) -> Result<Pass, String> {
 
 /// `hsp docs [--check]` under `root`: rewrites (or, with `check`, compares) every generated
 /// block and checks every timing block's header. Returns the lines to print: the files written
-/// or the count checked, and the skipped blocks.
-pub fn run(root: &Path, check: bool) -> Result<Vec<String>, String> {
+/// or the count checked, and the skipped blocks; with `list`, only the generators.
+pub fn run(root: &Path, check: bool, list: bool) -> Result<Vec<String>, String> {
+    if list {
+        return Ok(GENERATORS
+            .iter()
+            .map(|(name, what, _)| format!("{name:<18} {what}"))
+            .collect());
+    }
     let p = pass(root)?;
     let mut said: Vec<String> = p.skipped.iter().map(|s| format!("skipped {s}")).collect();
     if check {
