@@ -27,8 +27,7 @@ const EXTERNAL: &str =
     <code>theta_hub</code>, the torsion-bar torque and the accelerometers.</p>\n";
 
 /// The section on the browser page, for an FMU that carries it in `documentation/web/`.
-const WEB: &str =
-    "<h2>Try it in the browser</h2>\n<p><a href=\"web/index.html\">The model live</a>: \
+const WEB: &str = "<h2>Try it in the browser</h2>\n<p><a href=\"web/index.html\">The model live</a>: \
     this FMU's model and its integrator compiled to WebAssembly, in an interactive page (in \
     <code>documentation/web/</code> beside this page). Choose a preset, change the move, the loop \
     gains, the torsion bar, the damping or the motor, and watch the hub, the potentiometer, the \
