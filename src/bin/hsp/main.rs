@@ -22,6 +22,8 @@
 //!   paper (`--check` compares instead).
 //! - `hsp web [--out docs/web]`: the browser build, the `.wasm` beside the interactive page's
 //!   sources (docs/web.md).
+//! - `hsp docs [--check] [--root DIR]`: the generated figures of the markdown files, rewritten
+//!   (`--check` compares instead).
 //! - `hsp doc-figures [--fmu F] [--out docs/img]`: the packaged FMU's documentation figures,
 //!   copied for the README.
 
@@ -29,6 +31,7 @@
 
 mod binaries;
 mod docpage;
+mod docs;
 mod ecosystem;
 mod info;
 mod licenses;
@@ -183,6 +186,19 @@ enum Command {
         /// command writes, or when a row is outside its tolerance
         #[arg(long)]
         check: bool,
+    },
+    /// Rewrite the generated figures of the markdown files (`<!-- hsp docs: NAME -->` blocks)
+    Docs {
+        /// Write nothing; fail when a block differs from what its generator gives, names no
+        /// generator or lacks its end, or a timing block lacks its header
+        #[arg(long)]
+        check: bool,
+        /// The repository whose README.md, CONTRIBUTING.md, docs/*.md and bench/*.md are read
+        #[arg(long, value_name = "DIR")]
+        root: Option<std::path::PathBuf>,
+        /// Print the generators a block can name, with their arguments, and nothing else
+        #[arg(long)]
+        list: bool,
     },
     /// Frequency response of the linearised model, with its resonance peaks
     Frf {
@@ -390,6 +406,10 @@ fn main() -> ExitCode {
                 .iter()
                 .for_each(|p| println!("{verb} {}", p.display()));
         }),
+        Command::Docs { check, root, list } => {
+            docs::run(&root.unwrap_or_else(package::root), check, list)
+                .map(|lines| lines.iter().for_each(|l| println!("{l}")))
+        }
         Command::SourceHash => {
             println!("{}", hydraulic_slewing_plate::SOURCE_HASH);
             Ok(())

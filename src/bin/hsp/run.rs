@@ -151,6 +151,33 @@ pub struct RunInfo {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
+    let (settings, parameters) = prepare(args)?;
+    let fmu_path = if args.no_build {
+        PathBuf::from(&args.fmu)
+    } else {
+        PathBuf::from(package::package(&args.fmu)?)
+    };
+    let (results, info) = experiment(args, &fmu_path, &settings, parameters)?;
+    let csv_path = package::root().join(&args.csv);
+    results.write_csv(&csv_path)?;
+    print!(
+        "{}",
+        summary(args, &results, &info, &csv_path.display().to_string())
+    );
+    super::plot::after_run(&csv_path, &args.plot)
+}
+
+/// The summary of the run `args` on the FMU `fmu` as it is (`hsp run --no-build --fmu FMU`),
+/// writing nothing; the results line names the CSV as `--csv` gives it (`hsp docs`).
+pub(super) fn summary_of(args: &RunArgs, fmu: &std::path::Path) -> Result<String, String> {
+    let (settings, parameters) = prepare(args)?;
+    let (results, info) = experiment(args, fmu, &settings, parameters)?;
+    Ok(summary(args, &results, &info, &args.csv))
+}
+
+/// Checks the run's times; the settings of the run and the typed parameters it will use (the
+/// FMU checks them again when it initialises).
+fn prepare(args: &RunArgs) -> Result<(Vec<String>, Parameters), String> {
     let stop = args.stop();
     if !(stop > 0.0 && args.step > 0.0 && args.step <= stop) {
         return Err(format!(
@@ -159,17 +186,19 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         ));
     }
     let settings = settings(args)?;
-    // The typed parameters the run will use (the FMU checks them again when it initialises).
     let values = super::values_with(None, &settings)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
-    let fmu_path = if args.no_build {
-        PathBuf::from(&args.fmu)
-    } else {
-        PathBuf::from(package::package(&args.fmu)?)
-    };
-    let (results, stats, seconds) = simulate(args, &fmu_path, &settings, &parameters)?;
-    let csv_path = package::root().join(&args.csv);
-    results.write_csv(&csv_path)?;
+    Ok((settings, parameters))
+}
+
+/// Runs the experiment on the FMU `fmu_path`: the results and what the summary needs.
+fn experiment(
+    args: &RunArgs,
+    fmu_path: &std::path::Path,
+    settings: &[String],
+    parameters: Parameters,
+) -> Result<(Results, RunInfo), String> {
+    let (results, stats, seconds) = simulate(args, fmu_path, settings, &parameters)?;
     let info = RunInfo {
         preset: args.preset.clone(),
         parameters,
@@ -177,11 +206,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         seconds,
         warnings: super::loader::take_warnings(),
     };
-    print!(
-        "{}",
-        summary(args, &results, &info, &csv_path.display().to_string())
-    );
-    super::plot::after_run(&csv_path, &args.plot)
+    Ok((results, info))
 }
 
 /// Runs the experiment through the FMU's C ABI; returns the results table, the solver statistics
@@ -476,13 +501,13 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     let st = &info.stats;
     writeln!(
         s,
-        "  solver  {} steps, {} rejected, {} f evaluations, {} Jacobians, {} LU factorisations",
+        "{SOLVER_LINE}{} steps, {} rejected, {} f evaluations, {} Jacobians, {} LU factorisations",
         st[0], st[1], st[2], st[3], st[4]
     )
     .unwrap();
     writeln!(
         s,
-        "  time    {:.3} s wall, {:.1} x real time",
+        "{TIME_LINE}{:.3} s wall, {:.1} x real time",
         info.seconds,
         stop / info.seconds.max(1e-9)
     )
@@ -490,6 +515,12 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     writeln!(s, "  results {csv}").unwrap();
     s
 }
+
+/// The start of the summary's solver line (the counts follow).
+pub const SOLVER_LINE: &str = "  solver  ";
+/// The start of the summary's line of wall time and real-time factor, the one line that depends
+/// on the machine.
+pub const TIME_LINE: &str = "  time    ";
 
 fn hub_locked(p: &Parameters) -> bool {
     p.plate.root == Root::Locked

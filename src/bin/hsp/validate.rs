@@ -86,7 +86,7 @@ fn verdict(ok: bool) -> Verdict {
 }
 
 /// Four significant digits, no exponent between 1e-3 and 1e6.
-fn num(x: f64) -> String {
+pub(super) fn num(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
     }
