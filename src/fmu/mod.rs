@@ -167,12 +167,6 @@ pub trait FmuModel: Sized + Send {
     /// here may not turn out non-finite.
     fn refresh(&mut self, _values: &mut Values, _index: Option<usize>) {}
 
-    /// The shortest communication step the model can take (its solver's minimum step): a
-    /// shorter one is refused up front with its size. Default: no minimum.
-    fn min_step(&self) -> f64 {
-        0.0
-    }
-
     /// The continuous states as `(state, derivative)` positions in [`FmuModel::variables`], in
     /// the order of `<ModelStructure><Derivatives>` (the order of the continuous-state arrays of the C API).
     /// Empty: the model offers no Model Exchange.

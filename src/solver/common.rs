@@ -147,6 +147,15 @@ pub(crate) fn rounding_floor(t: f64) -> f64 {
     16.0 * f64::EPSILON * t.abs()
 }
 
+/// Below this a step is explicit Euler's, not the method's: 16 ulp of t (the step would not
+/// change t reliably), or √(smallest normal double) ≈ 1.5e-154 (the methods' terms in 1/h and
+/// its square would overflow; a communication step of 5e-324 s is one an importer may ask for).
+/// Euler's local error, O(h² |f'|), is far below any tolerance at such a size, and it is stable
+/// while h |λ| < 2, which such a step meets for any eigenvalue λ of a model.
+pub(crate) fn euler_floor(t: f64) -> f64 {
+    rounding_floor(t).max(f64::MIN_POSITIVE.sqrt())
+}
+
 /// Smallest admissible step at time t chosen by error control: the user's `min_step`, but
 /// never below [`rounding_floor`].
 pub(crate) fn h_min(opts: &SolverOptions, t: f64) -> f64 {
@@ -298,8 +307,9 @@ pub(crate) enum NextStep {
 }
 
 /// Plans the next step attempt, the same way for both methods (with `quantise`, a step shorter
-/// than what is left before `t_end` is an equal share of it, see below): covers a rounding remnant before
-/// `t_end` (a few ulp of t) with an explicit Euler step, error O(remaining^2); counts the attempt
+/// than what is left before `t_end` is an equal share of it, see below): covers a remnant before
+/// `t_end` below [`euler_floor`] (a few ulp of t, or a denormal step) with an explicit Euler
+/// step, error O(remaining^2); counts the attempt
 /// against `max_steps`; clips h to `max_step` and to `limit` (`t_end`, or beyond it when the
 /// caller lets steps go past `t_end`: [`Integrator::advance_past`]); and fails when h has fallen below
 /// the minimum step, with the kind and reason `why_small` gives. A final step shorter than the
@@ -315,7 +325,7 @@ pub(crate) fn plan_step(
 ) -> Result<NextStep, SolverError> {
     let t = integ.t;
     let remaining = t_end - t;
-    if remaining <= rounding_floor(t) {
+    if remaining <= euler_floor(t) {
         for (x, f) in integ.x.iter_mut().zip(f0) {
             *x += remaining * f;
         }

@@ -30,9 +30,11 @@
 //! judge it (above 1: a step the adaptive driver would have rejected).
 //!
 //! A step whose stages are not finite, or whose W is singular, ends the call with an error; the
-//! integrator stays at the last completed step, as the adaptive drivers do.
+//! integrator stays at the last completed step, as the adaptive drivers do. A call too short for
+//! Rodas5P's 1/h terms (below [`euler_floor`](super::common::euler_floor), as an importer's
+//! 5e-324 s step is) is one explicit Euler step instead, as in the adaptive drivers.
 
-use super::common::Outputs;
+use super::common::{euler_floor, Outputs};
 use super::integrator::Integrator;
 use super::rodas5p::{self, Reject};
 use super::{OdeSystem, SolverError, SolverErrorKind};
@@ -55,6 +57,28 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         let h = (t_end - t0) / f64::from(substeps);
         let mut outputs = Outputs::new(times, t0, n);
         integ.hist.err_prev = 0.0;
+        if h <= euler_floor(t0) {
+            // A step too short for Rodas5P's 1/h terms (an importer's 5e-324 s): one explicit
+            // Euler step over the whole call, as the adaptive drivers take (see `euler_floor`).
+            rodas5p::eval_f0(integ, sys, &mut w.f0)?;
+            let x0 = &integ.x;
+            for ((x1, x), f) in w.x1.iter_mut().zip(x0).zip(&w.f0) {
+                *x1 = x + (t_end - t0) * f;
+            }
+            if outputs.pending(t_end) {
+                let x1 = &w.x1;
+                let mut linear = |theta: f64, buf: &mut [f64]| {
+                    for ((b, a), z) in buf.iter_mut().zip(x0).zip(x1) {
+                        *b = a + theta * (z - a);
+                    }
+                };
+                outputs.emit(t0, t_end - t0, t_end, x1, &mut linear, out);
+            }
+            integ.x.copy_from_slice(&w.x1);
+            integ.t = t_end;
+            integ.stats.accepted += 1;
+            return Ok(());
+        }
         for k in 1..=substeps {
             let t = integ.t;
             rodas5p::eval_f0(integ, sys, &mut w.f0)?;

@@ -13,7 +13,7 @@ use super::tolerances::{set_scal, transformed_tolerances, Tolerances};
 use super::workspace::Work;
 use super::{nonfinite_here, Radau5Options, Why};
 use crate::solver::common::{
-    all_finite, eval, initial_step, plan_step, rounding_floor, NextStep, Outputs,
+    all_finite, euler_floor, eval, initial_step, plan_step, NextStep, Outputs,
 };
 use crate::solver::integrator::Integrator;
 use crate::solver::{OdeSystem, SolverError, SolverErrorKind};
@@ -166,14 +166,14 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     }
 
     /// The next attempt's (h, last, proposed) from [`plan_step`], or None when `t_end` is
-    /// reached (a rounding remnant before it covered by an Euler step from f0).
+    /// reached (a remnant before it below [`euler_floor`] covered by an Euler step from f0).
     fn plan(
         &mut self,
         integ: &mut Integrator,
         work: &mut Work,
         t_end: f64,
     ) -> Result<Option<(f64, bool, f64)>, SolverError> {
-        if t_end - integ.t <= rounding_floor(integ.t) {
+        if t_end - integ.t <= euler_floor(integ.t) {
             // plan_step finishes with an Euler step from f0.
             self.f0_here(integ, work)?;
         }
