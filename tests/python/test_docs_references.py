@@ -10,8 +10,10 @@ PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 
 def defined_in(text):
-    """The test and function names a source defines."""
-    return set(re.findall(r"\bdef (\w+)", text)) | set(re.findall(r"\bfn (\w+)", text))
+    """The test and function names a source defines (tests/contract_both_versions.rs defines its
+    tests through its macro: `both_versions!(name, ...)`)."""
+    return (set(re.findall(r"\bdef (\w+)", text)) | set(re.findall(r"\bfn (\w+)", text))
+            | set(re.findall(r"\bboth_versions!\(\s*(\w+)", text)))
 
 
 def test_named_test_files_exist():
