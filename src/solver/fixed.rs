@@ -31,7 +31,7 @@
 //!
 //! A step whose stages are not finite, or whose W is singular, ends the call with an error; the
 //! integrator stays at the last completed step, as the adaptive drivers do. A call too short for
-//! Rodas5P's 1/h terms (below [`euler_floor`](super::common::euler_floor), as an importer's
+//! Rodas5P's 1/h terms (below `common::euler_floor`, as an importer's
 //! 5e-324 s step is) is one explicit Euler step instead, as in the adaptive drivers.
 
 use super::common::{euler_floor, Outputs};
