@@ -25,9 +25,12 @@ pub enum Output {
     Skip(String),
 }
 
-/// What the generators read besides the model: the repository root (for the packaged FMUs).
+/// What the generators read besides the model: the repository root (for the packaged FMUs), and
+/// whether this is `--check` (a figure that a rebuild elsewhere would change is written, not
+/// checked).
 pub struct Context {
     pub root: PathBuf,
+    pub check: bool,
 }
 
 /// A generator: the context and the block's arguments to its text.
@@ -453,6 +456,16 @@ fn binary_size(ctx: &Context, args: &[String]) -> Result<Output, String> {
             "{} has no {PORTABLE_WITNESS} (a --host-only or partial package): binary sizes \
              are those of `hsp package --require-portable`",
             fmi3.display()
+        )));
+    }
+    if ctx.check && folder.contains("darwin") {
+        // Measured: the same sources built in /work/main and in /work/ci-check gave macOS
+        // binaries 48 to 832 bytes apart (the Linux and Windows ones alike to the byte). The
+        // crates' symbol hashes depend on the checkout's path, and ld64.lld lays the Mach-O
+        // symbols out by them.
+        return Ok(Output::Skip(format!(
+            "the size of binaries/{folder} depends on the checkout's path (the symbol hashes \
+             ld64.lld lays out by), so `hsp docs` writes it and --check does not compare it"
         )));
     }
     let prefix = format!("binaries/{folder}/");

@@ -142,9 +142,10 @@ struct Pass {
     rewritten: Vec<(PathBuf, String)>,
 }
 
-fn pass(root: &Path) -> Result<Pass, String> {
+fn pass(root: &Path, check: bool) -> Result<Pass, String> {
     let ctx = Context {
         root: root.to_path_buf(),
+        check,
     };
     let mut cache = HashMap::new();
     let mut p = Pass {
@@ -226,7 +227,7 @@ pub fn run(root: &Path, check: bool, list: bool) -> Result<Vec<String>, String> 
             .map(|(name, what, _)| format!("{name:<18} {what}"))
             .collect());
     }
-    let p = pass(root)?;
+    let p = pass(root, check)?;
     let mut said: Vec<String> = p.skipped.iter().map(|s| format!("skipped {s}")).collect();
     if check {
         if !p.problems.is_empty() || !p.stale.is_empty() {
