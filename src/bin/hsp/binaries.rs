@@ -300,19 +300,23 @@ fn build_linux64(portability: Portability) -> Result<PathBuf, String> {
     // `hsp` links (with it) share one fingerprint in cargo's `target/release`, so building one
     // there made cargo rebuild the other at the next `cargo run --bin hsp`, minutes each time.
     let host_dir = target_dir().join(HOST_FMU_DIR);
-    let mut command = Command::new(cargo());
-    command
-        .args([
-            "build",
-            "--release",
-            "--lib",
-            "--no-default-features",
-            "--quiet",
-        ])
-        .arg("--target-dir")
-        .arg(&host_dir);
+    let mut command = cargo_build_library();
+    command.arg("--target-dir").arg(&host_dir);
     run(command, "cargo build --release --lib")?;
     built(host_dir.join("release").join(format!("lib{CRATE_LIB}.so")))
+}
+
+/// `cargo build` of the FMU's library alone: release, without the tools' `cli` feature.
+fn cargo_build_library() -> Command {
+    let mut command = Command::new(cargo());
+    command.args([
+        "build",
+        "--release",
+        "--lib",
+        "--no-default-features",
+        "--quiet",
+    ]);
+    command
 }
 
 /// The aarch64 Linux binary (FMI 3.0's `aarch64-linux`), against glibc 2.17 like the x86-64 one.
@@ -591,16 +595,8 @@ fn build_win64(require_portable: bool) -> Result<Option<PathBuf>, String> {
             require_portable,
         );
     }
-    let mut command = Command::new(cargo());
-    command
-        .args([
-            "build",
-            "--release",
-            "--lib",
-            "--no-default-features",
-            "--quiet",
-        ])
-        .args(["--target", WINDOWS_TARGET]);
+    let mut command = cargo_build_library();
+    command.args(["--target", WINDOWS_TARGET]);
     run(command, &format!("cargo build --target {WINDOWS_TARGET}"))?;
     built(
         target_dir()
