@@ -313,6 +313,7 @@ fn loes_rotor_junction_accepts_a_torsion_bar_and_hub() {
         &ControllerParameters::linear(),
         r,
         l.theta,
+        l.p_load,
     );
     g.connect_signal_port(l.valve_command, c.command);
     let shaft = g.add_zero("shaft.torque");

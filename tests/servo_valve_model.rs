@@ -289,8 +289,9 @@ fn coupled_power_balance_at_random_states() {
 
 #[test]
 fn linearisation_matches_g_est() {
-    let p = ServoValveParameters::default();
-    let ctrl = ControllerParameters::default();
+    // The paper's loop: the voltage-driven coil and eq. 1's controller (no pressure feedback).
+    let p = ServoValveParameters::voltage_driven();
+    let ctrl = ControllerParameters::paper();
     let pts = compare_with_g_est(&p, &ctrl, &log_frequencies(0.5, 100.0, 60)).unwrap();
     let mut report = String::new();
     for q in &pts {
@@ -320,11 +321,12 @@ fn linearisation_matches_g_est() {
 #[test]
 fn current_drive_replaces_the_coil_lag_by_the_current_loop() {
     let ctrl = ControllerParameters::linear();
-    let volt = ServoValveParameters::default();
+    let volt = ServoValveParameters::voltage_driven();
     let cur = ServoValveParameters {
         drive: CoilDrive::Current,
         ..volt.clone()
     };
+    assert_eq!(cur, ServoValveParameters::default());
     let lin_v = open_loop_linearization(&volt, &ctrl).unwrap();
     let lin_c = open_loop_linearization(&cur, &ctrl).unwrap();
     let y = lin_v

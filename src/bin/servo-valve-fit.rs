@@ -177,6 +177,9 @@ fn coupled_eigenvalues(values: &Values) -> Result<(Vec<String>, Vec<Mode>), Stri
 fn main() {
     let mut values = Values::from_start(&VARIABLES);
     set_by_name(&mut values, "hydraulics.model", "2").expect("hydraulics.model");
+    // The paper's loop, whose direct path G_est is: the voltage-driven coil, eq. 1's controller.
+    set_by_name(&mut values, "servo_valve.drive", "1").expect("servo_valve.drive");
+    set_by_name(&mut values, "controller.k_pl", "0").expect("controller.k_pl");
     let mut fit: Vec<String> = Vec::new();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {

@@ -16,6 +16,18 @@
 //! of some tens to hundreds of ohms) swings to within about 3 V of its rails. The paper's own loop
 //! saturates early: a 1 V reference step asks for 20 V.
 //!
+//! **Load-pressure feedback** ([`add_pressure_feedback`], not in the paper). A differential
+//! pressure transducer across the actuator reads `p_load = p_1 - p_2`; a first-order low-pass
+//! (corner `f_pl`, the transducer's signal conditioning) gives `p_f`, and `k_pl p_f` is
+//! subtracted from the error amplifier's output before the power amplifier:
+//! `e_in = A2 (A1 (r - y_POT) - k_pl p_f)`. It is the electronic form of a bypass leak across
+//! the motor (Merritt, *Hydraulic Control Systems*, 1967, sections 7.2 and 8.4): the valve opens
+//! against the load pressure as if the motor leaked `A2 K_qe k_pl` per pascal, which damps the
+//! oil column and the plate modes the loop excites, without the leak's flow loss. The price is a
+//! static compliance against an external load torque `T`: the loop settles where
+//! `A1 k_POT theta = k_pl T / D_m`. The default (5 mV/bar, 50 Hz) and why are in
+//! docs/model.md ("The default loop's damping"). `k_pl = 0` is the paper's eq. 1 (no transducer).
+//!
 //! **External control** (`external`). The analog controller is replaced by the input `e_in`
 //! \[V\], the coil drive voltage a user's own controller computes; it passes through the same
 //! output limit (turn `saturation` off to drive the coil without one). The potentiometer stays,
@@ -52,11 +64,25 @@ pub struct ControllerParameters {
     /// Whether the input `e_in` drives the coil in place of the analog controller
     /// (`controller.external`).
     pub external: bool,
+    /// Load-pressure feedback gain \[V/Pa\] (`controller.k_pl`): volts subtracted from the error
+    /// amplifier's output per pascal of filtered load pressure. Default 5e-8 V/Pa (5 mV/bar):
+    /// inside the band of gains that keep the default loop damped over the assumed parameters'
+    /// range (about 1.7e-8 to 6.5e-7), where the default move rings least (docs/model.md);
+    /// 0 switches the feedback off (the paper).
+    pub k_pl: f64,
+    /// Corner frequency of the pressure signal's first-order low-pass \[Hz\] (`controller.f_pl`):
+    /// 50 Hz, ten times the loop's highest mode it damps, far below the valve's 120 Hz.
+    pub f_pl: f64,
 }
 
+/// Default load-pressure feedback gain \[V/Pa\]: 5 mV/bar.
+pub const DEFAULT_K_PL: f64 = 5e-8;
+/// Default corner of the pressure signal's low-pass \[Hz\].
+pub const DEFAULT_F_PL: f64 = 50.0;
+
 impl Default for ControllerParameters {
-    /// The paper's gains with the output limit on and the analog controller in the loop (the
-    /// FMU's defaults).
+    /// The paper's gains with the output limit on, the analog controller in the loop and the
+    /// load-pressure feedback (the FMU's defaults).
     fn default() -> Self {
         ControllerParameters {
             a1: 2.0,
@@ -65,17 +91,34 @@ impl Default for ControllerParameters {
             e_max: DEFAULT_E_MAX,
             saturation: true,
             external: false,
+            k_pl: DEFAULT_K_PL,
+            f_pl: DEFAULT_F_PL,
         }
     }
 }
 
 impl ControllerParameters {
-    /// The paper's controller exactly as in eq. 1: the default gains, a linear amplifier.
+    /// The paper's controller exactly as in eq. 1: the default gains, a linear amplifier, no
+    /// pressure feedback.
     pub fn linear() -> Self {
         ControllerParameters {
             saturation: false,
+            ..Self::paper()
+        }
+    }
+
+    /// The paper's analog controller (eq. 1) with the amplifier's output limit: no pressure
+    /// feedback.
+    pub fn paper() -> Self {
+        ControllerParameters {
+            k_pl: 0.0,
             ..Self::default()
         }
+    }
+
+    /// Whether the load-pressure feedback is in the loop.
+    pub fn pressure_feedback(&self) -> bool {
+        self.k_pl != 0.0
     }
 
     /// The amplifier's output law.
@@ -89,10 +132,21 @@ impl ControllerParameters {
 
     /// Checks the gains and the rail; the error names the FMU variable.
     pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [("A1", self.a1), ("A2", self.a2), ("k_pot", self.k_pot)] {
+        for (name, v) in [
+            ("A1", self.a1),
+            ("A2", self.a2),
+            ("k_pot", self.k_pot),
+            ("k_pl", self.k_pl),
+        ] {
             if !v.is_finite() {
                 return Err(format!("controller.{name}: must be finite, got {v}"));
             }
+        }
+        if self.pressure_feedback() && !(self.f_pl.is_finite() && self.f_pl > 0.0) {
+            return Err(format!(
+                "controller.f_pl: the pressure filter's corner must be positive, got {} Hz",
+                self.f_pl
+            ));
         }
         if !(self.e_max.is_finite() && self.e_max > 0.0) {
             return Err(format!(
@@ -186,34 +240,62 @@ pub fn add_output_limit(
     }
 }
 
+/// The load pressure's low-pass `p_f` \[Pa\], `dp_f/dt = 2 pi f_pl (p_load - p_f)`: the
+/// integrator `<prefix>.p_f` (a state, nominal 10 bar) fed by `<prefix>.p_f_rate`. `None` without
+/// pressure feedback (`k_pl = 0`).
+pub fn add_pressure_feedback(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &ControllerParameters,
+    p_load: SignalId,
+) -> Option<SignalId> {
+    if !p.pressure_feedback() {
+        return None;
+    }
+    let w = 2.0 * core::f64::consts::PI * p.f_pl;
+    let rate = g.add_signal_port(format!("{prefix}.p_f_rate"));
+    let p_f = g.add_integrator(format!("{prefix}.p_f"), rate);
+    g.set_integrator_nominal(p_f, 1e6);
+    let sum = g.add_sum(format!("{prefix}.p_f_error"), &[(w, p_load), (-w, p_f)]);
+    g.connect_signal_port(rate, sum);
+    Some(p_f)
+}
+
 /// The two amplifiers: returns `(A1 error, power amplifier output)`, signals `<prefix>.A1`,
-/// `<prefix>.A2` (and `<prefix>.e_out`, the limited output, when `saturation`).
+/// `<prefix>.A2` (and `<prefix>.e_out`, the limited output, when `saturation`). With pressure
+/// feedback, `k_pl p_f` is subtracted between them (`<prefix>.A1_pl`).
 pub fn add_amplifiers(
     g: &mut BondGraph,
     prefix: &str,
     p: &ControllerParameters,
     error: SignalId,
+    p_load: SignalId,
 ) -> (SignalId, SignalId) {
     let a1 = g.add_gain(format!("{prefix}.A1"), p.a1, error);
-    let a2 = g.add_gain(format!("{prefix}.A2"), p.a2, a1);
+    let into_a2 = match add_pressure_feedback(g, prefix, p, p_load) {
+        Some(p_f) => g.add_sum(format!("{prefix}.A1_pl"), &[(1.0, a1), (-p.k_pl, p_f)]),
+        None => a1,
+    };
+    let a2 = g.add_gain(format!("{prefix}.A2"), p.a2, into_a2);
     (a1, add_output_limit(g, prefix, p, a2))
 }
 
 /// The closed-loop controller: potentiometer on `angle` \[rad\], error against `reference` \[V\],
-/// both amplifiers.
+/// both amplifiers, the pressure feedback from `p_load` \[Pa\].
 pub fn add_controller(
     g: &mut BondGraph,
     prefix: &str,
     p: &ControllerParameters,
     reference: SignalId,
     angle: SignalId,
+    p_load: SignalId,
 ) -> ControllerPorts {
     let y_pot = add_potentiometer(g, prefix, p, angle);
     let error = g.add_sum(
         format!("{prefix}.error"),
         &[(1.0, reference), (-1.0, y_pot)],
     );
-    let (amplified_error, command) = add_amplifiers(g, prefix, p, error);
+    let (amplified_error, command) = add_amplifiers(g, prefix, p, error, p_load);
     ControllerPorts {
         y_pot,
         error,
@@ -224,7 +306,8 @@ pub fn add_controller(
 
 /// The valve drive of the assembled model: the analog controller closing the loop on
 /// `reference`, or, with `p.external`, the external coil voltage `e_in` through the amplifier's
-/// output limit (the potentiometer stays). Returns `(y_POT, coil voltage)`.
+/// output limit (the potentiometer stays; the pressure feedback is the analog controller's, so it
+/// goes with it). Returns `(y_POT, coil voltage)`.
 pub fn add_drive(
     g: &mut BondGraph,
     prefix: &str,
@@ -232,12 +315,13 @@ pub fn add_drive(
     reference: SignalId,
     e_in: SignalId,
     angle: SignalId,
+    p_load: SignalId,
 ) -> (SignalId, SignalId) {
     if p.external {
         let y_pot = add_potentiometer(g, prefix, p, angle);
         (y_pot, add_output_limit(g, prefix, p, e_in))
     } else {
-        let c = add_controller(g, prefix, p, reference, angle);
+        let c = add_controller(g, prefix, p, reference, angle, p_load);
         (c.y_pot, c.command)
     }
 }

@@ -251,7 +251,7 @@ pub fn build_loop(loes: &LoesParameters, ctrl: &ControllerParameters) -> BondGra
     let mut g = BondGraph::new("loes_closed_loop");
     let r = g.add_input("r");
     let l = add_loes(&mut g, "loes", loes);
-    let c = controller::add_controller(&mut g, "controller", ctrl, r, l.theta);
+    let c = controller::add_controller(&mut g, "controller", ctrl, r, l.theta, l.p_load);
     g.connect_signal_port(l.valve_command, c.command);
     add_standard_outputs(&mut g, &l, c.y_pot);
     g
@@ -263,7 +263,7 @@ pub fn build_open_loop(loes: &LoesParameters, ctrl: &ControllerParameters) -> Bo
     let mut g = BondGraph::new("loes_open_loop");
     let e = g.add_input("e");
     let l = add_loes(&mut g, "loes", loes);
-    let (_, command) = controller::add_amplifiers(&mut g, "controller", ctrl, e);
+    let (_, command) = controller::add_amplifiers(&mut g, "controller", ctrl, e, l.p_load);
     g.connect_signal_port(l.valve_command, command);
     let y_pot = controller::add_potentiometer(&mut g, "controller", ctrl, l.theta);
     add_standard_outputs(&mut g, &l, y_pot);

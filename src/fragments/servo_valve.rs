@@ -199,7 +199,7 @@ pub fn add_servo_valve_loop(
     r: SignalId,
 ) -> Result<(ServoValvePorts, SignalId), String> {
     let sv = add_servo_valve(g, prefix, p)?;
-    let c = controller::add_controller(g, "controller", ctrl, r, sv.theta);
+    let c = controller::add_controller(g, "controller", ctrl, r, sv.theta, sv.p_load);
     g.connect_signal_port(sv.valve_command, c.command);
     Ok((sv, c.y_pot))
 }
@@ -213,7 +213,7 @@ pub fn build_open_loop(
     let mut g = BondGraph::new("servo_valve_open_loop");
     let e = g.add_input("e");
     let sv = add_servo_valve(&mut g, "servo_valve", p)?;
-    let (_, command) = controller::add_amplifiers(&mut g, "controller", ctrl, e);
+    let (_, command) = controller::add_amplifiers(&mut g, "controller", ctrl, e, sv.p_load);
     g.connect_signal_port(sv.valve_command, command);
     let y_pot = controller::add_potentiometer(&mut g, "controller", ctrl, sv.theta);
     add_standard_outputs(&mut g, &sv, y_pot);

@@ -84,6 +84,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
         loop_reference,
         e_in,
         theta,
+        p_load,
     );
     g.connect_signal_port(valve_command, command);
     g.add_output("controller.e_out", command);

@@ -227,6 +227,8 @@ impl Parameters {
                 e_max: values.real(idx::CONTROLLER_E_MAX),
                 saturation: values.boolean(idx::CONTROLLER_SATURATION),
                 external: values.boolean(idx::CONTROLLER_EXTERNAL),
+                k_pl: values.real(idx::CONTROLLER_K_PL),
+                f_pl: values.real(idx::CONTROLLER_F_PL),
             },
             reference: MoveParameters {
                 angle: values.real(idx::REFERENCE_ANGLE),

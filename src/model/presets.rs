@@ -17,6 +17,12 @@
 //! | `paper-fig9b` | Fig. 9b, Table 1 | the LOES driving hub and the paper's plate, linear amplifier |
 //! | `paper-fig10` | Fig. 10 | the paper's plate clamped at the root, shaken by F1/F2; the LOES motor alone |
 //!
+//! The two presets of the complete system (`complete`, `complete-hub-locked`) use the default
+//! design's current-feedback coil drive and load-pressure feedback (docs/model.md, "The default
+//! loop's damping"); every other preset uses the paper's voltage drive (`servo_valve.drive = 1`,
+//! where the full valve is in) and eq. 1's controller without pressure feedback
+//! (`controller.k_pl = 0`).
+//!
 //! The time-domain presets of the complete system use the consistent plate formulation and the
 //! command generator's move; the presets that reproduce a result of the paper use the paper's
 //! formulation (which is what reproduces eq. 16 and Table 1) and switch the generator and the
@@ -46,6 +52,10 @@ pub const COMPLETE: &str = "complete";
 /// The default move of the command generator, 30 degrees in radians (`reference.angle`).
 const MOVE_30_DEG: &str = "0.5235987755982988";
 
+/// The load-pressure feedback gain of the complete system's presets \[V/Pa\]
+/// (`controller.k_pl`, [`crate::fragments::controller::DEFAULT_K_PL`]).
+const PRESSURE_FEEDBACK: &str = "5e-8";
+
 /// The structural damping ratio of the presets that reproduce the paper (and of the motor-alone
 /// setups): 1 %, the value the paper's results were first reproduced with (docs/model-notes.md).
 const PAPER_ZETA: &str = "0.01";
@@ -65,6 +75,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "1"),
             ("controller.saturation", "true"),
             ("controller.external", "false"),
+            ("controller.k_pl", PRESSURE_FEEDBACK),
+            ("servo_valve.drive", "2"),
             ("reference.angle", MOVE_30_DEG),
             ("plate.Cd", "1.2"),
             ("plate.zeta", "0.02"),
@@ -82,6 +94,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "2"),
             ("controller.saturation", "true"),
             ("controller.external", "false"),
+            ("controller.k_pl", PRESSURE_FEEDBACK),
+            ("servo_valve.drive", "2"),
             ("reference.angle", MOVE_30_DEG),
             ("plate.Cd", "1.2"),
             ("plate.zeta", "0.02"),
@@ -99,6 +113,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "1"),
             ("controller.saturation", "true"),
             ("controller.external", "false"),
+            ("controller.k_pl", "0"),
+            ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
             ("plate.zeta", PAPER_ZETA),
@@ -116,6 +132,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "1"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("controller.k_pl", "0"),
+            ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
             ("plate.zeta", PAPER_ZETA),
@@ -133,6 +151,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "1"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("controller.k_pl", "0"),
+            ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
             ("plate.zeta", PAPER_ZETA),
@@ -151,6 +171,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "1"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("controller.k_pl", "0"),
+            ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
             ("plate.zeta", PAPER_ZETA),
@@ -168,6 +190,8 @@ pub const PRESETS: &[Preset] = &[
             ("plate.root", "2"),
             ("controller.saturation", "false"),
             ("controller.external", "false"),
+            ("controller.k_pl", "0"),
+            ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
             ("plate.zeta", PAPER_ZETA),

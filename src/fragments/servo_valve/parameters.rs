@@ -50,8 +50,10 @@ pub struct ServoValveParameters {
     /// coil's lag `R_bob / L_bob` = 64 1/s is the identified 65 1/s pole. Above the 0.1-1 H of
     /// single coils: the two coils of a torque motor in series, at low frequency, reach it.
     pub l_bob: f64,
-    /// How the power amplifier drives the coil (`drive`): a voltage (the paper's linear power
-    /// operational amplifier, the default) or a current (a current-feedback amplifier).
+    /// How the power amplifier drives the coil (`drive`): a current (a current-feedback
+    /// amplifier, the default: without the coil's 65 1/s lag in the position loop the loop keeps
+    /// its damping, docs/model.md) or a voltage (the paper's linear power operational
+    /// amplifier, the setup of the `G_est` fit: [`ServoValveParameters::voltage_driven`]).
     pub drive: CoilDrive,
     /// Transconductance of the current-feedback amplifier \[A/V\] (`G_i`): 12.5 mA/V, the
     /// voltage drive's DC `1 / R_bob`, so that 10 V commands the rated 125 mA either way.
@@ -121,6 +123,17 @@ pub struct ServoValveParameters {
     pub b_m: f64,
 }
 
+impl ServoValveParameters {
+    /// The defaults with the paper's voltage drive: the setup whose direct path is fitted to
+    /// `G_est` (the coil's lag is its 65 1/s pole).
+    pub fn voltage_driven() -> Self {
+        ServoValveParameters {
+            drive: CoilDrive::Voltage,
+            ..Self::default()
+        }
+    }
+}
+
 impl Default for ServoValveParameters {
     fn default() -> Self {
         let d_0: f64 = 0.25e-3;
@@ -135,7 +148,7 @@ impl Default for ServoValveParameters {
             dp_cr: 5e3,
             r_bob: 80.0,
             l_bob: 1.252,
-            drive: CoilDrive::Voltage,
+            drive: CoilDrive::Current,
             g_i: 0.0125,
             k_i: 7.8e3,
             u_c: 12.0,

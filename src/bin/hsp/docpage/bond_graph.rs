@@ -105,6 +105,11 @@ pub const SIGNALS: &str = "Signal part (Fig. 8): reference, controller, potentio
 /// The prefixes of the signal blocks drawn in [`SIGNALS`] (with the inputs that feed them).
 const SIGNAL_PREFIXES: &[&str] = &["reference", "controller"];
 
+/// The signals of the servo valve's current-feedback amplifier (`servo_valve.drive = 2`,
+/// `torque_motor::add_current_amplifier`): electronics, drawn in the signal part with the
+/// controller that feeds them.
+const CURRENT_AMPLIFIER_STEMS: &[&str] = &["i_demand", "i_error", "K_i", "u_limited"];
+
 /// The prefix of a name (up to its first `.`) and the stem after it (up to the next `.`).
 fn prefix_and_stem(name: &str) -> (&str, &str) {
     match name.split_once('.') {
@@ -373,8 +378,9 @@ pub fn svg(g: &BondGraph, strokes: Option<&[bool]>) -> String {
         s
     };
     let in_signal_part = |s: usize| {
-        let (p, _) = prefix_and_stem(&signals[s].name);
+        let (p, stem) = prefix_and_stem(&signals[s].name);
         SIGNAL_PREFIXES.contains(&p)
+            || (p == "servo_valve" && CURRENT_AMPLIFIER_STEMS.contains(&stem))
     };
     let mut sig_nodes: Vec<usize> = (0..signals.len()).filter(|&s| in_signal_part(s)).collect();
     // The inputs that feed the signal part directly.
