@@ -12,6 +12,7 @@
 //! | module | what it is | knows about |
 //! | --- | --- | --- |
 //! | [`solver`] | stiff one-step integrators (Rodas5P, Radau IIA) | numbers only |
+//! | [`eigen`] | eigenvalues of a real matrix, balanced first as LAPACK's `dgeev` does; damping ratios | numbers only |
 //! | [`bond_graph`] | elements, causality, compilation to state equations | energy and signals |
 //! | [`fragments`] | the paper's physical parts as bond-graph fragments | physics, no FMI |
 //! | [`model`] | the assembled model behind the FMU, its parameters and outputs | fragments, solver |
@@ -23,6 +24,7 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 pub mod bond_graph;
+pub mod eigen;
 pub mod fmi2;
 pub mod fmi3;
 pub mod fmu;

@@ -7,6 +7,7 @@
 mod fmu;
 
 use fmu::Fmu;
+use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
@@ -187,7 +188,7 @@ fn the_slowest_coupled_pair_is_converged() {
         assert_eq!(p.plate.formulation, Formulation::Consistent);
         let sys = Assembled::new(&p).unwrap();
         let lin = sys.compiled().linearize(&sys.initial_state(), sys.inputs());
-        let eig = lin.a.complex_eigenvalues();
+        let eig = eigen::eigenvalues(&lin.a);
         // The slowest oscillatory pair: the smallest |lambda| with an imaginary part.
         eig.iter()
             .filter(|l| l.im > 1e-3)

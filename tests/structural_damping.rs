@@ -4,6 +4,7 @@
 //! damping, is not stable on its own.
 
 use hydraulic_slewing_plate::bond_graph::BondGraph;
+use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::plate::damping::modal_dashpots;
 use hydraulic_slewing_plate::fragments::plate::{self, Formulation, PlateModel, PlateParameters};
@@ -48,11 +49,8 @@ fn clamped_structure(zeta: f64, bar_k: f64) -> Vec<Complex<f64>> {
     let m = g.compile().unwrap();
     let x = vec![0.0; m.n_states()];
     let lin = m.linearize(&x, &[0.0, 0.0]);
-    let mut eig: Vec<Complex<f64>> = lin
-        .a
-        .complex_eigenvalues()
-        .iter()
-        .copied()
+    let mut eig: Vec<Complex<f64>> = eigen::eigenvalues(&lin.a)
+        .into_iter()
         .filter(|l| l.im > 1e-6)
         .collect();
     eig.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
@@ -87,7 +85,7 @@ fn complete(sets: &[(&str, &str)]) -> Vec<Complex<f64>> {
     let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
     let sys = Assembled::new(&p).unwrap();
     let lin = sys.compiled().linearize(&sys.initial_state(), sys.inputs());
-    lin.a.complex_eigenvalues().iter().copied().collect()
+    eigen::eigenvalues(&lin.a)
 }
 
 /// With the structural damping off, the position loop and the structure alone are not stable:

@@ -13,6 +13,7 @@
 //! named `servo_valve.*` constants by Nelder-Mead in their logarithms, minimising
 //! [`g_est_cost`] over 40 log-spaced frequencies from 0.5 to 100 Hz, and prints them.
 
+use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::servo_valve::{
     compare_with_g_est, log_frequencies, open_loop_linearization, GEstPoint,
@@ -101,8 +102,9 @@ fn parameters(values: &Values) -> Parameters {
     })
 }
 
-/// Eigenvalues of the coupled loop at rest, sorted by magnitude; states whose column of `A` is
-/// zero (output integrals nothing feeds back, e.g. `hub.theta`) are left out and named.
+/// Eigenvalues of the coupled loop at rest (balanced, [`eigen::eigenvalues`]), sorted by
+/// magnitude; states whose column of `A` is zero (output integrals nothing feeds back, e.g.
+/// `hub.theta`) are left out and named.
 type Mode = (Complex<f64>, String);
 
 fn coupled_eigenvalues(values: &Values) -> Result<(Vec<String>, Vec<Mode>), String> {
@@ -115,14 +117,13 @@ fn coupled_eigenvalues(values: &Values) -> Result<(Vec<String>, Vec<Mode>), Stri
         .collect();
     let keep: Vec<usize> = (0..n).filter(|j| !free.contains(j)).collect();
     let a = DMatrix::from_fn(keep.len(), keep.len(), |i, j| lin.a[(keep[i], keep[j])]);
-    // Eigenvectors in nominal units, by inverse iteration near each eigenvalue: the three
-    // states that move most name the mode.
+    // Eigenvectors in nominal units, by inverse iteration on `a` (unbalanced) near each
+    // eigenvalue: the three states that move most name the mode.
     let nominal: Vec<f64> = keep.iter().map(|&i| sys.nominal()[i]).collect();
     let m = keep.len();
-    let mut ev: Vec<Mode> = a
-        .complex_eigenvalues()
-        .iter()
-        .map(|&l| {
+    let mut ev: Vec<Mode> = eigen::eigenvalues(&a)
+        .into_iter()
+        .map(|l| {
             let shift = l + Complex::new(1e-9 * (1.0 + l.norm()), 0.0);
             let mat = DMatrix::from_fn(m, m, |i, j| {
                 let v = Complex::new(a[(i, j)], 0.0);
@@ -239,7 +240,7 @@ fn main() {
     }
     let p = parameters(&values).servo_valve;
     let lin = open_loop_linearization(&p, &ctrl).expect("linearisation");
-    let mut ev: Vec<_> = lin.a.complex_eigenvalues().iter().copied().collect();
+    let mut ev = eigen::eigenvalues(&lin.a);
     ev.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
     println!("open-loop eigenvalues, motor uncoupled (1/s):");
     for e in ev {

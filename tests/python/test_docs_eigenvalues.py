@@ -1,8 +1,8 @@
 """The slow eigenvalue pairs that docs/model.md quotes, which `hsp docs` computes on the
-linearisation's A scaled by the states' nominal values, against LAPACK's eigenvalues of the same A
-(`numpy.linalg.eigvals`, which balances A first): an independent computation of the same figures.
-The QR iteration on A unscaled misses the consistent formulation's slow real parts by 0.6 and 2 %
-(docs/model.md), which the 4-digit comparison here would catch."""
+linearisation's A balanced first (src/eigen.rs), against LAPACK's eigenvalues of the same A
+(`numpy.linalg.eigvals`, which balances A with its own dgebal): an independent computation of the
+same figures. The QR iteration on A unbalanced misses the consistent formulation's slow real parts
+by 0.9 and 3 % (docs/model.md), which the 4-digit comparison here would catch."""
 
 import json
 import re

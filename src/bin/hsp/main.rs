@@ -10,7 +10,8 @@
 //!   prints a summary and writes the results as CSV.
 //! - `hsp presets [--json]`: the named parameter sets (the paper's configurations).
 //! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest, in
-//!   the layout of `Linearization::to_json` (names, operating point `x0`, `u0`, matrices by rows).
+//!   the layout of `Linearization::to_json` (names, operating point `x0`, `u0`, matrices by rows),
+//!   and A's `eigenvalues` as `[re, im]` (balanced, `hydraulic_slewing_plate::eigen`).
 //! - `hsp graph [--set ...]`: the model's bond graph as Graphviz DOT, with causal strokes.
 //! - `hsp modes --json [--set ...]`: natural frequencies of the plate model (eq. 14); `--plot FILE`
 //!   draws the first mode shapes.
@@ -52,6 +53,7 @@ mod web;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::compose::{bond_graph, plate_modes};
@@ -136,7 +138,8 @@ enum Command {
         json: bool,
     },
     /// Linearise the assembled model at rest: {"states", "inputs", "outputs", "x0", "u0", "A", "B",
-    /// "C", "D"}, the matrices as arrays of rows
+    /// "C", "D", "eigenvalues"}, the matrices as arrays of rows, A's eigenvalues as [re, im] pairs
+    /// (balanced first, as LAPACK's dgeev), the largest real part first
     Linearize {
         /// Print JSON (the only format)
         #[arg(long)]
@@ -266,7 +269,13 @@ fn linearize(model: &ModelArgs) -> Result<String, String> {
     let system = model.assembled()?;
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
-    Ok(lin.to_json().to_string())
+    let mut json = lin.to_json();
+    let eigenvalues: Vec<[f64; 2]> = eigen::eigenvalues(&lin.a)
+        .iter()
+        .map(|z| [z.re, z.im])
+        .collect();
+    json["eigenvalues"] = serde_json::json!(eigenvalues);
+    Ok(json.to_string())
 }
 
 fn model_info(model: &ModelArgs, json: bool) -> Result<String, String> {

@@ -12,6 +12,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use hydraulic_slewing_plate::bond_graph::Linearization;
+use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmu::Experiment;
 use hydraulic_slewing_plate::fragments::loes::{self, LoesParameters};
 use hydraulic_slewing_plate::fragments::servo_valve::{compare_with_g_est, g_est, log_frequencies};
@@ -204,9 +205,10 @@ fn mode_hz(modes: &[((usize, usize), f64)], label: (usize, usize)) -> Result<f64
         .ok_or_else(|| format!("the model has no mode {label:?}"))
 }
 
-/// Eigenvalues sorted by real part, then imaginary part.
+/// Eigenvalues ([`eigen::eigenvalues`], balanced) sorted by real part, then imaginary part, the
+/// smallest first.
 fn eigenvalues(a: &DMatrix<f64>) -> Vec<Complex<f64>> {
-    let mut e: Vec<Complex<f64>> = a.complex_eigenvalues().iter().copied().collect();
+    let mut e = eigen::eigenvalues(a);
     e.sort_by(|x, y| x.re.total_cmp(&y.re).then(x.im.total_cmp(&y.im)));
     e
 }
