@@ -6,7 +6,9 @@ the servo-valve coil. This loop runs at a 1 ms communication step:
     e_in = Kp (r - y_pot) + Kd (dr/dt - k_pot omega_motor),   y_pot = k_pot theta_motor [V],
 r [V] being the FMU's default move (minimum jerk, 30 deg of motor angle over 2 s from 0.5 s: the
 start values of reference.*) computed here; reference.angle = 0 turns the built-in one off.
-With Kp = A1 A2 = 20, the analog loop's gain, it must match the FMU's own analog loop (run too);
+With Kp = A1 A2 = 20, the analog loop's gain, it must match the FMU's own analog loop of eq. 1
+(run too, with controller.k_pl = 0: the default analog controller also feeds back the load
+pressure, which this loop leaves out);
 the last run adds a derivative term. Prints k_pot, then per run the final motor angle, overshoot,
 settling time (2 % of the move, from its start) and peak |w_tip|; and the P loop's largest gaps
 to the analog loop.  Run: .venv/bin/python examples/closed_loop.py [--fmu FMU]
@@ -33,11 +35,13 @@ STOP, H = float(md.defaultExperiment.stopTime), 1e-3
 KP = start["controller.A1"] * start["controller.A2"]  # the analog loop's gain: 20
 
 
-def run(kp=None, kd=0.0):  # kp None: the FMU's analog loop and built-in move
+def run(kp=None, kd=0.0):  # kp None: the FMU's analog loop of eq. 1 and built-in move
     slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier)
     slave.instantiate()
     slave.setupExperiment(startTime=0.0, stopTime=STOP)
-    if kp is not None:
+    if kp is None:
+        slave.setReal([vr["controller.k_pl"]], [0.0])
+    else:
         slave.setBoolean([vr["controller.external"]], [True])
         slave.setReal([vr["reference.angle"]], [0.0])
     slave.enterInitializationMode()

@@ -2,8 +2,8 @@
 """The example SSP system on libcosim (libcosimpy), checked against fmpy.
 
 fmu/HydraulicSlewingPlate.ssp (written by `hsp package`) holds SystemStructure.ssd, the FMU and
-the parameter set resources/servo-valve-motor.ssv (the full servo valve on the motor alone, no
-built-in move). libcosim loads it with the set bound to the instance `plate`, reads the 10 ms
+the parameter set resources/complete.ssv (the FMU's default: the complete system with its
+built-in 30 deg move). libcosim loads it with the set bound to the instance `plate`, reads the 10 ms
 fixed step and the 2 s stop time from the .ssd, and runs it with a 1 V step of the reference r;
 its log level is lowered to errors (at its default it prints ~1000 debug lines, at warnings one
 per FMI 2.0 Enumeration it cannot set). fmpy then runs the same FMU with the values read from

@@ -135,3 +135,21 @@ fn without_the_pressure_feedback_the_box_fails() {
     assert!(paper >= 8, "{paper}");
     assert!(current_only >= 6, "{current_only}");
 }
+
+/// The default gain sits inside a band, not on an edge: `k_pl` 2.5 times smaller and 10 times
+/// larger than the default (2e-8 and 5e-7 V/Pa) still meet the rule over the whole box.
+#[test]
+fn the_pressure_feedback_gain_has_margin_both_ways() {
+    let default = hydraulic_slewing_plate::fragments::controller::DEFAULT_K_PL;
+    for k in [default / 2.5, default * 10.0] {
+        let text = k.to_string();
+        for pt in points() {
+            let m = least(pt, &[("controller.k_pl", &text)]);
+            assert!(
+                m.zeta >= pt.zeta / 3.0,
+                "k_pl {k}: {}",
+                report(pt, m)
+            );
+        }
+    }
+}

@@ -26,8 +26,10 @@ pub use crate::docpage::text::escape;
 
 /// The preset the example system binds. Its switches (the Enumerations) are the FMU's defaults:
 /// libcosim skips FMI 2.0 Enumeration variables (it warns that it does not support them), so an
-/// SSP imported there applies the Real, Integer and Boolean settings only.
-pub const EXAMPLE: &str = "servo-valve-motor";
+/// SSP imported there applies the Real, Integer and Boolean settings only. Since the default
+/// loop's current drive, `complete` is the only preset with that property: every other one
+/// switches `servo_valve.drive` or `hydraulics.model` (docs/ecosystem.md).
+pub const EXAMPLE: &str = "complete";
 
 /// The example system's communication step and stop time, s.
 const EXAMPLE_STEP: f64 = 0.01;
