@@ -4,7 +4,8 @@
 fmu/HydraulicSlewingPlate.ssp (written by `hsp package`) holds SystemStructure.ssd, the FMU and
 the parameter set resources/complete.ssv (the FMU's default: the complete system with its
 built-in 30 deg move). libcosim loads it with the set bound to the instance `plate`, reads the 10 ms
-fixed step and the 2 s stop time from the .ssd, and runs it with a 1 V step of the reference r;
+fixed step and the 6 s stop time from the .ssd, and runs it with the reference r at 0 V (the
+preset's own move is the experiment);
 its log level is lowered to errors (at its default it prints ~1000 debug lines, at warnings one
 per FMI 2.0 Enumeration it cannot set). fmpy then runs the same FMU with the values read from
 the same .ssv, the same step and the same input.
@@ -37,17 +38,18 @@ with zipfile.ZipFile(ssp) as z:
     fmu_bytes = z.read(component.get("source"))
 kind = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true"}
 values = {n: kind[e.tag.split("}")[1]](e.get("value")) for n, e in values.items()}
+R = 0.0  # the reference r [V]: the preset's built-in move alone
 stop = float(ssd.find(f"{SSD}DefaultExperiment").get("stopTime"))
 OSP = "{http://opensimulationplatform.com/SSP/OSPAnnotations}"
 step = float(ssd.find(f".//{OSP}FixedStepAlgorithm").get("baseStepSize"))
 print(f"system {ssd.get('name')}: instance {component.get('name')}, {source} ({len(values)} values), "
-      f"0 to {stop:g} s at {step * 1e3:g} ms, r = 1 V")
+      f"0 to {stop:g} s at {step * 1e3:g} ms, r = {R:g} V")
 
 log_output_level(CosimLogLevel.ERROR)
 execution = CosimExecution.from_ssp_file(ssp)
 plate = execution.slave_index_from_instance_name(component.get("name"))
 refs = {v.name.decode(): v.reference for v in execution.slave_variables(plate)}
-execution.real_initial_value(plate, refs["r"], 1.0)
+execution.real_initial_value(plate, refs["r"], R)
 observer = CosimObserver.create_last_value()
 execution.add_observer(observer)
 cosim = []
@@ -61,7 +63,7 @@ with tempfile.TemporaryDirectory() as d:  # fmpy runs the FMU the .ssp carries
     fmu.write_bytes(fmu_bytes)
     enums = {v.name: int(v.start) for v in read_model_description(str(fmu)).modelVariables
              if v.type == "Enumeration"}
-    r = np.array([(0.0, 1.0, 0, 0, 0), (stop, 1.0, 0, 0, 0)],  # every input: r = 1 V, the others 0
+    r = np.array([(0.0, R, 0, 0, 0), (stop, R, 0, 0, 0)],  # every input: r = R, the others 0
                  dtype=[(n, float) for n in ("time", "r", "e_in", "F1", "F2")])
     res = simulate_fmu(str(fmu), stop_time=stop, output_interval=step, input=r,
                        output=["y_pot", "p_load"], start_values=values)

@@ -188,11 +188,19 @@ def test_libcosim_runs_the_ssp_as_fmpy_runs_the_same_parameter_set(fmu_path, vr)
                             output=["y_pot", "p_load"], start_values=start_values)
 
     ref = fmpy_run(values)
-    print("libcosim - fmpy: y_pot", np.max(np.abs(got[:, 0] - ref["y_pot"][1:])), "V, p_load",
-          np.max(np.abs(got[:, 1] - ref["p_load"][1:])), "Pa")
-    # The tolerances of tests/python/test_libcosim.py: the same FMU, the same steps.
-    np.testing.assert_allclose(got[:, 0], ref["y_pot"][1:], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(got[:, 1], ref["p_load"][1:], rtol=1e-9, atol=1e-3)
+    print("libcosim - fmpy before the last point: y_pot",
+          np.max(np.abs(got[:-1, 0] - ref["y_pot"][1:-1])), "V, p_load",
+          np.max(np.abs(got[:-1, 1] - ref["p_load"][1:-1])), "Pa; at the last: y_pot",
+          abs(got[-1, 0] - ref["y_pot"][-1]), "V, p_load", abs(got[-1, 1] - ref["p_load"][-1]), "Pa")
+    # The tolerances of tests/python/test_libcosim.py: the same FMU, the same steps. Up to the last
+    # point: fmpy passes the stop time, so there the FMU ends a step on it, where libcosim (no stop
+    # time) gets the dense output of a step that runs past it; both are within the solver's
+    # tolerance of the solution (rtol 1e-6 of the range).
+    np.testing.assert_allclose(got[:-1, 0], ref["y_pot"][1:-1], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got[:-1, 1], ref["p_load"][1:-1], rtol=1e-9, atol=1e-3)
+    for k, name in enumerate(["y_pot", "p_load"]):
+        span = np.ptp(ref[name])
+        assert abs(got[-1, k] - ref[name][-1]) < 1e-6 * span, (name, got[-1, k], ref[name][-1])
     # What libcosim would skip does not matter: every Enumeration the set holds is at its start
     # value (the premise of binding this preset, src/bin/hsp/ecosystem/ssp.rs).
     md = fmpy.read_model_description(fmu_path)

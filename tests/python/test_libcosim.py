@@ -3,8 +3,9 @@ with fmpy's results for the same experiments.
 
 libcosim ignores FMI 2.0 Enumeration variables (it logs "FMI 2.0 Enumeration variable type not
 supported"), so the FMU's switches (hydraulics.model, plate.formulation, ...) keep their defaults
-there: the test runs the full servo valve on the motor alone (preset servo-valve-motor), whose
-switches are the defaults, and checks that this is so."""
+there: the test runs the full servo valve on the motor alone (preset servo-valve-motor) with the
+coil drive at its default (the current drive; the preset's voltage drive is an Enumeration that
+libcosim would skip), and checks that every switch it needs is a default."""
 
 import numpy as np
 from fmpy import simulate_fmu
@@ -14,8 +15,9 @@ from libcosimpy.CosimSlave import CosimLocalSlave
 
 from conftest import preset
 
-# The full servo valve on the motor alone (the two step responses differ by more than 0.1 V).
-PRESET = preset("servo-valve-motor")
+# The full servo valve on the motor alone (the two step responses differ by more than 0.1 V), the
+# coil driven by current, the default.
+PRESET = {**preset("servo-valve-motor"), "servo_valve.drive": 2}
 
 STEP_NS = 10_000_000  # 10 ms
 STEPS = 200  # to 2 s

@@ -33,7 +33,7 @@ pub const EXAMPLE: &str = "complete";
 
 /// The example system's communication step and stop time, s.
 const EXAMPLE_STEP: f64 = 0.01;
-const EXAMPLE_STOP: f64 = 2.0;
+const EXAMPLE_STOP: f64 = 6.0;
 
 /// The connectors of the example's component: (name, kind).
 const CONNECTORS: &[(&str, &str)] = &[
