@@ -57,6 +57,19 @@ impl Logger {
     }
 
     /// Sends a message to the environment's logger if its category is enabled.
+    /// A message from the model ([`super::StepLog`]): built only when its category is enabled,
+    /// logged with status Warning in the warning category and OK in the others.
+    pub fn model_log(&self, category: LogCategory, message: &dyn Fn() -> String) {
+        if self.enabled(category) {
+            let status = if category == LogCategory::StatusWarning {
+                Status::Warning
+            } else {
+                Status::Ok
+            };
+            self.log(status, category, &message());
+        }
+    }
+
     pub fn log(&self, status: Status, category: LogCategory, message: &str) {
         if !self.enabled(category) {
             return;

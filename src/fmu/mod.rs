@@ -144,8 +144,14 @@ pub trait FmuModel: Sized + Send {
 
     /// Builds the model from the parameter values and computes the initial outputs and calculated
     /// parameters into `values`. Called when initialisation mode ends, and before then when the
-    /// environment reads an initial unknown; it may be called several times.
-    fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String>;
+    /// environment reads an initial unknown; it may be called several times. Warnings about the
+    /// parameters go to `log`.
+    fn initialize(
+        &mut self,
+        values: &mut Values,
+        experiment: &Experiment,
+        log: &mut StepLog,
+    ) -> Result<(), String>;
 
     /// Advances from `t_start` to exactly `t_end` with the inputs in `values` held constant, then
     /// writes the outputs into `values` (or leaves some to [`FmuModel::refresh`]). On failure the model stays at the last time it reached,

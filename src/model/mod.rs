@@ -10,12 +10,14 @@
 //!   variables: the [`OdeSystem`] the integrator advances.
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`validity`]: the warnings of the validity monitors at the communication points.
+//! - [`margin`]: the loop-margin monitor, the least damped mode at rest, at initialisation.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
 mod affine;
 pub mod assembly;
 pub mod compose;
 pub mod frf;
+pub mod margin;
 pub mod paper;
 pub mod parameters;
 pub mod presets;
@@ -24,6 +26,7 @@ pub mod variables;
 
 use serde::{Deserialize, Serialize};
 
+use crate::eigen;
 use crate::fmu::logging::Short;
 use crate::fmu::variables::reals_of;
 use crate::fmu::{
@@ -54,6 +57,10 @@ pub struct HydraulicSlewingPlate {
     on_demand: OnDemandValues,
     /// The validity monitors that have warned in this simulation.
     validity: validity::ValidityWatch,
+    /// The least damped mode at rest of the built model ([`margin`]), and whether its warning
+    /// has been logged (once per built model: initialisation may run several times).
+    margin: Option<eigen::Mode>,
+    margin_logged: bool,
 }
 
 /// Which of the values left by the last step ([`Assembled::write_at_point`]) have been computed:
@@ -78,7 +85,10 @@ impl HydraulicSlewingPlate {
     fn build(&mut self, values: &Values, experiment: &Experiment) -> Result<(), String> {
         let parameters = Parameters::from_values(values, experiment)?;
         if self.parameters.as_ref() != Some(&parameters) || self.system.is_none() {
-            self.system = Some(Assembled::new(&parameters)?);
+            let system = Assembled::new(&parameters)?;
+            self.margin = margin::least_damped_at_rest(&system);
+            self.margin_logged = false;
+            self.system = Some(system);
             self.parameters = Some(parameters);
         }
         Ok(())
@@ -126,6 +136,7 @@ impl HydraulicSlewingPlate {
         &mut self,
         values: &mut Values,
         experiment: &Experiment,
+        log: &mut StepLog,
     ) -> Result<(), String> {
         self.build(values, experiment)?;
         let (Some(system), Some(parameters)) = (&mut self.system, &self.parameters) else {
@@ -133,6 +144,18 @@ impl HydraulicSlewingPlate {
         };
         system.set_inputs(values);
         compose::write_plate_frequencies(parameters, values)?;
+        // The loop margin: NaN when every eigenvalue is a zero (no mode to damp).
+        let (zeta, f) = self
+            .margin
+            .map_or((f64::NAN, f64::NAN), |m| (m.zeta, m.frequency_hz()));
+        values.set_real(idx::MARGIN_ZETA, zeta);
+        values.set_real(idx::MARGIN_F, f);
+        if !self.margin_logged {
+            self.margin_logged = true;
+            if let Some(message) = self.margin.and_then(|m| margin::warning(&m, parameters)) {
+                log(LogCategory::StatusWarning, &|| message.clone());
+            }
+        }
         let integrator = Integrator::new(
             parameters.solver_options(system),
             experiment.start_time,
@@ -230,11 +253,16 @@ impl FmuModel for HydraulicSlewingPlate {
         parameters::check(index, value)
     }
 
-    fn initialize(&mut self, values: &mut Values, experiment: &Experiment) -> Result<(), String> {
+    fn initialize(
+        &mut self,
+        values: &mut Values,
+        experiment: &Experiment,
+        log: &mut StepLog,
+    ) -> Result<(), String> {
         self.integrator = None;
         self.on_demand.pending = false;
         self.validity.reset();
-        self.try_initialize(values, experiment)
+        self.try_initialize(values, experiment, log)
             .map_err(|message| with_suspects(message, values))
     }
 

@@ -71,7 +71,12 @@ impl FmuModel for Decay {
     fn new() -> Self {
         Decay { x: 1.0, t: 0.0 }
     }
-    fn initialize(&mut self, values: &mut Values, e: &Experiment) -> Result<(), String> {
+    fn initialize(
+        &mut self,
+        values: &mut Values,
+        e: &Experiment,
+        _log: &mut StepLog,
+    ) -> Result<(), String> {
         self.x = 1.0;
         self.t = e.start_time;
         values.set_real(2, self.x);

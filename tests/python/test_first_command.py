@@ -114,7 +114,7 @@ def test_first_command_prints_the_summary_and_writes_the_results_and_plot(first_
     out = done.stdout
     for heading in ("motor", "hub", "tip", "validity", "solver", "results", "plots"):
         assert f"\n  {heading} " in out, f"no {heading!r} line in\n{out}"
-    assert "no warning: the run stays within the linear model's range" in out
+    assert "no warning: the loop is damped and the run stays within the linear model's range" in out
     results = checkout / "results"
     assert (results / "default_experiment.csv").stat().st_size > 100_000
     png = (results / "default_experiment.png").read_bytes()

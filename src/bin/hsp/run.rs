@@ -146,8 +146,10 @@ pub struct RunInfo {
     pub stats: Vec<i32>,
     /// Wall-clock time of the stepping loop \[s\].
     pub seconds: f64,
-    /// The warnings the FMU logged (the validity monitors').
+    /// The warnings the FMU logged (the loop margin's and the validity monitors').
     pub warnings: Vec<String>,
+    /// The loop margin after initialisation: `margin.zeta` and `margin.f` \[Hz\].
+    pub margin: (f64, f64),
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
@@ -198,25 +200,29 @@ fn experiment(
     settings: &[String],
     parameters: Parameters,
 ) -> Result<(Results, RunInfo), String> {
-    let (results, stats, seconds) = simulate(args, fmu_path, settings, &parameters)?;
+    let (results, stats, seconds, margin) = simulate(args, fmu_path, settings, &parameters)?;
     let info = RunInfo {
         preset: args.preset.clone(),
         parameters,
         stats,
         seconds,
         warnings: super::loader::take_warnings(),
+        margin,
     };
     Ok((results, info))
 }
 
-/// Runs the experiment through the FMU's C ABI; returns the results table, the solver statistics
-/// and the wall time of the stepping loop.
+/// What [`simulate`] returns: the results table, the solver statistics, the wall time of the
+/// stepping loop and the loop margin (`margin.zeta`, `margin.f`).
+type Simulated = (Results, Vec<i32>, f64, (f64, f64));
+
+/// Runs the experiment through the FMU's C ABI.
 fn simulate(
     args: &RunArgs,
     fmu_path: &std::path::Path,
     settings: &[String],
     p: &Parameters,
-) -> Result<(Results, Vec<i32>, f64), String> {
+) -> Result<Simulated, String> {
     let fmu = Fmu::load(fmu_path)?;
     let inst = fmu.instantiate("hsp-run")?;
     let stop = args.stop();
@@ -228,6 +234,7 @@ fn simulate(
     inst.set_real(vr::E_IN, args.e_in)?;
     inst.enter_initialization()?;
     inst.exit_initialization()?;
+    let margin = inst.get_reals(&[vr::MARGIN_ZETA, vr::MARGIN_F])?;
 
     let mut names: Vec<&str> = RECORDED.to_vec();
     if p.hydraulics == HydraulicsModel::ServoValve {
@@ -264,7 +271,7 @@ fn simulate(
     let seconds = wall.elapsed().as_secs_f64();
     let stats = inst.solver_stats()?;
     inst.terminate()?;
-    Ok((results, stats, seconds))
+    Ok((results, stats, seconds, (margin[0], margin[1])))
 }
 
 /// Step-response figures of a series that starts at 0 and should end at `target`.
@@ -488,10 +495,17 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         max_abs(&col("hub.omega_ratio")).powi(2)
     )
     .unwrap();
+    let (zeta, f) = info.margin;
+    writeln!(
+        s,
+        "  margin  least damped mode at rest {f:.3} Hz, damping ratio {zeta:.4} (the FMU warns below {:.4}, plate.zeta/3)",
+        hydraulic_slewing_plate::model::margin::threshold(p)
+    )
+    .unwrap();
     if info.warnings.is_empty() {
         writeln!(
             s,
-            "          no warning: the run stays within the linear model's range"
+            "          no warning: the loop is damped and the run stays within the linear model's range"
         )
         .unwrap();
     }

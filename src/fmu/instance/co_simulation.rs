@@ -52,14 +52,7 @@ impl<M: FmuModel> Instance<M> {
         }
         let logger = &self.logger;
         let mut log = |category: LogCategory, message: &dyn Fn() -> String| {
-            if logger.enabled(category) {
-                let status = if category == LogCategory::StatusWarning {
-                    Status::Warning
-                } else {
-                    Status::Ok
-                };
-                logger.log(status, category, &message());
-            }
+            logger.model_log(category, message)
         };
         let result = self
             .model

@@ -371,7 +371,14 @@ impl<M: FmuModel> Instance<M> {
     /// Builds the model if a parameter changed since it was last built.
     fn ensure_initialized(&mut self) -> Result<(), Status> {
         if self.needs_initialize {
-            if let Err(msg) = self.model.initialize(&mut self.values, &self.experiment) {
+            let logger = &self.logger;
+            let mut log = |category: LogCategory, message: &dyn Fn() -> String| {
+                logger.model_log(category, message)
+            };
+            if let Err(msg) = self
+                .model
+                .initialize(&mut self.values, &self.experiment, &mut log)
+            {
                 return Err(self.error(&format!("initialization failed: {msg}")));
             }
             if let Some(bad) = self.non_finite_result() {

@@ -1,0 +1,90 @@
+//! The loop-margin monitor: how well damped the model is at rest, computed once when the FMU is
+//! initialised (docs/model.md, "The default loop's damping").
+//!
+//! The model is linearised at its rest state with the inputs at zero (`A`, the exact Jacobian of
+//! the compiled bond graph); its eigenvalues are the balanced ones of [`crate::eigen`]; the least
+//! damped mode (the smallest damping ratio `ζ = −Re λ / |λ|`) is written to the calculated
+//! parameters `margin.zeta` and `margin.f`. Eigenvalues of modulus below 1e-9 of the largest are
+//! left out: they are the zeros of the free hub angle, of the command generator's clock and, with
+//! the motor uncoupled, of the plate's rigid rotation, none of them a vibration.
+//!
+//! A warning is logged when the closed loop is unstable (`ζ < 0`) or damped less than a third of
+//! the structure's own damping ratio (`plate.zeta / 3`, the rule the default loop is designed to
+//! meet over the range of the unmeasured parameters, `tests/robust_plant.rs`): a disturbance of
+//! that mode then rings three times longer than the structure alone would let it. With
+//! `controller.external` the FMU's analog loop is open (the user's controller closes it), so the
+//! monitor reports the plant with `e_in` held and does not warn.
+//!
+//! Cost: one Jacobian and one eigenvalue problem of the state dimension when the model is built
+//! (again only when a parameter changes), none in the steps; `bench-margin` measures it.
+
+use crate::eigen::{eigenvalues, least_damped, Mode};
+
+use super::assembly::Assembled;
+use super::parameters::Parameters;
+
+/// Eigenvalues of modulus below this fraction of the largest are rigid-body and integrator zeros.
+pub const ZERO_FRACTION: f64 = 1e-9;
+
+/// The warning threshold as a fraction of `plate.zeta`.
+pub const THRESHOLD_FRACTION: f64 = 1.0 / 3.0;
+
+/// Round-off allowance on the damping ratio: a mode at exactly the threshold (an undamped plate
+/// mode with `plate.zeta = 0`, whose real part is round-off) does not warn.
+const ROUND_OFF: f64 = 1e-9;
+
+/// The least damped mode of the model at rest, `None` when every eigenvalue is a zero.
+pub fn least_damped_at_rest(system: &Assembled) -> Option<Mode> {
+    let model = system.compiled();
+    let n = model.n_states();
+    let mut a = nalgebra::DMatrix::zeros(n, n);
+    let u = vec![0.0; model.n_inputs()];
+    model.jacobian(&system.initial_state(), &u, &mut a);
+    let ev = eigenvalues(&a);
+    let largest = ev
+        .iter()
+        .map(|z| crate::eigen::modulus(*z))
+        .fold(0.0, f64::max);
+    least_damped(&ev, ZERO_FRACTION * largest)
+}
+
+/// The damping ratio below which the monitor warns.
+pub fn threshold(p: &Parameters) -> f64 {
+    THRESHOLD_FRACTION * p.plate.zeta
+}
+
+/// The warning for a least damped mode `m`, if it deserves one.
+pub fn warning(m: &Mode, p: &Parameters) -> Option<String> {
+    if p.controller.external {
+        return None;
+    }
+    let limit = threshold(p);
+    let f = m.frequency_hz();
+    if m.zeta.is_nan() {
+        return Some(
+            "loop margin: the eigenvalues of the model at rest could not be computed".into(),
+        );
+    }
+    if m.zeta < -ROUND_OFF {
+        let sigma = m.eigenvalue.re;
+        return Some(format!(
+            "loop margin: the loop at rest is unstable: its mode at {f:.3} Hz grows (damping ratio {:.4}, \
+             amplitude doubling every {:.3} s); a run will oscillate or drift away. Check \
+             servo_valve.beta, servo_valve.R_leak, plate.zeta and the loop's design \
+             (controller.k_pl, servo_valve.drive; docs/model.md, \"The default loop's damping\")",
+            m.zeta,
+            core::f64::consts::LN_2 / sigma
+        ));
+    }
+    if m.zeta < limit - ROUND_OFF {
+        return Some(format!(
+            "loop margin: the loop at rest is poorly damped: its mode at {f:.3} Hz has a damping ratio \
+             of {:.4}, below {limit:.4} (a third of plate.zeta), so a disturbance of it rings on \
+             long after the structure's own modes have decayed. Check servo_valve.beta, \
+             servo_valve.R_leak, plate.zeta and the loop's design (controller.k_pl, \
+             servo_valve.drive; docs/model.md, \"The default loop's damping\")",
+            m.zeta
+        ));
+    }
+    None
+}
