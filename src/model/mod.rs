@@ -11,6 +11,8 @@
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`validity`]: the warnings of the validity monitors at the communication points.
 //! - [`margin`]: the loop-margin monitor, the least damped mode at rest, at initialisation.
+//! - [`oscillation`]: the oscillation monitor, a limit cycle of the loop at the communication
+//!   points.
 //! - [`HydraulicSlewingPlate`]: the [`FmuModel`] the C ABI exports.
 
 mod affine;
@@ -18,6 +20,7 @@ pub mod assembly;
 pub mod compose;
 pub mod frf;
 pub mod margin;
+pub mod oscillation;
 pub mod paper;
 pub mod parameters;
 pub mod presets;
@@ -61,6 +64,8 @@ pub struct HydraulicSlewingPlate {
     /// has been logged (once per built model: initialisation may run several times).
     margin: Option<eigen::Mode>,
     margin_logged: bool,
+    /// The oscillation monitor's memory of this simulation.
+    oscillation: oscillation::OscillationWatch,
 }
 
 /// Which of the values left by the last step ([`Assembled::write_at_point`]) have been computed:
@@ -218,6 +223,41 @@ impl HydraulicSlewingPlate {
         });
     }
 
+    /// Feeds the loop's error at the communication point `t` to the oscillation monitor and logs
+    /// its warning (the analog loop only: with an external controller the FMU's loop is open).
+    fn check_oscillation(&mut self, values: &mut Values, t: f64, log: &mut StepLog) {
+        let Some(p) = &self.parameters else {
+            return;
+        };
+        if p.controller.external || self.oscillation.has_warned() {
+            return;
+        }
+        let k_pot = p.controller.k_pot;
+        self.refresh(values, Some(idx::CONTROLLER_REFERENCE));
+        self.refresh(values, Some(idx::Y_POT));
+        let reference = values.real(idx::CONTROLLER_REFERENCE);
+        let error = reference - values.real(idx::Y_POT);
+        let threshold = oscillation::AMPLITUDE_RAD * k_pot.abs();
+        if let Some(o) = self.oscillation.observe(t, reference, error, threshold) {
+            log(LogCategory::StatusWarning, &|| {
+                format!(
+                    "oscillation: the position loop oscillates at {:.2} Hz without decaying, t = {}: \
+                     its error r - y_pot swings by {:.3} V ({:.3} deg of motor angle), {:.3} V over \
+                     the {} s before, with the command held since t = {}. The loop is limit-cycling \
+                     (see the loop margin at initialisation: servo_valve.beta, servo_valve.R_leak, \
+                     plate.zeta, controller.k_pl, servo_valve.drive)",
+                    o.f_hz,
+                    Short(o.t),
+                    o.amplitude,
+                    (o.amplitude / k_pot).to_degrees(),
+                    o.earlier,
+                    Short(oscillation::WINDOW),
+                    Short(o.held_since)
+                )
+            });
+        }
+    }
+
     /// The solver's counters into their integer variables.
     fn write_stats(integrator: &Integrator, values: &mut Values) {
         let stats = integrator.stats();
@@ -262,6 +302,7 @@ impl FmuModel for HydraulicSlewingPlate {
         self.integrator = None;
         self.on_demand.pending = false;
         self.validity.reset();
+        self.oscillation.reset();
         self.try_initialize(values, experiment, log)
             .map_err(|message| with_suspects(message, values))
     }
@@ -343,6 +384,7 @@ impl FmuModel for HydraulicSlewingPlate {
             });
         }
         self.check_validity(values, t_end, log);
+        self.check_oscillation(values, t_end, log);
         Ok(())
     }
 
@@ -454,8 +496,9 @@ impl FmuModel for HydraulicSlewingPlate {
         time: Option<f64>,
     ) -> Result<(), String> {
         // Until it checks out, the model holds no integrator: a failed restore leaves nothing
-        // half-restored to step on.
+        // half-restored to step on. The oscillation monitor's history is another trajectory's.
         self.integrator = None;
+        self.oscillation.reset();
         let integrator = match (&state.integrator, time) {
             (None, None) => return Ok(()), // saved before the model was built
             (None, Some(_)) => {

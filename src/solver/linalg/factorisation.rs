@@ -27,6 +27,10 @@ pub struct Factorisation<T: Scalar> {
     /// LU of the Schur complement (m × m, column-major) and its interchanges.
     schur: Vec<T>,
     schur_piv: Vec<usize>,
+    /// The dense partition [`factor_with_fallback`] falls back to, kept once made: a system
+    /// whose structured elimination fails at every step (a badly scaled block) then allocates
+    /// nothing per step.
+    dense_fallback: Option<Arc<Partition>>,
 }
 
 impl<T: Scalar> Factorisation<T> {
@@ -40,6 +44,7 @@ impl<T: Scalar> Factorisation<T> {
             c: Vec::new(),
             schur: Vec::new(),
             schur_piv: Vec::new(),
+            dense_fallback: None,
         }
     }
 
@@ -257,7 +262,14 @@ pub(crate) fn factor_with_fallback<T: Scalar>(
     if part.is_dense() {
         return false;
     }
-    let dense = Arc::new(Partition::dense(part.dim()));
+    let dense = match &f.dense_fallback {
+        Some(d) if d.dim() == part.dim() => Arc::clone(d),
+        _ => {
+            let d = Arc::new(Partition::dense(part.dim()));
+            f.dense_fallback = Some(Arc::clone(&d));
+            d
+        }
+    };
     f.factor(&dense, &entry)
 }
 

@@ -1,0 +1,312 @@
+//! The oscillation monitor: one warning when the position loop oscillates without decaying after
+//! its command has settled (a limit cycle), with the oscillation's frequency and amplitude
+//! (docs/model.md, "Where the model stops").
+//!
+//! The watched signal is the loop's error `e = reference − y_POT` \[V\] (the analog controller's
+//! own input), sampled at the communication points. Once the loop's reference has been constant
+//! for two windows of [`WINDOW`] seconds, every window the last two windows are compared: the
+//! amplitude spectrum of each (a cubic trend taken out, then a Hann-windowed Fourier sum over the
+//! samples, exact for uneven sampling) is evaluated from [`F_MIN`] to [`F_MAX`] Hz on a grid of
+//! [`F_STEP`] and refined around its peaks. A spectral peak of the later window whose amplitude is above
+//! [`AMPLITUDE_RAD`] of motor angle (times `k_pot`) and not below [`SUSTAINED`] times the earlier
+//! window's at that frequency is an oscillation that does not decay: the monitor warns once per
+//! simulation. A
+//! decaying vibration (the plate ringing after a move) always shows a smaller amplitude in the
+//! later window and never warns, however slowly it decays.
+//!
+//! Limits: frequencies between [`F_MIN`] and the smaller of [`F_MAX`] and a quarter of the
+//! sampling rate (5 Hz at 50 ms communication steps), as peaks inside that band (a maximum at
+//! its edge is the flank of a slower or faster motion); a command that changes at every point (a
+//! loop closed by the importer through `r`) never settles and is not watched; with
+//! `controller.external` the FMU's loop is open and the monitor is off.
+//!
+//! Cost: a sample is kept at most every [`MIN_SPACING`] (400 per window); the spectra are
+//! computed once per window of simulated time, about 10^5 complex multiply-adds.
+
+/// The length of each of the two compared windows \[s\]: four periods of the slowest loop mode
+/// it is meant for (2 Hz), a frequency resolution of 0.5 Hz before refinement.
+pub const WINDOW: f64 = 2.0;
+/// Lowest frequency watched \[Hz\]: two periods in a window.
+pub const F_MIN: f64 = 1.0;
+/// Highest frequency watched \[Hz\]: above the loop's and the valve's slow modes, below the
+/// structure's stiff ones, which no loop drives into a limit cycle.
+pub const F_MAX: f64 = 25.0;
+/// Grid step of the spectra \[Hz\]; the peak is refined by parabolic interpolation.
+pub const F_STEP: f64 = 0.25;
+/// The smallest amplitude reported, in motor angle \[rad\]: 1 mrad (0.057 deg), one and a half
+/// counts of a 12-bit reading of the potentiometer's 150 deg.
+pub const AMPLITUDE_RAD: f64 = 1e-3;
+/// The later window's amplitude must be at least this fraction of the earlier one's: an
+/// oscillation that loses less than 1 % in a window (at 3.3 Hz, a damping ratio below 2.4e-4)
+/// does not decay; the fraction absorbs the round-off of equal amplitudes.
+pub const SUSTAINED: f64 = 0.99;
+/// The shortest spacing of the samples kept \[s\] (finer communication steps are thinned).
+pub const MIN_SPACING: f64 = 0.005;
+
+/// An oscillation found: frequency \[Hz\], amplitude in the later window and in the earlier one
+/// \[V of loop error\], the time it was found and since when the command has been held \[s\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Oscillation {
+    pub f_hz: f64,
+    pub amplitude: f64,
+    pub earlier: f64,
+    pub t: f64,
+    pub held_since: f64,
+}
+
+/// The monitor's memory over a simulation.
+#[derive(Clone, Debug, Default)]
+pub struct OscillationWatch {
+    /// `(t, e)` since the reference last changed, at most two windows back.
+    samples: Vec<(f64, f64)>,
+    /// The reference at the last sample (bits), and since when it has been constant.
+    reference: Option<u64>,
+    held_since: f64,
+    /// Simulated time of the next comparison.
+    next_check: f64,
+    warned: bool,
+    /// The two windows' [`detrended`] samples (memory reused: no allocation in the steady
+    /// state).
+    scratch: [Vec<(f64, f64, f64)>; 2],
+}
+
+impl OscillationWatch {
+    /// Forgets everything (a new simulation, or a restored state).
+    pub fn reset(&mut self) {
+        *self = OscillationWatch::default();
+    }
+
+    /// Whether the monitor has warned in this simulation.
+    pub fn has_warned(&self) -> bool {
+        self.warned
+    }
+
+    /// Takes the sample at the communication point `t` (the loop's reference and error \[V\]);
+    /// returns the oscillation the first time one is found. `threshold` is the amplitude of
+    /// error \[V\] below which nothing is reported.
+    pub fn observe(
+        &mut self,
+        t: f64,
+        reference: f64,
+        error: f64,
+        threshold: f64,
+    ) -> Option<Oscillation> {
+        if self.warned || !(t.is_finite() && error.is_finite()) {
+            return None;
+        }
+        if self.reference != Some(reference.to_bits()) {
+            self.reference = Some(reference.to_bits());
+            self.held_since = t;
+            self.samples.clear();
+            self.next_check = t + 2.0 * WINDOW;
+        }
+        if self
+            .samples
+            .last()
+            .is_none_or(|&(last, _)| t - last >= MIN_SPACING * (1.0 - 1e-9))
+        {
+            self.samples.push((t, error));
+        }
+        // Keep two windows (and the sample just before them, which weights the first).
+        let start = t - 2.0 * WINDOW;
+        let first_kept = self.samples.partition_point(|&(s, _)| s < start);
+        if first_kept > 1 {
+            self.samples.drain(..first_kept - 1);
+        }
+        if t < self.next_check {
+            return None;
+        }
+        self.next_check = t + WINDOW;
+        let found = compare(&self.samples, t, threshold, &mut self.scratch)?;
+        self.warned = true;
+        Some(Oscillation {
+            held_since: self.held_since,
+            ..found
+        })
+    }
+}
+
+/// The samples of `s` in `[a, b)` ready for [`amplitude`]: `(t − a, residual, weight)`, the
+/// residual being what is left of the signal after a least-squares cubic in time (weighted by
+/// the time to the next sample) is taken out, the weight the Hann window times that time. The
+/// cubic removes what moves slower than the window (a drift, or a mode below [`F_MIN`] whose
+/// Hann side lobes would otherwise show as a peak inside the band); a sinusoid of two or more
+/// periods in the window is almost orthogonal to it.
+fn detrended(s: &[(f64, f64)], a: f64, b: f64, points: &mut Vec<(f64, f64, f64)>) {
+    let span = b - a;
+    points.clear();
+    points.extend(
+        s.iter()
+            .enumerate()
+            .filter(|(_, &(t, _))| t >= a && t < b)
+            .map(|(k, &(t, e))| {
+                let dt = s.get(k + 1).map_or(0.0, |&(n, _)| n.min(b) - t);
+                (t - a, e, dt)
+            }),
+    );
+    // Normal equations of the cubic in x = 2 (t - a) / span - 1, in [-1, 1).
+    let basis = |x: f64| [1.0, x, x * x, x * x * x];
+    let mut gram = nalgebra::Matrix4::<f64>::zeros();
+    let mut rhs = nalgebra::Vector4::<f64>::zeros();
+    for &(t, e, dt) in points.iter() {
+        let p = basis(2.0 * t / span - 1.0);
+        for i in 0..4 {
+            rhs[i] += dt * p[i] * e;
+            for j in 0..4 {
+                gram[(i, j)] += dt * p[i] * p[j];
+            }
+        }
+    }
+    let coefficients = gram
+        .lu()
+        .solve(&rhs)
+        .unwrap_or_else(nalgebra::Vector4::zeros);
+    for (t, e, dt) in points.iter_mut() {
+        let p = basis(2.0 * *t / span - 1.0);
+        *e -= (0..4).map(|i| coefficients[i] * p[i]).sum::<f64>();
+        let hann = 0.5 - 0.5 * crate::math::cos(2.0 * core::f64::consts::PI * *t / span);
+        *dt *= hann;
+    }
+}
+
+/// The amplitude at `f` \[Hz\] of a sinusoid in the [`detrended`] samples `points`: the
+/// Hann-windowed Fourier sum, exact for uneven spacing.
+fn amplitude(points: &[(f64, f64, f64)], f: f64) -> f64 {
+    let w = 2.0 * core::f64::consts::PI * f;
+    let (mut re, mut im, mut sw) = (0.0, 0.0, 0.0);
+    for &(t, e, q) in points {
+        let (sin, cos) = crate::math::sin_cos(w * t);
+        re += q * e * cos;
+        im -= q * e * sin;
+        sw += q;
+    }
+    if sw <= 0.0 {
+        return 0.0;
+    }
+    2.0 * (re * re + im * im).sqrt() / sw
+}
+
+/// Compares the two windows ending at `t`: the largest spectral peak of the later one above
+/// `threshold` whose amplitude is at least [`SUSTAINED`] times the earlier window's at the same
+/// frequency.
+fn compare(
+    s: &[(f64, f64)],
+    t: f64,
+    threshold: f64,
+    scratch: &mut [Vec<(f64, f64, f64)>; 2],
+) -> Option<Oscillation> {
+    let (a, m) = (t - 2.0 * WINDOW, t - WINDOW);
+    // The band the sampling resolves: a quarter of the sampling rate.
+    let spacing = s
+        .windows(2)
+        .filter(|p| p[1].0 > a)
+        .map(|p| p[1].0 - p[0].0)
+        .fold(0.0, f64::max);
+    let f_max = F_MAX.min(0.25 / spacing.max(f64::MIN_POSITIVE));
+    let n = ((f_max - F_MIN) / F_STEP).floor() as usize + 1;
+    let [earlier, later] = scratch;
+    detrended(s, a, m, earlier);
+    detrended(s, m, t + 1e-9, later);
+    let at = |k: usize| amplitude(later, F_MIN + k as f64 * F_STEP);
+    let mut best: Option<Oscillation> = None;
+    // Interior peaks only: a maximum at an end of the band is the flank of something outside it.
+    // The spectrum at bins k - 1, k, k + 1, slid along the grid.
+    let (mut left, mut centre) = (at(0), at(1.min(n - 1)));
+    for k in 1..n.saturating_sub(1) {
+        let (l, c, r) = (left, centre, at(k + 1));
+        (left, centre) = (c, r);
+        if !(c >= l && c >= r) || c <= threshold {
+            continue;
+        }
+        // Parabolic interpolation of the peak on the grid.
+        let den = l - 2.0 * c + r;
+        let shift = if den < 0.0 { 0.5 * (l - r) / den } else { 0.0 };
+        let f = F_MIN + (k as f64 + shift.clamp(-0.5, 0.5)) * F_STEP;
+        let now = amplitude(later, f);
+        let before = amplitude(earlier, f);
+        if now > threshold && now >= SUSTAINED * before && best.is_none_or(|b| now > b.amplitude) {
+            best = Some(Oscillation {
+                f_hz: f,
+                amplitude: now,
+                earlier: before,
+                t,
+                held_since: f64::NAN,
+            });
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs the watch over `e(t)` sampled every `h` to `stop`, the reference held from 0.
+    fn watch(h: f64, stop: f64, e: impl Fn(f64) -> f64) -> Option<Oscillation> {
+        let mut w = OscillationWatch::default();
+        let n = (stop / h).round() as usize;
+        (1..=n).find_map(|k| {
+            let t = k as f64 * h;
+            w.observe(t, 1.0, e(t), 0.004)
+        })
+    }
+
+    #[test]
+    fn a_sustained_sinusoid_is_found_with_its_frequency_and_amplitude() {
+        for (h, f) in [(0.005, 3.3), (0.001, 7.9), (0.02, 1.6)] {
+            let o = watch(h, 10.0, |t| {
+                0.02 * (2.0 * core::f64::consts::PI * f * t).sin()
+            })
+            .unwrap_or_else(|| panic!("{f} Hz at h = {h}: not found"));
+            assert!((o.f_hz - f).abs() < 0.02 * f, "{f} Hz: {o:?}");
+            assert!((o.amplitude - 0.02).abs() < 0.002, "{o:?}");
+            // Found at the first comparison: two windows after the reference settled.
+            assert!((o.t - 2.0 * WINDOW).abs() < 1.5 * h, "{o:?}");
+        }
+    }
+
+    #[test]
+    fn a_growing_oscillation_is_found_and_a_decaying_one_is_not() {
+        let sine = |t: f64, sigma: f64| {
+            0.02 * (sigma * t).exp() * (2.0 * core::f64::consts::PI * 3.3 * t).sin()
+        };
+        assert!(watch(0.005, 10.0, |t| sine(t, 0.05)).is_some());
+        // Decaying as slowly as a mode of damping ratio 4.8e-4 at 3.3 Hz (2 % per window): not
+        // sustained.
+        assert!(watch(0.005, 20.0, |t| sine(t, -0.01)).is_none());
+        // A slow decaying ring plus noise-free constant: nothing.
+        assert!(watch(0.005, 20.0, |t| 0.5 + sine(t, -0.2)).is_none());
+    }
+
+    #[test]
+    fn below_the_threshold_or_while_the_command_moves_nothing_is_reported() {
+        assert!(watch(0.005, 10.0, |t| 0.003
+            * (2.0 * core::f64::consts::PI * 3.0 * t).sin())
+        .is_none());
+        let mut w = OscillationWatch::default();
+        for k in 1..=2000 {
+            let t = k as f64 * 0.005;
+            // The reference changes at every point (an importer's loop): never settled.
+            let e = 0.05 * (2.0 * core::f64::consts::PI * 3.0 * t).sin();
+            assert!(w.observe(t, t, e, 0.004).is_none());
+        }
+    }
+
+    #[test]
+    fn it_warns_once() {
+        let mut w = OscillationWatch::default();
+        let found = (1..=4000)
+            .filter_map(|k| {
+                let t = k as f64 * 0.005;
+                w.observe(
+                    t,
+                    1.0,
+                    0.05 * (2.0 * core::f64::consts::PI * 3.0 * t).sin(),
+                    0.004,
+                )
+            })
+            .count();
+        assert_eq!(found, 1);
+        assert!(w.has_warned());
+    }
+}
