@@ -131,7 +131,11 @@ fn without_the_pressure_feedback_the_box_fails() {
     let count = |extra: &[(&str, &str)]| {
         points()
             .into_iter()
-            .filter(|&pt| !meets_rule(least(pt, extra), pt))
+            .filter(|&pt| {
+                let m = least(pt, extra);
+                println!("{extra:?}: {}", report(pt, m));
+                !meets_rule(m, pt)
+            })
             .count()
     };
     let paper = count(&[("servo_valve.drive", "1"), ("controller.k_pl", "0")]);

@@ -18,7 +18,9 @@
 //! Cost: one Jacobian and one eigenvalue problem of the state dimension when the model is built
 //! (again only when a parameter changes), none in the steps; `bench-margin` measures it.
 
-use crate::eigen::{eigenvalues, least_damped, Mode};
+use nalgebra::Complex;
+
+use crate::eigen::{eigenvalues, least_damped, modulus, Mode};
 
 use super::assembly::Assembled;
 use super::parameters::Parameters;
@@ -33,19 +35,26 @@ pub const THRESHOLD_FRACTION: f64 = 1.0 / 3.0;
 /// mode with `plate.zeta = 0`, whose real part is round-off) does not warn.
 const ROUND_OFF: f64 = 1e-9;
 
-/// The least damped mode of the model at rest, `None` when every eigenvalue is a zero.
-pub fn least_damped_at_rest(system: &Assembled) -> Option<Mode> {
+/// The balanced eigenvalues of the model linearised at rest with zero inputs.
+pub fn eigenvalues_at_rest(system: &Assembled) -> Vec<Complex<f64>> {
     let model = system.compiled();
     let n = model.n_states();
     let mut a = nalgebra::DMatrix::zeros(n, n);
     let u = vec![0.0; model.n_inputs()];
     model.jacobian(&system.initial_state(), &u, &mut a);
-    let ev = eigenvalues(&a);
-    let largest = ev
-        .iter()
-        .map(|z| crate::eigen::modulus(*z))
-        .fold(0.0, f64::max);
-    least_damped(&ev, ZERO_FRACTION * largest)
+    eigenvalues(&a)
+}
+
+/// The least damped mode of the eigenvalues `ev` of a model at rest, leaving out the zeros
+/// ([`ZERO_FRACTION`] of the largest modulus); `None` when every eigenvalue is one.
+pub fn least_damped_mode(ev: &[Complex<f64>]) -> Option<Mode> {
+    let largest = ev.iter().map(|z| modulus(*z)).fold(0.0, f64::max);
+    least_damped(ev, ZERO_FRACTION * largest)
+}
+
+/// The least damped mode of the model at rest, `None` when every eigenvalue is a zero.
+pub fn least_damped_at_rest(system: &Assembled) -> Option<Mode> {
+    least_damped_mode(&eigenvalues_at_rest(system))
 }
 
 /// The damping ratio below which the monitor warns.
