@@ -255,7 +255,7 @@ mod tests {
     fn a_sustained_sinusoid_is_found_with_its_frequency_and_amplitude() {
         for (h, f) in [(0.005, 3.3), (0.001, 7.9), (0.02, 1.6)] {
             let o = watch(h, 10.0, |t| {
-                0.02 * (2.0 * core::f64::consts::PI * f * t).sin()
+                0.02 * crate::math::sin(2.0 * core::f64::consts::PI * f * t)
             })
             .unwrap_or_else(|| panic!("{f} Hz at h = {h}: not found"));
             assert!((o.f_hz - f).abs() < 0.02 * f, "{f} Hz: {o:?}");
@@ -268,7 +268,8 @@ mod tests {
     #[test]
     fn a_growing_oscillation_is_found_and_a_decaying_one_is_not() {
         let sine = |t: f64, sigma: f64| {
-            0.02 * (sigma * t).exp() * (2.0 * core::f64::consts::PI * 3.3 * t).sin()
+            0.02 * crate::math::exp(sigma * t)
+                * crate::math::sin(2.0 * core::f64::consts::PI * 3.3 * t)
         };
         assert!(watch(0.005, 10.0, |t| sine(t, 0.05)).is_some());
         // Decaying as slowly as a mode of damping ratio 4.8e-4 at 3.3 Hz (2 % per window): not
@@ -281,13 +282,13 @@ mod tests {
     #[test]
     fn below_the_threshold_or_while_the_command_moves_nothing_is_reported() {
         assert!(watch(0.005, 10.0, |t| 0.003
-            * (2.0 * core::f64::consts::PI * 3.0 * t).sin())
+            * crate::math::sin(2.0 * core::f64::consts::PI * 3.0 * t))
         .is_none());
         let mut w = OscillationWatch::default();
         for k in 1..=2000 {
             let t = k as f64 * 0.005;
             // The reference changes at every point (an importer's loop): never settled.
-            let e = 0.05 * (2.0 * core::f64::consts::PI * 3.0 * t).sin();
+            let e = 0.05 * crate::math::sin(2.0 * core::f64::consts::PI * 3.0 * t);
             assert!(w.observe(t, t, e, 0.004).is_none());
         }
     }
@@ -301,7 +302,7 @@ mod tests {
                 w.observe(
                     t,
                     1.0,
-                    0.05 * (2.0 * core::f64::consts::PI * 3.0 * t).sin(),
+                    0.05 * crate::math::sin(2.0 * core::f64::consts::PI * 3.0 * t),
                     0.004,
                 )
             })
