@@ -21,7 +21,7 @@ use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::DEFAULT_K_PL;
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::margin::{
-    eigenvalues_at_rest, least_damped_mode, THRESHOLD_FRACTION,
+    eigenvalues_at_rest, least_damped_mode, verdict, Verdict, ROUND_OFF, THRESHOLD_FRACTION,
 };
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
@@ -46,9 +46,6 @@ const DESIGNS: &[(&str, &[(&str, &str)])] = &[
 /// The modes below this frequency \[Hz\] are the slow ones.
 const SLOW_HZ: f64 = 5.0;
 
-/// Round-off allowance on a damping ratio (an undamped mode's real part is round-off).
-const ROUND_OFF: f64 = 1e-9;
-
 /// The least damped mode's text for the settings `sets` over the defaults (the command
 /// generator off: its clock is no mode).
 fn cell(sets: &[(&str, String)], zeta_rule: f64, default: bool) -> String {
@@ -67,9 +64,9 @@ fn cell(sets: &[(&str, String)], zeta_rule: f64, default: bool) -> String {
             .collect::<Vec<_>>(),
         0.0,
     );
-    let mark = match least_damped_mode(&ev) {
-        Some(m) if m.zeta < -ROUND_OFF => " !!",
-        Some(m) if m.zeta < zeta_rule - ROUND_OFF => " !",
+    let mark = match least_damped_mode(&ev).map(|m| verdict(m.zeta, zeta_rule)) {
+        Some(Verdict::Unstable) => " !!",
+        Some(Verdict::PoorlyDamped) => " !",
         _ => "",
     };
     let text = match slow {

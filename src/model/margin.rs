@@ -33,7 +33,7 @@ pub const THRESHOLD_FRACTION: f64 = 1.0 / 3.0;
 
 /// Round-off allowance on the damping ratio: a mode at exactly the threshold (an undamped plate
 /// mode with `plate.zeta = 0`, whose real part is round-off) does not warn.
-const ROUND_OFF: f64 = 1e-9;
+pub const ROUND_OFF: f64 = 1e-9;
 
 /// The balanced eigenvalues of the model linearised at rest with zero inputs.
 pub fn eigenvalues_at_rest(system: &Assembled) -> Vec<Complex<f64>> {
@@ -57,6 +57,29 @@ pub fn least_damped_at_rest(system: &Assembled) -> Option<Mode> {
     least_damped_mode(&eigenvalues_at_rest(system))
 }
 
+/// How a damping ratio stands against the warning threshold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// The mode grows (`ζ` below zero by more than round-off).
+    Unstable,
+    /// Damped less than the threshold (by more than round-off).
+    PoorlyDamped,
+    /// At or above the threshold, up to round-off.
+    Damped,
+}
+
+/// The verdict on a damping ratio `zeta` against `threshold`, with the round-off allowance
+/// (a mode at exactly the threshold, or an undamped one when the threshold is 0, is damped).
+pub fn verdict(zeta: f64, threshold: f64) -> Verdict {
+    if zeta < -ROUND_OFF {
+        Verdict::Unstable
+    } else if zeta < threshold - ROUND_OFF {
+        Verdict::PoorlyDamped
+    } else {
+        Verdict::Damped
+    }
+}
+
 /// The damping ratio below which the monitor warns.
 pub fn threshold(p: &Parameters) -> f64 {
     THRESHOLD_FRACTION * p.plate.zeta
@@ -74,7 +97,8 @@ pub fn warning(m: &Mode, p: &Parameters) -> Option<String> {
             "loop margin: the eigenvalues of the model at rest could not be computed".into(),
         );
     }
-    if m.zeta < -ROUND_OFF {
+    let v = verdict(m.zeta, limit);
+    if v == Verdict::Unstable {
         let sigma = m.eigenvalue.re;
         return Some(format!(
             "loop margin: the loop at rest is unstable: its mode at {f:.3} Hz grows (damping ratio {:.4}, \
@@ -85,7 +109,7 @@ pub fn warning(m: &Mode, p: &Parameters) -> Option<String> {
             core::f64::consts::LN_2 / sigma
         ));
     }
-    if m.zeta < limit - ROUND_OFF {
+    if v == Verdict::PoorlyDamped {
         return Some(format!(
             "loop margin: the loop at rest is poorly damped: its mode at {f:.3} Hz has a damping ratio \
              of {:.4}, below {limit:.4} (a third of plate.zeta), so a disturbance of it rings on \
