@@ -72,7 +72,9 @@ fn main() {
         ),
     ] {
         let p = parameters(&sets);
-        let system = Assembled::new(&p).expect("model");
+        // The margin linearises the model with the vane motor sliding, built a second time when
+        // the motor has seal friction (`HydraulicSlewingPlate::build`).
+        let system = Assembled::new(&p.sliding()).expect("model");
         let mode = least_damped_at_rest(&system).expect("a mode");
         println!(
             "{label}: {} states; least damped mode at rest {:.3} Hz, zeta {:.4}; {rounds} rounds",
@@ -87,9 +89,9 @@ fn main() {
             }),
         );
         show(
-            "the loop margin",
+            "the loop margin (the sliding model's build and its eigenvalues)",
             time(rounds, || {
-                least_damped_at_rest(&system);
+                least_damped_at_rest(&Assembled::new(&p.sliding()).expect("model"));
             }),
         );
         if sets.is_empty() {

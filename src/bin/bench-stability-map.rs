@@ -55,7 +55,7 @@ fn cell(sets: &[(&str, String)], zeta_rule: f64, default: bool) -> String {
         set_by_name(&mut values, n, v).unwrap_or_else(|e| panic!("{e}"));
     }
     let p = Parameters::from_values(&values, &Experiment::default()).expect("parameters");
-    let system = Assembled::new(&p).expect("model");
+    let system = Assembled::new(&p.sliding()).expect("model");
     let ev = eigenvalues_at_rest(&system);
     let slow: Option<Mode> = least_damped(
         &ev.iter()

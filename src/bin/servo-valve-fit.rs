@@ -181,6 +181,9 @@ fn main() {
     // The paper's loop, whose direct path G_est is: the voltage-driven coil, eq. 1's controller.
     set_by_name(&mut values, "servo_valve.drive", "1").expect("servo_valve.drive");
     set_by_name(&mut values, "controller.k_pl", "0").expect("controller.k_pl");
+    // The paper's motor has viscous friction only.
+    set_by_name(&mut values, "servo_valve.T_c", "0").expect("servo_valve.T_c");
+    set_by_name(&mut values, "servo_valve.T_s", "0").expect("servo_valve.T_s");
     let mut fit: Vec<String> = Vec::new();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {

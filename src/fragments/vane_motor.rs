@@ -19,6 +19,10 @@
 //!   `D_m (p_1 - p_2)`, swept flow `D_m omega`.
 //! * Rotor inertia `I_m` (state `<prefix>.I_m.p` = angular momentum) and viscous friction `b_m`
 //!   \[N m s/rad\].
+//! * Seal friction `<prefix>.friction` (not in the paper; [`friction`]): a nonlinear R on the rotor
+//!   junction with the running torque `T_c`, the breakaway torque `T_s` and the Stribeck speed
+//!   `omega_s`, regularised near zero speed so the integrator sees a smooth law. Left out when
+//!   `T_c = T_s = 0` (the paper's presets).
 //!
 //! The supply (`Se p_s`) and tank (`Se p_t`) are the 0-junctions passed in; they are shared with
 //! the pilot stage (BG2). The torsion bar of the coupled model bonds onto the rotor junction.
@@ -26,7 +30,8 @@
 //! Sign conventions: `x_v > 0` fills chamber 1, `p_1 > p_2` turns the rotor positive; the metered
 //! flow `q_valve` is the net flow into chamber 1 (P->A minus A->T).
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, Law, SignalId};
+use crate::bond_graph::{BondGraph, BondId, ElementId, Law, NonlinearLaw, SignalId};
+use crate::math::{exp, tanh};
 
 use super::flapper_nozzle::restriction;
 use super::orifice::variable_orifice;
@@ -105,6 +110,15 @@ pub fn add_vane_motor(
     let b_m = g.add_r(format!("{prefix}.b_m"), p.b_m);
     let i_m_bond = g.bond(rotor, i_m);
     g.bond(rotor, b_m);
+    if p.t_s > 0.0 {
+        let (t_c, t_s, omega_s) = (p.t_c, p.t_s, p.omega_s);
+        let law = NonlinearLaw::new(
+            format!("seal friction, running {t_c} N m, breakaway {t_s} N m"),
+            move |omega| friction(t_c, t_s, omega_s, omega),
+        );
+        let r = g.add_r(format!("{prefix}.friction"), Law::Nonlinear(law));
+        g.bond(rotor, r);
+    }
     g.set_nominal(i_m, &[p.i_m * 10.0]); // 10 rad/s
 
     let p_1 = g.add_effort_sensor(format!("{prefix}.p_1"), c1_bond);
@@ -126,5 +140,66 @@ pub fn add_vane_motor(
         q_valve,
         omega,
         supply_bonds: [pa_bond, pb_bond],
+    }
+}
+
+/// Speed of the regularisation as a fraction of the Stribeck speed: below `omega_s / 10` the
+/// friction torque rises smoothly through zero (`tanh`) instead of jumping from `-T_s` to `T_s`.
+pub const REGULARISATION: f64 = 0.1;
+
+/// The seal friction torque of the rotor at speed `omega` and its derivative, `(T, dT/domega)`:
+///
+/// `T(omega) = [T_c + (T_s - T_c) exp(-(omega/omega_s)^2)] tanh(omega / omega_t)`,
+/// `omega_t = REGULARISATION omega_s`.
+///
+/// The bracket is the Stribeck curve: the breakaway torque `T_s` at rest falls to the running
+/// (Coulomb) torque `T_c` over a few `omega_s` (Armstrong-Hélouvry, Dupont and Canudas de Wit,
+/// *Automatica* 30(7), 1994, the static part of their friction model). The `tanh` replaces the
+/// sign function: a rotor held by less than `T_s` creeps at `omega_t atanh(T / T_s)` instead of
+/// sticking, which keeps the right-hand side smooth for the implicit integrator at the price of
+/// a creep speed below `omega_t` (0.05 rad/s with the defaults: 1.5 mm/s at the vane tips). The torque always opposes the
+/// motion, so the element dissipates `T omega >= 0`.
+pub fn friction(t_c: f64, t_s: f64, omega_s: f64, omega: f64) -> (f64, f64) {
+    let omega_t = REGULARISATION * omega_s;
+    let u = omega / omega_s;
+    let stribeck = exp(-u * u);
+    let level = t_c + (t_s - t_c) * stribeck;
+    let slope = (t_s - t_c) * stribeck * (-2.0 * u / omega_s);
+    let th = tanh(omega / omega_t);
+    (level * th, slope * th + level * (1.0 - th * th) / omega_t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The law's values against its closed form at rest, in the Stribeck range and far above it,
+    /// its derivative against a central difference, and its dissipation.
+    #[test]
+    fn friction_falls_from_breakaway_to_running_torque() {
+        let (t_c, t_s, w_s) = (1.0, 1.5, 0.5);
+        assert_eq!(friction(t_c, t_s, w_s, 0.0).0, 0.0);
+        // far above the Stribeck speed: the running torque, with the sign of the motion
+        let (t, _) = friction(t_c, t_s, w_s, 2.0);
+        assert!((t - t_c).abs() < 1e-12, "{t}");
+        assert!((friction(t_c, t_s, w_s, -2.0).0 + t_c).abs() < 1e-12);
+        // at 3 omega_t: the closed form
+        let w = 3.0 * REGULARISATION * w_s;
+        let expect = (t_c + (t_s - t_c) * exp(-(w / w_s) * (w / w_s))) * tanh(3.0);
+        assert!((friction(t_c, t_s, w_s, w).0 - expect).abs() < 1e-14);
+        // the regularised breakaway: the largest torque, reached at about 2 omega_t, is within
+        // 4 % of T_s (and never above it)
+        let peak = (1..1000)
+            .map(|i| friction(t_c, t_s, w_s, i as f64 * 1e-3 * w_s).0)
+            .fold(0.0, f64::max);
+        assert!(peak > 0.96 * t_s && peak <= t_s, "{peak}");
+        for omega in [-0.3, -0.04, -1e-3, 1e-4, 0.002, 0.05, 0.2, 1.0] {
+            let (t, d) = friction(t_c, t_s, w_s, omega);
+            assert!(t * omega > 0.0, "dissipates at {omega}");
+            let h = 1e-7 * omega.abs().max(1e-3);
+            let fd = (friction(t_c, t_s, w_s, omega + h).0 - friction(t_c, t_s, w_s, omega - h).0)
+                / (2.0 * h);
+            assert!((d - fd).abs() < 1e-6 * d.abs().max(1.0), "{omega}: {d} vs {fd}");
+        }
     }
 }

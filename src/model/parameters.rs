@@ -169,6 +169,7 @@ impl Parameters {
             i_h: values.real(idx::HUB_I_H),
             cd: values.real(idx::PLATE_CD),
             rho_air: values.real(idx::PLATE_RHO_AIR),
+            ca: values.real(idx::PLATE_CA),
             x1: values.real(idx::PLATE_X1),
             y1: values.real(idx::PLATE_Y1),
             x2: values.real(idx::PLATE_X2),
@@ -219,6 +220,9 @@ impl Parameters {
                 d_m: values.real(idx::SERVO_VALVE_D_M),
                 i_m: values.real(idx::SERVO_VALVE_I_M),
                 b_m: values.real(idx::SERVO_VALVE_B_M),
+                t_c: values.real(idx::SERVO_VALVE_T_C),
+                t_s: values.real(idx::SERVO_VALVE_T_S),
+                omega_s: values.real(idx::SERVO_VALVE_OMEGA_S),
             },
             controller: ControllerParameters {
                 a1: values.real(idx::CONTROLLER_A1),
@@ -329,6 +333,19 @@ fn culprit(values: &Values, from: &[usize]) -> String {
 }
 
 impl Parameters {
+    /// The same parameters with the vane motor sliding: its Coulomb and breakaway friction left
+    /// out ([`ServoValveParameters::sliding`]). Linearisations at rest use it (the loop margin,
+    /// `hsp linearize`, `hsp frf`): at rest the regularised friction's slope, `T_s / omega_t`,
+    /// would clamp the motor and hide the loop, which small motions see only until they break
+    /// away. Coulomb friction adds damping that falls with the amplitude (its describing
+    /// function), so the sliding linearisation is the large-amplitude, least damped limit.
+    pub fn sliding(&self) -> Self {
+        Parameters {
+            servo_valve: self.servo_valve.sliding(),
+            ..self.clone()
+        }
+    }
+
     /// Checks the quantities the model derives from several parameters: masses, stiffnesses,
     /// compliances, the plate's frequency scale and the hydraulic energies at supply pressure
     /// must be finite, positive and within [`MAGNITUDES`]. The error names the parameter farthest

@@ -21,7 +21,10 @@
 //! design's current-feedback coil drive and load-pressure feedback (docs/model.md, "The default
 //! loop's damping"); every other preset uses the paper's voltage drive (`servo_valve.drive = 1`,
 //! where the full valve is in) and eq. 1's controller without pressure feedback
-//! (`controller.k_pl = 0`).
+//! (`controller.k_pl = 0`). The complete system's presets have the air's added mass
+//! (`plate.Ca = 1`) and the vane motor's seal friction (the defaults); the paper's presets leave
+//! the air out (`plate.Ca = 0`), and `servo-valve-motor`, the setup of the `G_est` fit, the
+//! friction (`servo_valve.T_c = T_s = 0`: the paper's motor has viscous friction only).
 //!
 //! The time-domain presets of the complete system use the consistent plate formulation and the
 //! command generator's move; the presets that reproduce a result of the paper use the paper's
@@ -79,6 +82,7 @@ pub const PRESETS: &[Preset] = &[
             ("servo_valve.drive", "2"),
             ("reference.angle", MOVE_30_DEG),
             ("plate.Cd", "1.2"),
+            ("plate.Ca", "1"),
             ("plate.zeta", "0.02"),
         ],
     },
@@ -98,6 +102,7 @@ pub const PRESETS: &[Preset] = &[
             ("servo_valve.drive", "2"),
             ("reference.angle", MOVE_30_DEG),
             ("plate.Cd", "1.2"),
+            ("plate.Ca", "1"),
             ("plate.zeta", "0.02"),
         ],
     },
@@ -115,8 +120,11 @@ pub const PRESETS: &[Preset] = &[
             ("controller.external", "false"),
             ("controller.k_pl", "0"),
             ("servo_valve.drive", "1"),
+            ("servo_valve.T_c", "0"),
+            ("servo_valve.T_s", "0"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
+            ("plate.Ca", "0"),
             ("plate.zeta", PAPER_ZETA),
         ],
     },
@@ -136,6 +144,7 @@ pub const PRESETS: &[Preset] = &[
             ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
+            ("plate.Ca", "0"),
             ("plate.zeta", PAPER_ZETA),
         ],
     },
@@ -155,6 +164,7 @@ pub const PRESETS: &[Preset] = &[
             ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
+            ("plate.Ca", "0"),
             ("plate.zeta", PAPER_ZETA),
         ],
     },
@@ -175,6 +185,7 @@ pub const PRESETS: &[Preset] = &[
             ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
+            ("plate.Ca", "0"),
             ("plate.zeta", PAPER_ZETA),
         ],
     },
@@ -194,6 +205,7 @@ pub const PRESETS: &[Preset] = &[
             ("servo_valve.drive", "1"),
             ("reference.angle", "0"),
             ("plate.Cd", "0"),
+            ("plate.Ca", "0"),
             ("plate.zeta", PAPER_ZETA),
         ],
     },

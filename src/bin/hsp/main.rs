@@ -89,8 +89,9 @@ impl ModelArgs {
         let values = values_with(self.preset.as_deref(), &self.set)?;
         Parameters::from_values(&values, &Experiment::default())
     }
+    /// The model to linearise: the vane motor sliding ([`Parameters::sliding`]).
     fn assembled(&self) -> Result<Assembled, String> {
-        Assembled::new(&self.parameters()?)
+        Assembled::new(&self.parameters()?.sliding())
     }
 }
 

@@ -163,7 +163,7 @@ fn parameters(preset: &str, sets: &[&str]) -> Result<Parameters, String> {
 
 /// `hsp linearize --preset NAME --set ...`: the assembled model linearised at its rest state.
 fn linearize(preset: &str, sets: &[&str]) -> Result<Linearization, String> {
-    let system = Assembled::new(&parameters(preset, sets)?)?;
+    let system = Assembled::new(&parameters(preset, sets)?.sliding())?;
     Ok(system
         .compiled()
         .linearize(&system.initial_state(), system.inputs()))

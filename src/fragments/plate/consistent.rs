@@ -16,6 +16,9 @@
 //!   are the natural modes of the clamped plate (eigenvectors of the Ritz problem), with an R
 //!   per mode (`2 zeta omega` modal damping of the clamped plate). The mass matrix then couples
 //!   the hub angle to these modes; with the hub, the fragment is an I-field.
+//! * the air's added mass ([`super::added_mass`]) joins the plate's: the modes are then those of
+//!   the plate in air, still normalised to the modal mass `2 m a b`, and the hub gains the air's
+//!   share of the slewing inertia and of the coupling.
 //!
 //! Without damping the model conserves energy exactly (a Hamiltonian system), and as a
 //! Rayleigh-Ritz model its frequencies converge from above as `N x M` grows. It does not
@@ -24,7 +27,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::beam_functions::{moment_integral, product_integral, BeamFunction, BeamKind};
-use super::{PlateModel, PlateParameters, Root};
+use super::{added_mass, PlateModel, PlateParameters, Root};
 
 /// Number of arms described by the coordinates (antisymmetric motion of the symmetric plate).
 pub const ARMS: f64 = 2.0;
@@ -84,14 +87,26 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
     let nm = p.n * p.m;
     let (_, kr) = ritz_matrices(p);
     let modal_mass = ARMS * mu * a * b;
-    // M = modal_mass I: the plate modes are the eigenvectors of K
-    let eig = kr.symmetric_eigen();
+    // M = modal_mass I + the air's diagonal added mass D_a: with S = diag(sqrt(modal_mass /
+    // (modal_mass + D_a))), the modes are S u for the eigenvectors u of S K S, whose eigenvalues
+    // are the modal stiffnesses at the modal mass `modal_mass` (S = I without air: the plate
+    // modes are the eigenvectors of K)
+    let air = added_mass::strip(p, &phis, &psis, ARMS);
+    let scale = match &air {
+        Some(air) => air.modes.map(|d| (modal_mass / (modal_mass + d)).sqrt()),
+        None => DVector::from_element(nm, 1.0),
+    };
+    let eig = match &air {
+        Some(_) => DMatrix::from_fn(nm, nm, |r, c| scale[r] * kr[(r, c)] * scale[c]),
+        None => kr,
+    }
+    .symmetric_eigen();
     let mut order: Vec<usize> = (0..nm).collect();
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
     let mut phi_mat = DMatrix::zeros(nm, nm);
     let mut lambdas = Vec::with_capacity(nm);
     for (c, &i) in order.iter().enumerate() {
-        let mut v = eig.eigenvectors.column(i).into_owned();
+        let mut v = eig.eigenvectors.column(i).component_mul(&scale);
         let imax = v.iamax();
         if v[imax] < 0.0 {
             v = -v;
@@ -131,9 +146,9 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
         v
     };
     if hub {
-        mass[(0, 0)] = p.i_h + ARMS * p.i_p();
-        // int int m x phi_n psi_m dx dy, both arms
-        let coupling = DVector::from_fn(nm, |j, _| {
+        mass[(0, 0)] = p.i_h + ARMS * p.i_p() + air.as_ref().map_or(0.0, |air| air.hub);
+        // int int m x phi_n psi_m dx dy, both arms, and the air's
+        let mut coupling = DVector::from_fn(nm, |j, _| {
             ARMS * mu
                 * a
                 * a
@@ -141,6 +156,9 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
                 * b
                 * moment_integral(&psis[j / p.n], 0)
         });
+        if let Some(air) = &air {
+            coupling += &air.coupling;
+        }
         let c = modal(coupling);
         for i in 0..nm {
             let v = if c[i].abs() > 1e-13 * mass[(0, 0)] {

@@ -9,7 +9,8 @@
 //! * [`paper`]: eqs. 18-21 of the paper with the errata of docs/model-notes.md (items 1-6) fixed.
 //! * [`consistent`]: the Lagrangian of hub and plate (eq. 4 and eq. 5 in full).
 //!
-//! [`drag`] adds the air drag of the plate swept broadside (not in the paper).
+//! [`drag`] adds the air drag of the plate swept broadside, [`added_mass`] the air's added mass
+//! (neither is in the paper).
 //!
 //! [`modes`] solves eq. 14 (natural frequencies) with a symmetric generalised eigen-solver;
 //! [`add_plate`] turns a [`PlateModel`] into bond-graph fragments (modal I, C, R per coordinate,
@@ -20,6 +21,7 @@
 //! antisymmetric motion that a hub torque excites (both arms described by one set of
 //! coordinates). A shaker force on one arm is projected onto that motion.
 
+pub mod added_mass;
 pub mod beam_functions;
 pub mod consistent;
 pub mod damping;
@@ -93,6 +95,9 @@ pub struct PlateParameters {
     pub cd: f64,
     /// Density of the air \[kg/m^3\] (`plate.rho_air`).
     pub rho_air: f64,
+    /// Added-mass coefficient of the air, a multiple of strip theory \[-\] (`plate.Ca`;
+    /// [`added_mass`]; 0: the plate in vacuum).
+    pub ca: f64,
     /// Shaker force points `(x1, y1)`, `(x2, y2)` \[m\].
     pub x1: f64,
     pub y1: f64,
@@ -119,6 +124,7 @@ impl Default for PlateParameters {
             i_h: 3.5,
             cd: 1.2,
             rho_air: 1.2,
+            ca: 1.0,
             x1: 1.3,
             y1: 0.1,
             x2: 0.7,
@@ -182,7 +188,11 @@ impl PlateParameters {
                 self.zeta
             ));
         }
-        for (name, v) in [("plate.Cd", self.cd), ("plate.rho_air", self.rho_air)] {
+        for (name, v) in [
+            ("plate.Cd", self.cd),
+            ("plate.rho_air", self.rho_air),
+            ("plate.Ca", self.ca),
+        ] {
             if !(v >= 0.0 && v.is_finite()) {
                 return Err(format!("{name}: must be non-negative, got {v}"));
             }

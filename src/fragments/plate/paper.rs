@@ -24,11 +24,14 @@
 //!   value is used (erratum). As in eqs. 18-20, the forces drive the modes, not the hub.
 //! * Locked hub (Fig. 10): the same eq. 21 with clamped-free functions along `x`, no hub.
 //! * Damping: an R per mode, `2 zeta sqrt(k m)` (not in the paper).
+//! * The air's added mass ([`super::added_mass`], not in the paper): per arm on each mode's
+//!   modal mass, both arms' on the hub's inertia (the pinned-free shapes do not couple to the
+//!   rotation). The paper's presets leave it out (`plate.Ca = 0`).
 
 use nalgebra::{DMatrix, DVector};
 
 use super::beam_functions::{moment_integral, product_integral, BeamFunction, BeamKind};
-use super::{PlateModel, PlateParameters, Root};
+use super::{added_mass, PlateModel, PlateParameters, Root};
 
 /// Builds the paper formulation, with the map from a point `(x, y)` to its displacement per
 /// unit coordinate (the hub's rotation `x theta` included).
@@ -61,8 +64,9 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
     let stress_row = super::stress_row(p, &phis, &psis, stress_point);
     let mut stress = DVector::zeros(n);
     stress.rows_mut(first, p.n * p.m).copy_from(&stress_row);
+    let air = added_mass::strip(p, &phis, &psis, 1.0);
     if hub {
-        mass[(0, 0)] = p.hub_total_inertia();
+        mass[(0, 0)] = p.hub_total_inertia() + air.as_ref().map_or(0.0, |air| 2.0 * air.hub);
         torque[0] = 1.0;
         for (s, &(x, _)) in accelerometers.iter_mut().zip(&points) {
             s[0] = x;
@@ -78,7 +82,7 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
             let x40 = product_integral(phi, 4, phi, 0) / a.powi(3);
             // eq. 21
             let k = d * (b * x40 + 2.0 * x20 * y20 + a * y40);
-            let m = mu * a * b;
+            let m = mu * a * b + air.as_ref().map_or(0.0, |air| air.modes[p.n * mi + ni]);
             mass[(j, j)] = m;
             stiffness[(j, j)] = k;
             damping.push(2.0 * p.zeta * (k * m).sqrt());

@@ -121,6 +121,15 @@ pub struct ServoValveParameters {
     /// Rotor viscous friction \[N m s/rad\] (`b_m`): 0.1 (vane seal drag); the fit does not
     /// depend on it.
     pub b_m: f64,
+    /// Coulomb (running) friction torque of the vane motor \[N m\] (`T_c`): 1.0, a running
+    /// pressure of 1 bar over `D_m` ([`crate::fragments::vane_motor::friction`]; 0: none).
+    pub t_c: f64,
+    /// Breakaway (static) friction torque \[N m\] (`T_s`): 1.5, a breakaway pressure of 1.5 bar;
+    /// at least `T_c`.
+    pub t_s: f64,
+    /// Stribeck speed \[rad/s\] (`omega_s`): 0.5, over which the friction falls from `T_s` to
+    /// `T_c` (15 mm/s at the vane tips' 30 mm radius).
+    pub omega_s: f64,
 }
 
 impl ServoValveParameters {
@@ -129,7 +138,20 @@ impl ServoValveParameters {
     pub fn voltage_driven() -> Self {
         ServoValveParameters {
             drive: CoilDrive::Voltage,
+            t_c: 0.0,
+            t_s: 0.0,
             ..Self::default()
+        }
+    }
+
+    /// The same valve and motor without the motor's Coulomb and breakaway friction: the motor
+    /// sliding, the linearisation the margin, `hsp linearize` and `hsp frf` use
+    /// ([`crate::fragments::vane_motor::friction`]).
+    pub fn sliding(&self) -> Self {
+        ServoValveParameters {
+            t_c: 0.0,
+            t_s: 0.0,
+            ..self.clone()
         }
     }
 }
@@ -173,6 +195,9 @@ impl Default for ServoValveParameters {
             d_m: D_M,
             i_m: 1e-4,
             b_m: 0.1,
+            t_c: 1.0,
+            t_s: 1.5,
+            omega_s: 0.5,
         }
     }
 }
@@ -249,11 +274,25 @@ impl ServoValveParameters {
             ("D_m", self.d_m),
             ("I_m", self.i_m),
             ("b_m", self.b_m),
+            ("omega_s", self.omega_s),
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
                 return Err(format!("servo_valve.{name}: must be positive, got {v}"));
             }
+        }
+        if !(self.t_c.is_finite() && self.t_c >= 0.0) {
+            return Err(format!(
+                "servo_valve.T_c: the running friction torque must be non-negative, got {} N m",
+                self.t_c
+            ));
+        }
+        if !(self.t_s.is_finite() && self.t_s >= self.t_c) {
+            return Err(format!(
+                "servo_valve.T_s: the breakaway friction torque must be at least the running \
+                 torque servo_valve.T_c = {} N m, got {} N m",
+                self.t_c, self.t_s
+            ));
         }
         Ok(())
     }

@@ -94,7 +94,7 @@ pub fn bode(work: &Path) -> Result<BodeFigure, String> {
     let mut values = Values::from_start(&VARIABLES);
     hydraulic_slewing_plate::model::presets::apply(&mut values, BODE_PRESET)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
-    let system = Assembled::new(&parameters)?;
+    let system = Assembled::new(&parameters.sliding())?;
     let lin = system
         .compiled()
         .linearize(&system.initial_state(), system.inputs());
