@@ -50,8 +50,12 @@ fn the_papers_loop_with_little_leakage_limit_cycles_and_is_caught() {
     let w = warnings(
         "complete",
         &[
+            // the previous design: the paper's loop, no seal friction, no added mass
             ("servo_valve.drive", "1"),
             ("controller.k_pl", "0"),
+            ("servo_valve.T_c", "0"),
+            ("servo_valve.T_s", "0"),
+            ("plate.Ca", "0"),
             ("servo_valve.R_leak", "1e12"),
         ],
         30.0,

@@ -28,6 +28,7 @@ fn paper_formulation_reproduces_eq16() {
     // asserted here.
     let p = PlateParameters {
         formulation: Formulation::Paper,
+        ca: 0.0, // the plate in vacuum, as in the paper
         ..PlateParameters::default()
     };
     let model = PlateModel::new(&p).unwrap();
@@ -60,6 +61,7 @@ fn paper_formulation_rounds_to_eq16_as_printed() {
     // 56.8 Hz has no mode (item 2).
     let p = PlateParameters {
         formulation: Formulation::Paper,
+        ca: 0.0, // the plate in vacuum, as in the paper
         ..PlateParameters::default()
     };
     let mut assigned = 0;
@@ -84,6 +86,7 @@ fn consistent_formulation_matches_model_notes_item_10() {
         formulation: Formulation::Consistent,
         n: 6,
         m: 1,
+        ca: 0.0, // the plate in vacuum, as in the paper
         ..PlateParameters::default()
     };
     let cases = [
@@ -145,6 +148,7 @@ fn consistent_ritz_frequencies_converge_from_above() {
             root: Root::Locked,
             n,
             m,
+            ca: 0.0, // the plate in vacuum, as in the paper
             ..PlateParameters::default()
         };
         let f: Vec<f64> = natural_modes(&PlateModel::new(&p).unwrap())

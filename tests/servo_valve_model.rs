@@ -237,20 +237,29 @@ fn coupled_power_balance_at_random_states() {
             ("plate.formulation", formulation),
             ("plate.root", root),
             ("plate.Cd", "1.2"),
+            ("plate.Ca", "1"),
         ]);
         let sys = Assembled::new(&p).unwrap();
         let m = sys.compiled();
         let rest = sys.initial_state();
         let mut rng = Lcg(9);
-        let (mut drag_power, mut stop_rate) = (0.0f64, 0.0f64);
-        for _ in 0..100 {
+        let (mut drag_power, mut stop_rate, mut friction_power) = (0.0f64, 0.0f64, 0.0f64);
+        let rotor = m
+            .state_index("servo_valve.I_m.p")
+            .expect("the rotor's momentum");
+        let i_m = p.servo_valve.i_m;
+        for k in 0..100 {
             // Every state within +-2 nominal of rest: pressures from -0.5 to 1.5 p_s (some chambers
             // in cavitation), spool and flapper past their stops, the bar twisted, the plate bent.
-            let x: Vec<f64> = rest
+            let mut x: Vec<f64> = rest
                 .iter()
                 .zip(sys.nominal())
                 .map(|(x0, nom)| x0 + 2.0 * nom * rng.next())
                 .collect();
+            // Every other state turns the rotor within twice the friction's Stribeck speed.
+            if k % 2 == 1 {
+                x[rotor] = 2.0 * p.servo_valve.omega_s * i_m * rng.next();
+            }
             let u: Vec<f64> = (0..m.input_names().len())
                 .map(|_| 2.0 * rng.next())
                 .collect();
@@ -269,12 +278,16 @@ fn coupled_power_balance_at_random_states() {
                     || name.ends_with(".b_f")
                     || name.ends_with(".b_v")
                     || name.ends_with(".b_m")
+                    || name.ends_with(".friction")
                     || name == "torsion_bar.c";
                 if dissipative {
                     assert!(*w >= -1e-12 * scale, "{name} generates {w}");
                 }
                 if name.starts_with("plate.drag[") {
                     drag_power += w;
+                }
+                if name == "servo_valve.friction" {
+                    friction_power += w;
                 }
                 if name == "servo_valve.springs.law[2]" {
                     stop_rate = stop_rate.max(w.abs());
@@ -284,6 +297,10 @@ fn coupled_power_balance_at_random_states() {
         // The balance above holds with the drag dissipating and the stop spring storing.
         assert!(drag_power > 0.0, "formulation {formulation}: no drag");
         assert!(stop_rate > 0.0, "formulation {formulation}: no stop spring");
+        assert!(
+            friction_power > 0.0,
+            "formulation {formulation}: no seal friction"
+        );
     }
 }
 
@@ -326,7 +343,8 @@ fn current_drive_replaces_the_coil_lag_by_the_current_loop() {
         drive: CoilDrive::Current,
         ..volt.clone()
     };
-    assert_eq!(cur, ServoValveParameters::default());
+    // the default valve and motor, without the seal friction the paper's motor lacks
+    assert_eq!(cur, ServoValveParameters::default().sliding());
     let lin_v = open_loop_linearization(&volt, &ctrl).unwrap();
     let lin_c = open_loop_linearization(&cur, &ctrl).unwrap();
     let y = lin_v

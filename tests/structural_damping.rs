@@ -82,7 +82,10 @@ fn complete(sets: &[(&str, &str)]) -> Vec<Complex<f64>> {
     for (n, v) in sets {
         set_by_name(&mut values, n, v).unwrap();
     }
-    let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+    // linearised as the loop margin is: the vane motor sliding
+    let p = Parameters::from_values(&values, &Experiment::default())
+        .unwrap()
+        .sliding();
     let sys = Assembled::new(&p).unwrap();
     let lin = sys.compiled().linearize(&sys.initial_state(), sys.inputs());
     eigen::eigenvalues(&lin.a)

@@ -9,8 +9,8 @@
 //! samples, exact for uneven sampling) is evaluated from [`F_MIN`] to [`F_MAX`] Hz on a grid of
 //! [`F_STEP`] and refined around its peaks. A spectral peak of the later window whose amplitude is above
 //! [`AMPLITUDE_RAD`] of motor angle (times `k_pot`) and not below [`SUSTAINED`] times the earlier
-//! window's at that frequency is an oscillation that does not decay: the monitor warns once per
-//! simulation. A
+//! window's at that frequency, and at least [`DOMINANT`] of the later window's largest
+//! excursion, is an oscillation that does not decay: the monitor warns once per simulation. A
 //! decaying vibration (the plate ringing after a move) always shows a smaller amplitude in the
 //! later window and never warns, however slowly it decays.
 //!
@@ -40,6 +40,11 @@ pub const AMPLITUDE_RAD: f64 = 1e-3;
 /// oscillation that loses less than 1 % in a window (at 3.3 Hz, a damping ratio below 2.4e-4)
 /// does not decay; the fraction absorbs the round-off of equal amplitudes.
 pub const SUSTAINED: f64 = 0.99;
+/// The peak must carry at least this fraction of the later window's largest excursion (its
+/// detrended error): a limit cycle is what the loop does, while a small growing component under
+/// a larger ring-down (the harmonics the motor's seal friction adds as the motion decays) is a
+/// detail of a decaying response.
+pub const DOMINANT: f64 = 0.5;
 /// The shortest spacing of the samples kept \[s\] (finer communication steps are thinned).
 pub const MIN_SPACING: f64 = 0.005;
 
@@ -208,6 +213,7 @@ fn compare(
     detrended(s, a, m, earlier);
     detrended(s, m, t + 1e-9, later);
     let at = |k: usize| amplitude(later, F_MIN + k as f64 * F_STEP);
+    let excursion = later.iter().fold(0.0, |m: f64, p| m.max(p.1.abs()));
     let mut best: Option<Oscillation> = None;
     // Interior peaks only: a maximum at an end of the band is the flank of something outside it.
     // The spectrum at bins k - 1, k, k + 1, slid along the grid.
@@ -224,7 +230,11 @@ fn compare(
         let f = F_MIN + (k as f64 + shift.clamp(-0.5, 0.5)) * F_STEP;
         let now = amplitude(later, f);
         let before = amplitude(earlier, f);
-        if now > threshold && now >= SUSTAINED * before && best.is_none_or(|b| now > b.amplitude) {
+        if now > threshold
+            && now >= SUSTAINED * before
+            && now >= DOMINANT * excursion
+            && best.is_none_or(|b| now > b.amplitude)
+        {
             best = Some(Oscillation {
                 f_hz: f,
                 amplitude: now,
@@ -277,6 +287,15 @@ mod tests {
         assert!(watch(0.005, 20.0, |t| sine(t, -0.01)).is_none());
         // A slow decaying ring plus noise-free constant: nothing.
         assert!(watch(0.005, 20.0, |t| 0.5 + sine(t, -0.2)).is_none());
+        // A small component growing under a larger ring-down at 1.2 Hz (friction's harmonics):
+        // nothing while the ring dominates; reported once the growing one does.
+        let ring = |t: f64| {
+            0.2 * crate::math::exp(-0.3 * t)
+                * crate::math::sin(2.0 * core::f64::consts::PI * 1.2 * t)
+        };
+        let o = watch(0.005, 30.0, |t| ring(t) + 0.005 * sine(t, 0.05) / 0.02)
+            .expect("the growing oscillation, once it dominates");
+        assert!((o.f_hz - 3.3).abs() < 0.1 && o.t > 8.0, "{o:?}");
     }
 
     #[test]
