@@ -612,7 +612,6 @@ fn directional_derivatives_are_the_linearisation() {
         .collect();
     assert_eq!(names, c.state_names());
     for (i, row) in json["A"].as_array().unwrap().iter().enumerate() {
-        let ds = [derivative_vr(i)];
         for (j, a) in row.as_array().unwrap().iter().enumerate() {
             assert_eq!(
                 lin_sliding.a[(i, j)],
