@@ -37,6 +37,7 @@ mod ecosystem;
 mod info;
 mod licenses;
 mod loader;
+mod manoeuvre;
 // The one reader of modelDescription.xml, shared with build.rs.
 #[path = "../../../tools/model_description.rs"]
 #[allow(dead_code)]

@@ -19,6 +19,7 @@ use hydraulic_slewing_plate::model::presets::{self, COMPLETE};
 use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
 
 use super::loader::Fmu;
+use super::manoeuvre::{self, Command};
 use super::package;
 use super::results::Results;
 
@@ -274,40 +275,6 @@ fn simulate(
     Ok((results, stats, seconds, (margin[0], margin[1])))
 }
 
-/// Step-response figures of a series that starts at 0 and should end at `target`.
-#[derive(Debug, PartialEq)]
-pub struct StepFigures {
-    /// Largest excursion beyond the target, in % of the target (0 if never beyond).
-    pub overshoot_pct: f64,
-    /// Time from which the series stays within `band` x |target| of the target, if it does by
-    /// the end of the run.
-    pub settling: Option<f64>,
-}
-
-/// Overshoot and settling time of `y(t)` against `target` with a settling band of `band` (e.g.
-/// 0.02) of the target.
-pub fn step_figures(t: &[f64], y: &[f64], target: f64, band: f64) -> StepFigures {
-    if target == 0.0 || y.is_empty() {
-        return StepFigures {
-            overshoot_pct: 0.0,
-            settling: None,
-        };
-    }
-    let s = target.signum();
-    let peak = y.iter().map(|v| s * v).fold(f64::NEG_INFINITY, f64::max);
-    let overshoot_pct = ((peak - target.abs()) / target.abs() * 100.0).max(0.0);
-    let tol = band * target.abs();
-    let settling = match y.iter().rposition(|v| (v - target).abs() > tol) {
-        None => Some(t[0]),
-        Some(i) if i + 1 < t.len() => Some(t[i + 1]),
-        Some(_) => None,
-    };
-    StepFigures {
-        overshoot_pct,
-        settling,
-    }
-}
-
 /// Total time during which `pred` holds at the end of a communication interval \[s\].
 fn time_where(t: &[f64], y: &[f64], pred: impl Fn(f64) -> bool) -> f64 {
     t.windows(2)
@@ -349,6 +316,9 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     let theta_hub = col("theta_hub");
     let last = |y: &[f64]| y.last().copied().unwrap_or(0.0);
     let stop = args.stop();
+    // The command with a target, when the loop is the FMU's (docs/model.md, "Measures of a
+    // manoeuvre").
+    let mut command = None;
     if p.controller.external {
         writeln!(
             s,
@@ -376,7 +346,7 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         let r = args.r();
         let mv = &p.reference;
         let target = r / p.controller.k_pot + if mv.is_on() { mv.angle } else { 0.0 };
-        let command = match (mv.is_on(), r != 0.0) {
+        let described = match (mv.is_on(), r != 0.0) {
             (true, step) => format!(
                 "minimum-jerk move of {:.2} deg over {} s from t = {} s{} (motor target {:.2} deg)",
                 mv.angle.to_degrees(),
@@ -396,39 +366,56 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         };
         writeln!(
             s,
-            "  command {command}, {stop} s in steps of {} s",
+            "  command {described}, {stop} s in steps of {} s",
             args.step
         )
         .unwrap();
-        let move_end = mv.is_on().then(|| mv.t_end());
+        let cmd = Command {
+            target,
+            t_end: if mv.is_on() { mv.t_end() } else { 0.0 },
+        };
         let line = |name: &str, y: &[f64]| {
-            let f = step_figures(t, y, target, 0.02);
-            let settling =
-                f.settling.map_or(
-                    format!("not settled within {stop} s"),
-                    |ts| match move_end {
-                        Some(end) => format!("{ts:.3} s (the move ends at {end} s)"),
-                        None => format!("{ts:.3} s"),
-                    },
-                );
             format!(
-                "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling (2 %) {settling}\n",
+                "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling ({} %, from t = {} s) {}\n",
                 last(y).to_degrees(),
-                f.overshoot_pct
+                manoeuvre::overshoot_pct(y, target),
+                manoeuvre::BAND * 100.0,
+                cmd.t_end,
+                manoeuvre::settling_text(manoeuvre::settling(t, y, target, cmd.t_end))
             )
         };
         s.push_str(&line("motor", &theta_motor));
         if p.motor_coupled && !hub_locked(p) {
             s.push_str(&line("hub", &theta_hub));
         }
+        command = Some(cmd);
     }
     let w_tip = col("w_tip");
-    let tail = (w_tip.len() * 9) / 10;
+    let residual = match command {
+        None => "no residual measures (no command target)".to_string(),
+        Some(c) => match manoeuvre::residual_peak(t, &w_tip, c.t_end) {
+            None => format!(
+                "no residual measures (the run ends before t = {} s)",
+                c.t_end
+            ),
+            Some(peak) => format!(
+                "from t = {} s residual peak {:.3} mm, ring-down to {} mm {}",
+                c.t_end,
+                peak * 1e3,
+                manoeuvre::RING_LEVEL * 1e3,
+                manoeuvre::ring_down_text(manoeuvre::ring_down(
+                    t,
+                    &w_tip,
+                    c.t_end,
+                    manoeuvre::RING_LEVEL
+                ))
+            ),
+        },
+    };
     writeln!(
         s,
-        "  tip     peak |w_tip| {:.3} mm, residual {:.4} mm (largest |w_tip| over the last 10 % of the run)",
-        max_abs(&w_tip) * 1e3,
-        max_abs(&w_tip[tail.min(w_tip.len())..]) * 1e3
+        "  tip     peak |w_tip| {:.3} mm; {residual}",
+        max_abs(&w_tip) * 1e3
     )
     .unwrap();
     let bar = |y: &[f64]| {
@@ -545,17 +532,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn step_figures_of_a_known_series() {
+    fn time_where_sums_the_intervals() {
         let t: Vec<f64> = (0..=10).map(|i| i as f64).collect();
-        let y = [0.0, 0.5, 1.1, 1.05, 0.97, 1.01, 1.0, 1.0, 1.0, 1.0, 1.0];
-        let f = step_figures(&t, &y, 1.0, 0.02);
-        assert!((f.overshoot_pct - 10.0).abs() < 1e-9);
-        assert_eq!(f.settling, Some(5.0));
-        // Negative target, and a series that never settles.
-        let y: Vec<f64> = y.iter().map(|v| -v).collect();
-        assert!((step_figures(&t, &y, -1.0, 0.02).overshoot_pct - 10.0).abs() < 1e-9);
-        assert_eq!(step_figures(&t[..5], &y[..5], -1.0, 0.02).settling, None);
-        // Beyond the target at t = 2, 3 and 5: three intervals of 1 s.
+        let y = [
+            0.0, -0.5, -1.1, -1.05, -0.97, -1.01, -1.0, -1.0, -1.0, -1.0, -1.0,
+        ];
+        // Beyond -1 at t = 2, 3 and 5: three intervals of 1 s.
         assert!((time_where(&t, &y, |v| v < -1.0) - 3.0).abs() < 1e-12);
     }
 }
