@@ -13,7 +13,7 @@ use clap::{Args, ValueEnum};
 use hydraulic_slewing_plate::fmu::Experiment;
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
 use hydraulic_slewing_plate::fragments::plate::Root;
-use hydraulic_slewing_plate::fragments::validity::{SPIN_LIMIT, TIP_RATIO_LIMIT};
+use hydraulic_slewing_plate::fragments::validity::{Monitor, SPIN_LIMIT, TIP_RATIO_LIMIT};
 use hydraulic_slewing_plate::model::parameters::{HydraulicsModel, Parameters};
 use hydraulic_slewing_plate::model::presets::{self, COMPLETE};
 use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
@@ -84,6 +84,11 @@ impl RunArgs {
         })
     }
 
+    /// The command of the run.
+    pub fn profile(&self) -> Profile {
+        self.profile
+    }
+
     /// The stop time \[s\].
     pub fn stop(&self) -> f64 {
         self.stop.unwrap_or(match self.profile {
@@ -124,8 +129,8 @@ const RECORDED_SERVO_VALVE: &[&str] = &[
     "servo_valve.p_2",
 ];
 
-/// The settings of a run in order: the preset's, then the user's `--set`.
-fn settings(args: &RunArgs) -> Result<Vec<String>, String> {
+/// The settings of a run in order: the preset's, then the user's `--set`, then `extra`.
+fn settings(args: &RunArgs, extra: &[String]) -> Result<Vec<String>, String> {
     let preset = presets::preset(&args.preset)?;
     let mut all: Vec<String> = preset
         .settings
@@ -136,6 +141,7 @@ fn settings(args: &RunArgs) -> Result<Vec<String>, String> {
         all.push("reference.angle=0".into());
     }
     all.extend(args.set.iter().cloned());
+    all.extend(extra.iter().cloned());
     Ok(all)
 }
 
@@ -154,12 +160,8 @@ pub struct RunInfo {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
-    let (settings, parameters) = prepare(args)?;
-    let fmu_path = if args.no_build {
-        PathBuf::from(&args.fmu)
-    } else {
-        PathBuf::from(package::package(&args.fmu)?)
-    };
+    let (settings, parameters) = prepare(args, &[])?;
+    let fmu_path = fmu_for(args)?;
     let (results, info) = experiment(args, &fmu_path, &settings, parameters)?;
     let csv_path = package::root().join(&args.csv);
     results.write_csv(&csv_path)?;
@@ -170,17 +172,41 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     super::plot::after_run(&csv_path, &args.plot)
 }
 
+/// The FMU the run `args` uses: `--fmu`, built first unless `--no-build`.
+pub(super) fn fmu_for(args: &RunArgs) -> Result<PathBuf, String> {
+    Ok(if args.no_build {
+        PathBuf::from(&args.fmu)
+    } else {
+        PathBuf::from(package::package(&args.fmu)?)
+    })
+}
+
+/// The typed parameters of the run `args` (its preset and `--set`).
+pub(super) fn parameters_of(args: &RunArgs) -> Result<Parameters, String> {
+    Ok(prepare(args, &[])?.1)
+}
+
 /// The summary of the run `args` on the FMU `fmu` as it is (`hsp run --no-build --fmu FMU`),
 /// writing nothing; the results line names the CSV as `--csv` gives it (`hsp docs`).
 pub(super) fn summary_of(args: &RunArgs, fmu: &std::path::Path) -> Result<String, String> {
-    let (settings, parameters) = prepare(args)?;
-    let (results, info) = experiment(args, fmu, &settings, parameters)?;
+    let (results, info) = results_of(args, &[], fmu)?;
     Ok(summary(args, &results, &info, &args.csv))
+}
+
+/// The results of the run `args` with the settings `extra` after its own (`NAME=VALUE`) on the
+/// FMU `fmu` as it is, writing nothing (`hsp fastest-move`).
+pub(super) fn results_of(
+    args: &RunArgs,
+    extra: &[String],
+    fmu: &std::path::Path,
+) -> Result<(Results, RunInfo), String> {
+    let (settings, parameters) = prepare(args, extra)?;
+    experiment(args, fmu, &settings, parameters)
 }
 
 /// Checks the run's times; the settings of the run and the typed parameters it will use (the
 /// FMU checks them again when it initialises).
-fn prepare(args: &RunArgs) -> Result<(Vec<String>, Parameters), String> {
+fn prepare(args: &RunArgs, extra: &[String]) -> Result<(Vec<String>, Parameters), String> {
     let stop = args.stop();
     if !(stop > 0.0 && args.step > 0.0 && args.step <= stop) {
         return Err(format!(
@@ -188,7 +214,7 @@ fn prepare(args: &RunArgs) -> Result<(Vec<String>, Parameters), String> {
             args.step
         ));
     }
-    let settings = settings(args)?;
+    let settings = settings(args, extra)?;
     let values = super::values_with(None, &settings)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     Ok((settings, parameters))
@@ -471,14 +497,20 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         )
         .unwrap();
     }
+    let l = &p.limits;
+    let plate_rule = if l.plate_sigma_f <= l.plate_sigma_y {
+        "fatigue"
+    } else {
+        "yield"
+    };
     writeln!(
         s,
-        "  validity peak w_tip/a {:.3} (limit {TIP_RATIO_LIMIT}), plate stress {:.1} MPa and bar shear {:.1} MPa ({:.2} and {:.2} of yield), (omega_hub/omega_1)^2 {:.3} (limit {SPIN_LIMIT})",
+        "  validity peak w_tip/a {:.3} (limit {TIP_RATIO_LIMIT}), plate stress {:.1} MPa (limit {:.2}, {plate_rule} at the root), bar shear {:.1} MPa (limit {:.1}, half of yield), (omega_hub/omega_1)^2 {:.3} (limit {SPIN_LIMIT})",
         max_abs(&col("plate.w_tip_ratio")),
         max_abs(&col("plate.stress")) * 1e-6,
+        Monitor::PlateStress.limit(l) * 1e-6,
         max_abs(&col("torsion_bar.stress")) * 1e-6,
-        max_abs(&col("plate.stress")) / p.limits.plate_sigma_y,
-        max_abs(&col("torsion_bar.stress")) / p.limits.bar_tau_y,
+        Monitor::BarStress.limit(l) * 1e-6,
         max_abs(&col("hub.omega_ratio")).powi(2)
     )
     .unwrap();
