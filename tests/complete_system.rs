@@ -95,14 +95,21 @@ fn the_default_move_settles_inside_the_models_range() {
     assert!((target.to_degrees() - 30.0).abs() < 1e-12 && end == 2.5);
     let hub = r.col("theta_hub");
     let overshoot = (r.peak("theta_hub") - target) / target;
-    let settled_from = hub
-        .iter()
-        .rposition(|v| (v - target).abs() > 0.02 * target)
-        .map_or(0.0, |i| r.t[i + 1]);
+    // Settling as docs/model.md defines it ("Measures of a manoeuvre"): from the move's end, into
+    // 2 % of the move around its target, and still inside at the end of the run.
+    let first = r.t.iter().position(|&t| t >= end).unwrap();
+    let last_out = (first..hub.len())
+        .rev()
+        .find(|&i| (hub[i] - target).abs() > 0.02 * target);
+    assert!(
+        last_out.is_none_or(|i| i + 1 < hub.len()),
+        "the hub is not settled"
+    );
+    let settled_from = last_out.map_or(end, |i| r.t[i + 1]);
     let sigma_y = start("plate.sigma_y");
     let tau_y = start("torsion_bar.tau_y");
     println!(
-        "hub overshoot {:.3} %, in the 2 % band from {settled_from:.3} s; peak w/a {:.4}, plate {:.2} MPa, bar {:.2} MPa, (omega/omega_1)^2 {:.4}, |e_out| {:.3} V, |x_v| {:.4} mm",
+        "hub overshoot {:.3} %, settled (2 %) from {settled_from:.3} s, the move ending at {end} s; peak w/a {:.4}, plate {:.2} MPa, bar {:.2} MPa, (omega/omega_1)^2 {:.4}, |e_out| {:.3} V, |x_v| {:.4} mm",
         overshoot * 100.0,
         r.peak("plate.w_tip_ratio"),
         r.peak("plate.stress") * 1e-6,
