@@ -10,17 +10,22 @@ With Kp = A1 A2 = 20, the analog loop's gain, it must match the FMU's own analog
 (run too, with controller.k_pl = 0: the default analog controller also feeds back the load
 pressure, which this loop leaves out);
 the last run adds a derivative term. Prints k_pot, then per run the final motor angle, overshoot,
-settling time (2 % of the move, from its start) and peak |w_tip|; and the P loop's largest gaps
-to the analog loop.  Run: .venv/bin/python examples/closed_loop.py [--fmu FMU]
+settling time of the motor angle and residual peak of |w_tip| after the move (tools/manoeuvre.py:
+from the move's end, 2 % of the move, "not settled" when the run ends first) and peak |w_tip|;
+and the P loop's largest gaps to the analog loop.  Run: .venv/bin/python examples/closed_loop.py [--fmu FMU]
 """
 import argparse
 import math
 import pathlib
 import shutil
+import sys
 
 import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "tools"))
+import manoeuvre  # noqa: E402  (tools/manoeuvre.py: settling and residual, one definition)
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--fmu", default=str(pathlib.Path(__file__).parents[1] / "fmu" / "HydraulicSlewingPlate.fmu"))
@@ -69,12 +74,12 @@ shutil.rmtree(unzipped, ignore_errors=True)
 _, theta, _, y = runs["analog loop (FMU)"][-1]  # the FMU's outputs at the end of the run
 print(f"k_pot = {k_pot:.6f} V/rad (10 V / 150 deg = {10 / math.radians(150):.6f}; "
       f"y_pot / theta_motor at {STOP:g} s: {y / theta:.6f})")
-print(f"{'':24s}{'final':>10s}{'overshoot':>11s}{'settling':>11s}{'peak w_tip':>11s}")
-print(f"{'':24s}{'[deg]':>10s}{'[%]':>11s}{'[s]':>11s}{'[mm]':>11s}")
+print(f"{'':24s}{'final':>10s}{'overshoot':>11s}{'settling':>13s}{'residual':>11s}{'peak w_tip':>11s}")
+print(f"{'':24s}{'[deg]':>10s}{'[%]':>11s}{'[s]':>13s}{'[mm]':>11s}{'[mm]':>11s}")
 for label, (t, theta, w, _) in ((k, x.T) for k, x in runs.items()):
-    last_out = np.nonzero(np.abs(theta - MOVE) > 0.02 * MOVE)[0][-1]
-    settle = f"{t[last_out + 1] - T0:.3f}" if last_out + 1 < len(t) else "not settled"
-    print(f"{label:24s}{math.degrees(theta[-1]):10.3f}{100 * (theta.max() - MOVE) / MOVE:11.3f}"
-          f"{settle:>11s}{1e3 * np.abs(w).max():11.3f}")
+    settling = manoeuvre.settling(t, theta, MOVE, T0 + DUR)  # the move's end: T0 + DUR
+    settle = "not settled" if math.isnan(settling) else f"{settling:.3f}"
+    print(f"{label:24s}{math.degrees(theta[-1]):10.3f}{manoeuvre.overshoot_pct(theta, MOVE):11.3f}"
+          f"{settle:>13s}{1e3 * manoeuvre.residual_peak(t, w, T0 + DUR):11.3f}{1e3 * np.abs(w).max():11.3f}")
 gap = np.abs(runs[f"P, Kp = {KP:g} (Python)"] - runs["analog loop (FMU)"]).max(axis=0)
 print(f"P loop - analog loop: max |theta_motor| {math.degrees(gap[1]):.4f} deg, max |w_tip| {1e3 * gap[2]:.3f} mm")

@@ -8,11 +8,13 @@ What it shows
     co-simulation with a communication step of 1 ms, the controller's sampling period), and runs
     the FMU's default slewing move (30 deg of motor angle, minimum-jerk over 2 s from t = 0.5 s,
     default preset `complete`) twice: once with the FMU's own analog loop, once with this
-    controller. It prints and plots, for both:
-      - settling time: from the start of the move until the hub angle stays within 2 % of the
-        move (0.6 deg) of its target;
+    controller. It prints and plots, for both (the measures of tools/manoeuvre.py, docs/model.md
+    "Measures of a manoeuvre"):
+      - settling time: from the end of the move until the hub angle stays within 2 % of the
+        move (0.6 deg) of its target ("nan": not settled within the run);
       - residual tip vibration: RMS and peak of the tip deflection w_tip from the end of the move
-        to the end of the run, and the last time |w_tip| exceeds 1 mm (the ring-down time);
+        to the end of the run, and its ring-down time: from the end of the move until |w_tip|
+        stays at or below 1 mm ("nan": not rung down within the run);
       - the largest values of the FMU's validity monitors and any warning the FMU logged.
 
 The controller (designed here, from A, B, C of `hsp linearize --set controller.external=true`)
@@ -53,10 +55,12 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tools"))
+import manoeuvre  # noqa: E402  (tools/manoeuvre.py: settling and ring-down, one definition)
+
 H = 1e-3           # communication step = the controller's sampling period [s]
 CUT = 200.0        # modes slower than this [1/s] are kept in the reduced model
-BAND = 0.02        # settling band, a fraction of the move
-RING = 1e-3        # |w_tip| threshold of the ring-down time [m]
+BAND = manoeuvre.BAND  # settling band, a fraction of the move (drawn on the plot)
 RECORDED = ["theta_motor", "theta_hub", "w_tip", "y_pot", "torsion_bar.torque",
             "controller.reference", "controller.e_out", "plate.w_tip_ratio", "plate.stress",
             "torsion_bar.stress", "hub.omega_ratio"]
@@ -221,21 +225,13 @@ def run(unzipped, md, stop, controller=None):
 def summary(data, move):
     angle, t0, duration = move
     t, hub, w = data["time"], data["theta_hub"], data["w_tip"]
-    outside = np.nonzero(np.abs(hub - angle) > BAND * abs(angle))[0]
-    if not len(outside):
-        settling = 0.0
-    else:
-        settling = np.nan if outside[-1] + 1 >= len(t) else t[outside[-1] + 1] - t0
-    after = t >= t0 + duration
-    big = np.nonzero(np.abs(w) > RING)[0]
-    ring = t[big[-1] + 1] - (t0 + duration) if len(big) and big[-1] + 1 < len(t) else np.nan
-    if not len(big):
-        ring = 0.0
+    t_end = t0 + duration  # the move's end: the command's target is reached there
+    after = t >= t_end
     return {
-        "settling_time_s": settling,
+        "settling_after_move_s": manoeuvre.settling(t, hub, angle, t_end),
         "residual_rms_w_tip_m": float(np.sqrt(np.mean(w[after] ** 2))),
-        "residual_peak_w_tip_m": float(np.max(np.abs(w[after]))),
-        "ring_down_s": ring,
+        "residual_peak_w_tip_m": manoeuvre.residual_peak(t, w, t_end),
+        "ring_down_s": manoeuvre.ring_down(t, w, t_end),
         "peak_w_tip_m": float(np.max(np.abs(w))),
         "peak_e_out_V": float(np.max(np.abs(data["controller.e_out"]))),
         **{f"max_{m}": float(np.max(np.abs(data[m]))) for m in MONITORS},
@@ -317,7 +313,7 @@ def main(argv=None):
 
     rows = {label: summary(data, move) for label, (data, _) in results.items()}
     print(f"\n{'':34s}{'analog loop':>14s}{'LQG (Python)':>14s}")
-    lines = [("settling time (2 % of the move) [s]", "settling_time_s", 1, "{:.3f}"),
+    lines = [("settling after the move (2 %) [s]", "settling_after_move_s", 1, "{:.3f}"),
              ("residual RMS w_tip [mm]", "residual_rms_w_tip_m", 1e3, "{:.3f}"),
              ("residual peak w_tip [mm]", "residual_peak_w_tip_m", 1e3, "{:.3f}"),
              ("ring-down to 1 mm after move [s]", "ring_down_s", 1, "{:.3f}"),
@@ -327,7 +323,7 @@ def main(argv=None):
     for text, key, factor, fmt in lines:
         cells = "".join(f"{fmt.format(rows[l][key] * factor):>14s}" for l in rows)
         print(f"{text:34s}{cells}")
-    print("(nan: the hub never settles, or |w_tip| is still above 1 mm at the end of the run)")
+    print("(nan: the hub is not settled, or |w_tip| not rung down to 1 mm, at the end of the run)")
     for label, (_, warnings) in results.items():
         print(f"validity warnings, {label}: {len(warnings)}" + "".join(f"\n  {w}" for w in warnings))
 

@@ -7,10 +7,11 @@ values of `torsion_bar.k` [N m/rad], one Dask task each on a LocalCluster of 2 w
 through the project's sweep tool, tools/sweep.py (imported, not copied: it sends the FMU to each
 worker once and runs `run_point` there). The same sweep from the command line:
     .venv/bin/python tools/sweep.py --grid torsion_bar.k=1000,2500,5000,10000 --workers 2
-Prints the settings, then per stiffness: the peak of |w_tip|, its residual (largest |w_tip| over the
-last 10 % of the run), the settling times (2 % of the change, counted from t = 0; "not settled"
-when the run ends first) of the hub and of y_pot, and the final hub angle. The wall-clock time is
-on its own line. Writes sweep_dask.csv into --out.
+Prints the settings, then per stiffness: the peak of |w_tip|, and the measures of the manoeuvre
+(tools/manoeuvre.py; docs/model.md, "Measures of a manoeuvre"): the residual peak of |w_tip| after
+the move, its ring-down time to 1 mm and the settling times (2 % of the move around its target) of
+the hub and of y_pot, all counted from the move's end ("not rung down", "not settled" when the run
+ends first); and the final hub angle. The wall-clock time is on its own line. Writes sweep_dask.csv into --out.
 Run: .venv/bin/python examples/sweep_dask.py [--fmu FMU] [--out results/examples] [--k 1000,5000] [--stop S]
 """
 import argparse

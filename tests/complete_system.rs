@@ -95,14 +95,21 @@ fn the_default_move_settles_inside_the_models_range() {
     assert!((target.to_degrees() - 30.0).abs() < 1e-12 && end == 2.5);
     let hub = r.col("theta_hub");
     let overshoot = (r.peak("theta_hub") - target) / target;
-    let settled_from = hub
-        .iter()
-        .rposition(|v| (v - target).abs() > 0.02 * target)
-        .map_or(0.0, |i| r.t[i + 1]);
+    // Settling as docs/model.md defines it ("Measures of a manoeuvre"): from the move's end, into
+    // 2 % of the move around its target, and still inside at the end of the run.
+    let first = r.t.iter().position(|&t| t >= end).unwrap();
+    let last_out = (first..hub.len())
+        .rev()
+        .find(|&i| (hub[i] - target).abs() > 0.02 * target);
+    assert!(
+        last_out.is_none_or(|i| i + 1 < hub.len()),
+        "the hub is not settled"
+    );
+    let settled_from = last_out.map_or(end, |i| r.t[i + 1]);
     let sigma_y = start("plate.sigma_y");
     let tau_y = start("torsion_bar.tau_y");
     println!(
-        "hub overshoot {:.3} %, in the 2 % band from {settled_from:.3} s; peak w/a {:.4}, plate {:.2} MPa, bar {:.2} MPa, (omega/omega_1)^2 {:.4}, |e_out| {:.3} V, |x_v| {:.4} mm",
+        "hub overshoot {:.3} %, settled (2 %) from {settled_from:.3} s, the move ending at {end} s; peak w/a {:.4}, plate {:.2} MPa, bar {:.2} MPa, (omega/omega_1)^2 {:.4}, |e_out| {:.3} V, |x_v| {:.4} mm",
         overshoot * 100.0,
         r.peak("plate.w_tip_ratio"),
         r.peak("plate.stress") * 1e-6,
@@ -115,6 +122,9 @@ fn the_default_move_settles_inside_the_models_range() {
     assert!(settled_from < end + 1.5, "hub settles at {settled_from} s");
     assert!(r.peak("plate.w_tip_ratio") < 0.05);
     assert!(r.peak("plate.stress") < 0.1 * sigma_y);
+    // Below the plate's fatigue threshold too (half of 96.5 MPa): no plate-stress warning (the
+    // run has none at all, below).
+    assert!(r.peak("plate.stress") < 0.5 * start("plate.sigma_f"));
     assert!(r.peak("torsion_bar.stress") < 0.1 * tau_y);
     // No limit reached: the amplifier stays in its linear range, the spool off its stops.
     assert!(r.peak("controller.e_out") < LINEAR_FRACTION * start("controller.e_max"));
@@ -148,11 +158,19 @@ fn the_2_volt_step_warns_that_it_leaves_the_models_range() {
             .count()
     };
     // The tip swings to w/a 0.38 and the hub spins at (Omega/omega_1)^2 0.14 (both past 0.1);
-    // the rig-sized motor stalls at 140 N m, which the 20 mm bar carries at 0.24 of its yield,
-    // and the plate's root stays under half of its yield (95 MPa).
+    // the rig-sized motor stalls at 140 N m, which the 20 mm bar carries at 0.24 of its yield.
+    // The plate's nominal root stress passes half of 6061-T6's fatigue strength (96.5 MPa at
+    // 5e8 reversed cycles, concentrated twice at the clamped root: 48.25 MPa), though not half
+    // of its yield (138 MPa): the plate's monitor warns.
     assert_eq!(named(Monitor::TipRatio), 1, "{:?}", r.warnings);
     assert_eq!(named(Monitor::SpinRatio), 1, "{:?}", r.warnings);
     assert_eq!(named(Monitor::BarStress), 0, "{:?}", r.warnings);
+    let sigma_f = start("plate.sigma_f");
+    assert!(
+        r.peak("plate.stress") > 0.5 * sigma_f
+            && r.peak("plate.stress") < 0.5 * start("plate.sigma_y")
+    );
+    assert_eq!(named(Monitor::PlateStress), 1, "{:?}", r.warnings);
     assert!(r.warnings.iter().all(|w| w.contains(" t = ")));
 }
 

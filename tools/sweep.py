@@ -14,10 +14,12 @@ into its local directory, so a cluster needs no shared file system.
 Each run is the FMU's default experiment unless told otherwise: the stop time and the
 communication step of the model description's <DefaultExperiment> (``--stop``, ``--step``), no
 input (``--input r=1`` adds a constant 1 V to the reference), the built-in move of the command
-generator. The settings used are printed first. A settling time is reported only when the run
-shows the quantity settled: the run goes on past the end of the built-in move and the quantity
-stays in its band over at least the last 10 % of the run; otherwise it is "not settled" (an empty
-cell in the CSV, NaN in the rows).
+generator. The settings used are printed first. The measures of the manoeuvre are those of
+tools/manoeuvre.py (docs/model.md, "Measures of a manoeuvre"), the rule `hsp run` prints: settling
+times counted from the end of the move (t = 0 without a move) into 2 % of the commanded change
+around the command's target, the residual peak of |w_tip| after the move and its ring-down time to
+1 mm; "not settled" and "not rung down" (an empty cell in the CSV, NaN in the rows) when the run
+ends first.
 
 Runs on a LocalCluster by default (``--workers N``), or on any running scheduler
 (``--scheduler tcp://host:8786``). Prints a table of the points, writes a CSV (``--out``) and, with
@@ -26,7 +28,7 @@ Runs on a LocalCluster by default (``--workers N``), or on any running scheduler
 Example:
 
     python tools/sweep.py --grid torsion_bar.k=1000,2500,5000 --grid plate.zeta=0.005,0.02 \\
-        --set hydraulics.motor_coupled=true --plot residual_w_tip
+        --set hydraulics.motor_coupled=true --plot residual_peak_w_tip
 """
 
 from __future__ import annotations
@@ -46,6 +48,10 @@ import tempfile
 import time
 import zipfile
 
+# tools/manoeuvre.py, beside this file (in the repository and in a Dask worker's directory).
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import manoeuvre  # noqa: E402
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 DEFAULT_FMU = ROOT / "fmu" / "HydraulicSlewingPlate.fmu"
 
@@ -56,9 +62,10 @@ SOLVER_STATS = ["solver.steps", "solver.rejected", "solver.f_evals", "solver.jac
 #: The metrics of a row, in CSV order.
 METRICS = [
     "peak_w_tip",
-    "residual_w_tip",
-    "settling_time_theta_hub",
-    "settling_time_y_pot",
+    "residual_peak_w_tip",
+    "ring_down_w_tip",
+    "settling_after_move_theta_hub",
+    "settling_after_move_y_pot",
     "final_theta_hub",
     "peak_p_load",
 ] + [s.replace(".", "_") for s in SOLVER_STATS] + ["wall_s"]
@@ -83,44 +90,19 @@ def extract(fmu_bytes: bytes, directory: str) -> str:
     return target
 
 
-#: The tail of a run over which the residual is taken and a settled quantity must stay in its band.
-TAIL = 0.1
-
-
-def settling_time(t, y, band=0.02):
-    """First time after which y stays within `band` of the size of its change (|y[-1] - y[0]|)
-    around its final value; t[0] when y does not change. NaN ("not settled") when y is still
-    outside that band in the last `TAIL` of the run: the run ended before y settled (a signal
-    still moving at the end is near its own final value only in the last few samples)."""
-    final, change = y[-1], abs(y[-1] - y[0])
-    tol = band * change
-    last_out = None
-    for i in range(len(y) - 1, -1, -1):
-        if abs(y[i] - final) > tol:
-            last_out = i
-            break
-    if last_out is None:
-        return t[0]
-    settled = t[last_out + 1]
-    return math.nan if settled > t[-1] - TAIL * (t[-1] - t[0]) else settled
-
-
-def metrics(t, series, stats, wall, move_end=None):
-    """The summary metrics of one run: tip deflection peak and residual (largest |w_tip| over the
-    last 10 % of the run), settling times (2 %; NaN when the run ends before the quantity settles
-    or before `move_end`, the end of the built-in move), final hub angle, peak |p_load|, solver
-    statistics and wall time."""
-    w = series["w_tip"]
-    n_tail = max(1, len(t) // 10)  # the last TAIL of the run
-
-    def settling(y):
-        return math.nan if move_end is not None and t[-1] < move_end else settling_time(t, y)
-
+def metrics(t, series, stats, wall, values):
+    """The summary metrics of one run: peak |w_tip|, the measures of the manoeuvre
+    (tools/manoeuvre.py: residual peak of |w_tip| after the move and its ring-down time to 1 mm,
+    settling times of the hub and y_pot after the move; NaN when the run ends first or the loop
+    has no target), final hub angle, peak |p_load|, solver statistics and wall time. `values`
+    are the run's parameter values and inputs as `manoeuvre.command` reads them."""
+    m = manoeuvre.measures(t, series, values)
     row = {
-        "peak_w_tip": max(abs(v) for v in w),
-        "residual_w_tip": max(abs(v) for v in w[-n_tail:]),
-        "settling_time_theta_hub": settling(series["theta_hub"]),
-        "settling_time_y_pot": settling(series["y_pot"]),
+        "peak_w_tip": max(abs(v) for v in series["w_tip"]),
+        "residual_peak_w_tip": m["residual_peak_w_tip"],
+        "ring_down_w_tip": m["ring_down_w_tip"],
+        "settling_after_move_theta_hub": m["settling_theta_hub"],
+        "settling_after_move_y_pot": m["settling_y_pot"],
         "final_theta_hub": series["theta_hub"][-1],
         "peak_p_load": max(abs(v) for v in series["p_load"]),
         "wall_s": wall,
@@ -130,17 +112,21 @@ def metrics(t, series, stats, wall, move_end=None):
     return row
 
 
-def move_end(variables, values):
-    """The end of the command generator's move (reference.t_start + reference.duration) with
-    `values` (name -> value) set, or None when there is no move (reference.angle = 0 or
-    controller.external = true)."""
+#: The parameters the measures of a manoeuvre read (manoeuvre.command).
+COMMAND_PARAMETERS = ["reference.angle", "reference.t_start", "reference.duration",
+                      "controller.k_pot", "controller.external"]
+
+
+def command_values(variables, values, inputs):
+    """The values `manoeuvre.command` reads, typed: each of COMMAND_PARAMETERS from `values`
+    (name -> value as given) or its start value, and the input r from `inputs` (0 when absent)."""
     def value(name):
         v = values.get(name, variables[name].start)
-        return str(v).strip().lower() == "true" if variables[name].type == "Boolean" else float(v)
+        return str(v).strip().lower() in ("true", "1") if variables[name].type == "Boolean" else float(v)
 
-    if value("controller.external") or value("reference.angle") == 0:
-        return None
-    return value("reference.t_start") + value("reference.duration")
+    typed = {name: value(name) for name in COMMAND_PARAMETERS}
+    typed["r"] = float(inputs.get("r", 0.0))
+    return typed
 
 
 def default_experiment(fmu_path):
@@ -168,12 +154,14 @@ def describe(options, fixed, default):
 
 def format_table(rows, names):
     """The rows as a text table: the swept parameters, the status and the main metrics; a
-    settling time that the run does not reach reads "not settled"."""
-    def settle(v):
-        return "not settled" if math.isnan(v) else f"{v:.3f}"
+    settling time that the run does not reach reads "not settled", a ring-down time "not rung
+    down"."""
+    def time(v, words):
+        return words if math.isnan(v) else f"{v:.3f}"
 
-    cols = [("status", 7), ("peak w_tip [mm]", 16), ("residual [mm]", 14),
-            ("settling hub [s]", 17), ("settling y_pot [s]", 19), ("final hub [deg]", 16)]
+    cols = [("status", 7), ("peak w_tip [mm]", 16), ("residual peak [mm]", 19),
+            ("ring-down 1 mm [s]", 19), ("settling hub [s]", 17), ("settling y_pot [s]", 19),
+            ("final hub [deg]", 16)]
     widths = [max(len(n), 10) + 2 for n in names]
     lines = ["".join(f"{n:>{w}s}" for n, w in zip(names, widths))
              + "".join(f"{c:>{w}s}" for c, w in cols)]
@@ -183,8 +171,12 @@ def format_table(rows, names):
         if r["status"] != "ok":
             lines.append(line + "  " + r["message"])
             continue
-        lines.append(line + f"{r['peak_w_tip'] * 1e3:16.3f}{r['residual_w_tip'] * 1e3:14.3f}"
-                     f"{settle(r['settling_time_theta_hub']):>17s}{settle(r['settling_time_y_pot']):>19s}"
+        residual = r["residual_peak_w_tip"]
+        lines.append(line + f"{r['peak_w_tip'] * 1e3:16.3f}"
+                     f"{'-' if math.isnan(residual) else f'{residual * 1e3:.3f}':>19s}"
+                     f"{time(r['ring_down_w_tip'], 'not rung down'):>19s}"
+                     f"{time(r['settling_after_move_theta_hub'], 'not settled'):>17s}"
+                     f"{time(r['settling_after_move_y_pot'], 'not settled'):>19s}"
                      f"{math.degrees(r['final_theta_hub']):16.3f}")
     return "\n".join(lines)
 
@@ -239,8 +231,8 @@ def run_point(unzipdir: str, params: dict, options: dict) -> dict:
         series = {name: [v[k] for v in values] for k, name in enumerate(names)}
         for name in RECORDED:
             series.setdefault(name, [0.0] * len(t))
-        end = move_end(variables, params)
-        row.update(metrics(t, series, stats, time.perf_counter() - started, end))
+        values = command_values(variables, params, options["inputs"])
+        row.update(metrics(t, series, stats, time.perf_counter() - started, values))
     except Exception as e:  # a failed point is a row, never a lost sweep
         detail = "; ".join(messages)
         row["status"] = "error"
@@ -314,7 +306,10 @@ def sweep(client, fmu_path, points, options):
     Call it from the module `sweep` (`import sweep`), not from a script's `__main__`."""
     # The workers import this file as the module `sweep` (uploaded to each of them, so a cluster
     # needs no copy of the repository), and the tasks refer to its functions by name.
-    client.upload_file(str(pathlib.Path(__file__).resolve()))
+    # manoeuvre.py first: sweep imports it.
+    here = pathlib.Path(__file__).resolve()
+    client.upload_file(str(here.with_name("manoeuvre.py")))
+    client.upload_file(str(here))
     fmu_bytes = pathlib.Path(fmu_path).read_bytes()
     plugin = _plugin_class()(fmu_bytes)
     if hasattr(client, "register_plugin"):
@@ -363,7 +358,7 @@ def write_csv(path, rows, parameter_names):
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
         w.writeheader()
-        for r in rows:  # NaN (a settling time not reached) is an empty cell
+        for r in rows:  # NaN (not settled, not rung down, no measure) is an empty cell
             w.writerow({c: "" if isinstance(r.get(c), float) and math.isnan(r[c]) else r.get(c, "")
                         for c in columns})
 

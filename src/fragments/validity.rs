@@ -9,23 +9,36 @@
 //! | output | quantity | the model stops holding when |
 //! | --- | --- | --- |
 //! | `plate.w_tip_ratio` | `w_tip / a` | above [`TIP_RATIO_LIMIT`] = 0.1: an elastica departs from linear bending by about 1 % there, 4 % at 0.21 and 33 % at 0.81 |
-//! | `plate.stress` | bending stress at the plate's most bent section | above [`YIELD_FRACTION`] of `plate.sigma_y`: a clamped root concentrates stress by about 2, so yield is near |
-//! | `torsion_bar.stress` | shear stress `16 T / (pi d^3)` at the bar's surface | above [`YIELD_FRACTION`] of `torsion_bar.tau_y` |
+//! | `plate.stress` | bending stress at the plate's most bent section | above `min(plate.sigma_f, plate.sigma_y) /` [`ROOT_CONCENTRATION`]: a clamped root concentrates stress by about 2, so the root's peak stress then reaches the fatigue strength (48 MPa nominal for 6061-T6) |
+//! | `torsion_bar.stress` | shear stress `16 T / (pi d^3)` at the bar's surface | above [`YIELD_FRACTION`] of `torsion_bar.tau_y`, which is also the steel's torsional endurance limit (below) |
 //! | `hub.omega_ratio` | hub speed over the plate's first clamped bending frequency | its square above [`SPIN_LIMIT`] = 0.1: the spin-softening terms the linear model omits grow as `(Omega / omega_1)^2` |
 //!
 //! The FMU checks the monitors at every communication point and logs one warning per quantity
 //! (the first time it goes out of range), naming the quantity, its value and the time.
 //!
-//! Material limits (parameters): aluminium 6061-T6, yield 276 MPa (ASM Aerospace Specification
-//! Metals, MIL-HDBK-5), the plate of the paper; the bar in AISI 4140 quenched and tempered,
-//! tensile yield 655 MPa, shear yield by von Mises `0.577 x 655` = 378 MPa.
+//! Material limits (parameters): the plate of the paper in aluminium 6061-T6, yield 276 MPa
+//! (ASM Aerospace Specification Metals, MIL-HDBK-5) and fatigue strength 96.5 MPa at 5e8 cycles
+//! of completely reversed stress (R. R. Moore rotating beam; ASM). A slewing rig reverses the
+//! plate's bending at every move and rings in its slow mode after it, thousands of cycles an
+//! hour, and aluminium has no endurance limit, so the plate's rule is fatigue at the clamped root, not
+//! yield: the yield strength still caps it for a material whose fatigue strength exceeds its yield.
+//! The bar in AISI 4140 quenched and tempered, tensile yield 655 MPa, shear yield by von Mises
+//! `0.577 x 655` = 378 MPa. Steel has an endurance limit, about half its ultimate strength
+//! (Shigley, *Mechanical Engineering Design*, `S'e = 0.5 S_ut` below 1400 MPa), in shear `0.577`
+//! of it: with `S_ut` at least the 655 MPa yield, at least `0.577 x 0.5 x 655` = 189 MPa, the
+//! bar's threshold [`YIELD_FRACTION`] `x 378`. The bar's rule stays half its shear yield: that
+//! is at or below its unnotched torsional endurance limit (a shouldered bar's fillets would need
+//! their own concentration factor, which the model does not know).
 
 use crate::bond_graph::{BondGraph, SignalId};
 
 /// `|w_tip / a|` above which linear plate theory is not trusted.
 pub const TIP_RATIO_LIMIT: f64 = 0.1;
-/// Fraction of a yield stress above which the monitors warn.
+/// Fraction of the torsion bar's shear yield stress above which its monitor warns.
 pub const YIELD_FRACTION: f64 = 0.5;
+/// The stress concentration at the plate's clamped root: the plate's monitor warns when this
+/// times the nominal stress `plate.stress` exceeds the smaller of the fatigue and yield strengths.
+pub const ROOT_CONCENTRATION: f64 = 2.0;
 /// `(Omega / omega_1)^2` above which the omitted spin terms matter.
 pub const SPIN_LIMIT: f64 = 0.1;
 
@@ -34,6 +47,9 @@ pub const SPIN_LIMIT: f64 = 0.1;
 pub struct Limits {
     /// Yield strength of the plate \[Pa\] (`plate.sigma_y`, 6061-T6: 276 MPa).
     pub plate_sigma_y: f64,
+    /// Fatigue strength of the plate, completely reversed stress \[Pa\] (`plate.sigma_f`,
+    /// 6061-T6: 96.5 MPa at 5e8 cycles).
+    pub plate_sigma_f: f64,
     /// Diameter of the torsion bar \[m\] (`torsion_bar.d`).
     pub bar_d: f64,
     /// Shear yield strength of the torsion bar \[Pa\] (`torsion_bar.tau_y`).
@@ -44,6 +60,7 @@ impl Default for Limits {
     fn default() -> Self {
         Limits {
             plate_sigma_y: 276e6,
+            plate_sigma_f: 96.5e6,
             bar_d: 0.02,
             bar_tau_y: 378e6,
         }
@@ -51,6 +68,12 @@ impl Default for Limits {
 }
 
 impl Limits {
+    /// The plate's strength its monitor compares with the root's concentrated stress: the
+    /// smaller of the fatigue and yield strengths \[Pa\].
+    pub fn plate_strength(&self) -> f64 {
+        self.plate_sigma_f.min(self.plate_sigma_y)
+    }
+
     /// The shear stress at the surface of the bar per unit torque, `16 / (pi d^3)` \[Pa/(N m)\].
     pub fn bar_stress_per_torque(&self) -> f64 {
         16.0 / (std::f64::consts::PI * self.bar_d.powi(3))
@@ -88,7 +111,7 @@ impl Monitor {
     pub fn limit(self, limits: &Limits) -> f64 {
         match self {
             Monitor::TipRatio => TIP_RATIO_LIMIT,
-            Monitor::PlateStress => YIELD_FRACTION * limits.plate_sigma_y,
+            Monitor::PlateStress => limits.plate_strength() / ROOT_CONCENTRATION,
             Monitor::BarStress => YIELD_FRACTION * limits.bar_tau_y,
             Monitor::SpinRatio => SPIN_LIMIT.sqrt(),
         }
@@ -107,10 +130,22 @@ impl Monitor {
                  (large deflection: linear plate theory no longer holds)"
             ),
             Monitor::PlateStress => format!(
-                "the plate's bending stress {:.1} MPa exceeds {YIELD_FRACTION} of its yield \
-                 strength plate.sigma_y = {:.0} MPa",
-                value * 1e-6,
-                limits.plate_sigma_y * 1e-6
+                "the plate's bending stress {:.1} MPa exceeds {:.2} MPa: concentrated {} times \
+                 at the clamped root it passes the plate's {} (plate.{} = {:.1} MPa)",
+                value.abs() * 1e-6,
+                self.limit(limits) * 1e-6,
+                ROOT_CONCENTRATION,
+                if limits.plate_sigma_f <= limits.plate_sigma_y {
+                    "fatigue strength at 5e8 reversed cycles"
+                } else {
+                    "yield strength"
+                },
+                if limits.plate_sigma_f <= limits.plate_sigma_y {
+                    "sigma_f"
+                } else {
+                    "sigma_y"
+                },
+                limits.plate_strength() * 1e-6
             ),
             Monitor::BarStress => format!(
                 "the torsion bar's shear stress {:.1} MPa exceeds {YIELD_FRACTION} of its shear \
@@ -188,6 +223,30 @@ mod tests {
         // 100 N m on 20 mm: 16 * 100 / (pi 8e-6) = 63.66 MPa.
         let tau = 100.0 * Limits::default().bar_stress_per_torque();
         assert!((tau - 63.662e6).abs() < 1e3, "{tau}");
+    }
+
+    #[test]
+    fn the_plate_warns_at_half_its_fatigue_strength() {
+        // 6061-T6: 96.5 MPa fatigue strength, 276 MPa yield; at the root's concentration of 2
+        // the plate warns above 48.25 MPa of nominal stress, the fatigue strength named.
+        let l = Limits::default();
+        assert_eq!(Monitor::PlateStress.limit(&l), 48.25e6);
+        let text = Monitor::PlateStress.message(50e6, 1.0, &l);
+        assert!(
+            text.contains("fatigue") && text.contains("96.5 MPa"),
+            "{text}"
+        );
+        // A material whose fatigue strength exceeds its yield: the yield strength rules.
+        let soft = Limits {
+            plate_sigma_y: 50e6,
+            ..l
+        };
+        assert_eq!(Monitor::PlateStress.limit(&soft), 25e6);
+        let text = Monitor::PlateStress.message(30e6, 1.0, &soft);
+        assert!(
+            text.contains("yield") && text.contains("sigma_y = 50.0"),
+            "{text}"
+        );
     }
 
     #[test]

@@ -241,6 +241,7 @@ impl Parameters {
             },
             limits: Limits {
                 plate_sigma_y: values.real(idx::PLATE_SIGMA_Y),
+                plate_sigma_f: values.real(idx::PLATE_SIGMA_F),
                 bar_d: values.real(idx::TORSION_BAR_D),
                 bar_tau_y: values.real(idx::TORSION_BAR_TAU_Y),
             },

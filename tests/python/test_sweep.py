@@ -1,8 +1,9 @@
 """tools/sweep.py on a Dask LocalCluster of 2 worker processes over 8 points: the table equals the
 same points run serially in this process, failed points are rows with the FMU's message, each
 worker extracts the FMU once; the command line writes the CSV and the plot, runs the FMU's
-default experiment unless told otherwise and prints its settings, and reports "not settled" for a
-run that stops before the move has settled."""
+default experiment unless told otherwise and prints its settings, and reports "not settled" and
+"not rung down" for a run that stops before the move ends. The measures themselves are
+tests/python/test_manoeuvre.py's."""
 
 import csv
 import importlib.util
@@ -83,15 +84,17 @@ def test_metrics_respond_to_the_parameters(cluster_rows):
     assert len(rows) == 6
     for r in rows:
         assert r["peak_w_tip"] > 0 and r["peak_p_load"] > 0 and r["solver_steps"] > 0
-        assert 0 < r["residual_w_tip"] <= r["peak_w_tip"]
-    # Regression (measured 20.2/16.7, 6.9/6.6, 4.7/5.0 mm at zeta 0.005/0.02): more plate damping
-    # leaves less residual vibration on the softer bars; on the stiffest the loop's own damping
-    # (the pressure feedback) dominates and the two stay within 10 %.
+        # No built-in move (a step of r at t = 0): the residual is counted from t = 0, so it is
+        # the peak itself.
+        assert r["residual_peak_w_tip"] == r["peak_w_tip"], r
+    # Regression (measured 2.539/2.464, 2.546/2.472, 2.549/2.475 mm at zeta 0.005/0.02): more
+    # plate damping lowers the peak tip deflection on every bar; a stiffer bar asks for more load
+    # pressure (measured 0.2213, 0.2221, 0.2224 bar at zeta 0.005).
     by = {(r["torsion_bar.k"], r["plate.zeta"]): r for r in rows}
-    for k in ("1000", "2500"):
-        assert by[(k, "0.02")]["residual_w_tip"] < by[(k, "0.005")]["residual_w_tip"]
-    low, high = by[("5000", "0.005")]["residual_w_tip"], by[("5000", "0.02")]["residual_w_tip"]
-    assert abs(high - low) < 0.1 * low, (low, high)
+    for k in ("1000", "2500", "5000"):
+        assert by[(k, "0.02")]["peak_w_tip"] < by[(k, "0.005")]["peak_w_tip"]
+    loads = [by[(k, "0.005")]["peak_p_load"] for k in ("1000", "2500", "5000")]
+    assert loads == sorted(loads), loads
 
 
 def test_failed_points_are_rows_with_the_message(cluster_rows):
@@ -130,11 +133,12 @@ def default_experiment(fmu_path):
 
 
 def printed_rows(out, n_params):
-    """The rows of the printed table: parameters, status, then the five metrics as text."""
+    """The rows of the printed table: parameters, status, then the six metrics as text."""
     rows = []
     for line in out.splitlines():
-        cells = re.split(r"\s{2,}", line.strip().replace("not settled", "not_settled"))
-        if len(cells) == n_params + 6 and cells[n_params] == "ok":
+        cells = re.split(r"\s{2,}", line.strip().replace("not settled", "not_settled")
+                         .replace("not rung down", "not_rung_down"))
+        if len(cells) == n_params + 7 and cells[n_params] == "ok":
             rows.append(cells)
     return rows
 
@@ -153,7 +157,7 @@ def test_command_line_writes_csv_and_plot(fmu_path, tmp_path):
 
 def test_defaults_are_the_fmus_default_experiment(fmu_path, md, tmp_path):
     """No --stop, --step or --input: the whole default experiment (the built-in move, no added
-    step of r), its settings printed; every quantity settles within it."""
+    step of r), its settings printed; the hub and y_pot settle within it, after the move."""
     printed, table = command_line(fmu_path, tmp_path / "sweep.csv", "--grid", "torsion_bar.k=1000,5000")
     stop, step = default_experiment(fmu_path)
     assert (f"settings: stop {stop:g} s (DefaultExperiment), step {step:g} s (DefaultExperiment), "
@@ -161,57 +165,45 @@ def test_defaults_are_the_fmus_default_experiment(fmu_path, md, tmp_path):
     start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start}
     move = start["reference.angle"]
     move_end = start["reference.t_start"] + start["reference.duration"]
-    assert move_end < 0.9 * stop  # the run goes on past the move, beyond the last 10 %
+    assert move_end < stop  # the run goes on past the move
     rows = printed_rows(printed, 1)
     assert [r[0] for r in rows] == ["1000", "5000"], printed
     for row, saved in zip(rows, table):
-        # The hub ends in the 2 % band of the move; the hub and y_pot settle after the move starts
-        # and before the last 10 % of the run, as printed and as saved.
+        # The hub ends in the 2 % band of the move; the hub and y_pot settle within the run,
+        # counted from the move's end, as printed and as saved.
         assert abs(float(saved["final_theta_hub"]) - move) < 0.02 * move, saved
-        for name, text in (("settling_time_theta_hub", row[4]), ("settling_time_y_pot", row[5])):
+        for name, text in (("settling_after_move_theta_hub", row[5]), ("settling_after_move_y_pot", row[6])):
             value = float(saved[name])
-            assert start["reference.t_start"] < value < 0.9 * stop, (name, saved)
+            assert 0 <= value < stop - move_end, (name, saved)
             assert text == f"{value:.3f}", (text, value)
+        # The residual peak (after the move) is below the peak; printed as saved.
+        residual = float(saved["residual_peak_w_tip"])
+        assert 0 < residual < float(saved["peak_w_tip"]) and row[3] == f"{1e3 * residual:.3f}", (row, saved)
         # The run's samples are the default step's: the settling times fall on its grid.
-        assert abs(float(saved["settling_time_theta_hub"]) / step
-                   - round(float(saved["settling_time_theta_hub"]) / step)) < 1e-6
+        assert abs(float(saved["settling_after_move_theta_hub"]) / step
+                   - round(float(saved["settling_after_move_theta_hub"]) / step)) < 1e-6
 
 
 def test_a_run_that_stops_mid_move_is_not_settled(fmu_path, md, tmp_path):
     """Stopped at 1 s, a quarter of the way into the move (0.5 s to 2.5 s): the hub is still
-    turning, so no settling time (the words "not settled", an empty CSV cell), where the old rule
-    (the last time outside the band of the final value) gave a time near the stop time."""
+    turning and the move has not ended, so no settling time (the words "not settled", an empty
+    CSV cell), no ring-down time ("not rung down") and no residual ("-")."""
     start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start}
     stop = 1.0
     assert start["reference.t_start"] < stop < start["reference.t_start"] + start["reference.duration"]
     printed, table = command_line(fmu_path, tmp_path / "sweep.csv", "--grid", "torsion_bar.k=1000,5000",
                                   "--stop", str(stop))
     rows = printed_rows(printed, 1)
-    assert len(rows) == 2 and all(r[4] == r[5] == "not_settled" for r in rows), printed
+    assert len(rows) == 2 and all(r[5] == r[6] == "not_settled" and r[4] == "not_rung_down"
+                                  and r[3] == "-" for r in rows), printed
     for saved in table:
         assert saved["status"] == "ok"
-        assert saved["settling_time_theta_hub"] == "" and saved["settling_time_y_pot"] == ""
+        for name in ("settling_after_move_theta_hub", "settling_after_move_y_pot",
+                     "residual_peak_w_tip", "ring_down_w_tip"):
+            assert saved[name] == "", (name, saved)
         # The hub has turned only part of the move (minimum jerk at a quarter of its time: 10 %).
         assert 0 < float(saved["final_theta_hub"]) < 0.2 * start["reference.angle"], saved
         assert float(saved["peak_w_tip"]) > 0
-
-
-def test_settling_time_against_closed_forms():
-    """A first-order step response settles where exp(-t/tau) reaches 2 % of its change; a ramp
-    cut off while rising does not settle; a constant has settled from the start."""
-    tau, h, stop = 0.2, 1e-3, 3.0
-    t = [i * h for i in range(round(stop / h) + 1)]
-    y = [1 - math.exp(-ti / tau) for ti in t]
-    final = y[-1]
-    # |y - final| = exp(-t/tau) - exp(-stop/tau) <= 0.02 final: the first sample at or after t*.
-    t_star = -tau * math.log(0.02 * final + math.exp(-stop / tau))
-    assert t_star <= sweep.settling_time(t, y) < t_star + h
-    assert math.isnan(sweep.settling_time(t, [ti for ti in t]))  # a ramp: still moving at the end
-    assert math.isnan(sweep.settling_time(t, [min(ti, 0.95 * stop) for ti in t]))  # settles too late
-    # A ramp to 1.5 and flat after: within 2 % of 1.5 from t = 0.98 x 1.5, the first sample after.
-    t_ramp = 0.98 * 0.5 * stop
-    assert t_ramp - 1e-9 <= sweep.settling_time(t, [min(ti, 0.5 * stop) for ti in t]) <= t_ramp + h + 1e-9
-    assert sweep.settling_time(t, [0.3] * len(t)) == 0.0
 
 
 def test_first_example_prints_what_the_docs_quote(fmu_path, tmp_path):

@@ -8,6 +8,8 @@
 //! - `hsp run [--preset NAME]`: builds the FMU if needed, loads it through its C ABI, runs the
 //!   default experiment (a slewing manoeuvre of the complete system: a step in the reference `r`),
 //!   prints a summary and writes the results as CSV.
+//! - `hsp fastest-move [hsp run arguments]`: the fastest minimum-jerk move whose peak `w_tip/a`
+//!   stays within 0.1, bisected over `reference.duration`, and its torque budget.
 //! - `hsp presets [--json]`: the named parameter sets (the paper's configurations).
 //! - `hsp linearize --json [--set NAME=VALUE ...]`: A, B, C, D of the assembled model at rest, in
 //!   the layout of `Linearization::to_json` (names, operating point `x0`, `u0`, matrices by rows),
@@ -34,9 +36,11 @@ mod binaries;
 mod docpage;
 mod docs;
 mod ecosystem;
+mod fastest;
 mod info;
 mod licenses;
 mod loader;
+mod manoeuvre;
 // The one reader of modelDescription.xml, shared with build.rs.
 #[path = "../../../tools/model_description.rs"]
 #[allow(dead_code)]
@@ -129,6 +133,10 @@ enum Command {
     },
     /// Run the default experiment (a slewing manoeuvre) through the FMU's C ABI and summarise it
     Run(run::RunArgs),
+    /// The torque budget: the fastest minimum-jerk move (bisected to 1 ms over
+    /// reference.duration) whose peak |w_tip|/a stays within the validity monitor's limit, with
+    /// its peak bar torque, load pressure, hub overshoot and the motor's margin
+    FastestMove(fastest::FastestArgs),
     /// Print the hash of the sources this build is made from; a packaged FMU's binary carries it
     /// as `hsp-source-hash:<hash>`, so a test can tell a stale FMU from a fresh one
     SourceHash,
@@ -390,6 +398,7 @@ fn main() -> ExitCode {
             }
         }),
         Command::Run(args) => run::run(&args),
+        Command::FastestMove(args) => fastest::main(&args),
         Command::Web { out } => web::page_files()
             .and_then(|files| web::write(&files, &package::root().join(out)))
             .map(|paths| {

@@ -13,12 +13,13 @@ use clap::{Args, ValueEnum};
 use hydraulic_slewing_plate::fmu::Experiment;
 use hydraulic_slewing_plate::fragments::controller::LINEAR_FRACTION;
 use hydraulic_slewing_plate::fragments::plate::Root;
-use hydraulic_slewing_plate::fragments::validity::{SPIN_LIMIT, TIP_RATIO_LIMIT};
+use hydraulic_slewing_plate::fragments::validity::{Monitor, SPIN_LIMIT, TIP_RATIO_LIMIT};
 use hydraulic_slewing_plate::model::parameters::{HydraulicsModel, Parameters};
 use hydraulic_slewing_plate::model::presets::{self, COMPLETE};
 use hydraulic_slewing_plate::model::variables::{vr, VARIABLES};
 
 use super::loader::Fmu;
+use super::manoeuvre::{self, Command};
 use super::package;
 use super::results::Results;
 
@@ -83,6 +84,11 @@ impl RunArgs {
         })
     }
 
+    /// The command of the run.
+    pub fn profile(&self) -> Profile {
+        self.profile
+    }
+
     /// The stop time \[s\].
     pub fn stop(&self) -> f64 {
         self.stop.unwrap_or(match self.profile {
@@ -123,8 +129,8 @@ const RECORDED_SERVO_VALVE: &[&str] = &[
     "servo_valve.p_2",
 ];
 
-/// The settings of a run in order: the preset's, then the user's `--set`.
-fn settings(args: &RunArgs) -> Result<Vec<String>, String> {
+/// The settings of a run in order: the preset's, then the user's `--set`, then `extra`.
+fn settings(args: &RunArgs, extra: &[String]) -> Result<Vec<String>, String> {
     let preset = presets::preset(&args.preset)?;
     let mut all: Vec<String> = preset
         .settings
@@ -135,6 +141,7 @@ fn settings(args: &RunArgs) -> Result<Vec<String>, String> {
         all.push("reference.angle=0".into());
     }
     all.extend(args.set.iter().cloned());
+    all.extend(extra.iter().cloned());
     Ok(all)
 }
 
@@ -153,12 +160,8 @@ pub struct RunInfo {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
-    let (settings, parameters) = prepare(args)?;
-    let fmu_path = if args.no_build {
-        PathBuf::from(&args.fmu)
-    } else {
-        PathBuf::from(package::package(&args.fmu)?)
-    };
+    let (settings, parameters) = prepare(args, &[])?;
+    let fmu_path = fmu_for(args)?;
     let (results, info) = experiment(args, &fmu_path, &settings, parameters)?;
     let csv_path = package::root().join(&args.csv);
     results.write_csv(&csv_path)?;
@@ -169,17 +172,41 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     super::plot::after_run(&csv_path, &args.plot)
 }
 
+/// The FMU the run `args` uses: `--fmu`, built first unless `--no-build`.
+pub(super) fn fmu_for(args: &RunArgs) -> Result<PathBuf, String> {
+    Ok(if args.no_build {
+        PathBuf::from(&args.fmu)
+    } else {
+        PathBuf::from(package::package(&args.fmu)?)
+    })
+}
+
+/// The typed parameters of the run `args` (its preset and `--set`).
+pub(super) fn parameters_of(args: &RunArgs) -> Result<Parameters, String> {
+    Ok(prepare(args, &[])?.1)
+}
+
 /// The summary of the run `args` on the FMU `fmu` as it is (`hsp run --no-build --fmu FMU`),
 /// writing nothing; the results line names the CSV as `--csv` gives it (`hsp docs`).
 pub(super) fn summary_of(args: &RunArgs, fmu: &std::path::Path) -> Result<String, String> {
-    let (settings, parameters) = prepare(args)?;
-    let (results, info) = experiment(args, fmu, &settings, parameters)?;
+    let (results, info) = results_of(args, &[], fmu)?;
     Ok(summary(args, &results, &info, &args.csv))
+}
+
+/// The results of the run `args` with the settings `extra` after its own (`NAME=VALUE`) on the
+/// FMU `fmu` as it is, writing nothing (`hsp fastest-move`).
+pub(super) fn results_of(
+    args: &RunArgs,
+    extra: &[String],
+    fmu: &std::path::Path,
+) -> Result<(Results, RunInfo), String> {
+    let (settings, parameters) = prepare(args, extra)?;
+    experiment(args, fmu, &settings, parameters)
 }
 
 /// Checks the run's times; the settings of the run and the typed parameters it will use (the
 /// FMU checks them again when it initialises).
-fn prepare(args: &RunArgs) -> Result<(Vec<String>, Parameters), String> {
+fn prepare(args: &RunArgs, extra: &[String]) -> Result<(Vec<String>, Parameters), String> {
     let stop = args.stop();
     if !(stop > 0.0 && args.step > 0.0 && args.step <= stop) {
         return Err(format!(
@@ -187,7 +214,7 @@ fn prepare(args: &RunArgs) -> Result<(Vec<String>, Parameters), String> {
             args.step
         ));
     }
-    let settings = settings(args)?;
+    let settings = settings(args, extra)?;
     let values = super::values_with(None, &settings)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
     Ok((settings, parameters))
@@ -274,40 +301,6 @@ fn simulate(
     Ok((results, stats, seconds, (margin[0], margin[1])))
 }
 
-/// Step-response figures of a series that starts at 0 and should end at `target`.
-#[derive(Debug, PartialEq)]
-pub struct StepFigures {
-    /// Largest excursion beyond the target, in % of the target (0 if never beyond).
-    pub overshoot_pct: f64,
-    /// Time from which the series stays within `band` x |target| of the target, if it does by
-    /// the end of the run.
-    pub settling: Option<f64>,
-}
-
-/// Overshoot and settling time of `y(t)` against `target` with a settling band of `band` (e.g.
-/// 0.02) of the target.
-pub fn step_figures(t: &[f64], y: &[f64], target: f64, band: f64) -> StepFigures {
-    if target == 0.0 || y.is_empty() {
-        return StepFigures {
-            overshoot_pct: 0.0,
-            settling: None,
-        };
-    }
-    let s = target.signum();
-    let peak = y.iter().map(|v| s * v).fold(f64::NEG_INFINITY, f64::max);
-    let overshoot_pct = ((peak - target.abs()) / target.abs() * 100.0).max(0.0);
-    let tol = band * target.abs();
-    let settling = match y.iter().rposition(|v| (v - target).abs() > tol) {
-        None => Some(t[0]),
-        Some(i) if i + 1 < t.len() => Some(t[i + 1]),
-        Some(_) => None,
-    };
-    StepFigures {
-        overshoot_pct,
-        settling,
-    }
-}
-
 /// Total time during which `pred` holds at the end of a communication interval \[s\].
 fn time_where(t: &[f64], y: &[f64], pred: impl Fn(f64) -> bool) -> f64 {
     t.windows(2)
@@ -349,6 +342,9 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     let theta_hub = col("theta_hub");
     let last = |y: &[f64]| y.last().copied().unwrap_or(0.0);
     let stop = args.stop();
+    // The command with a target, when the loop is the FMU's (docs/model.md, "Measures of a
+    // manoeuvre").
+    let mut command = None;
     if p.controller.external {
         writeln!(
             s,
@@ -376,7 +372,7 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         let r = args.r();
         let mv = &p.reference;
         let target = r / p.controller.k_pot + if mv.is_on() { mv.angle } else { 0.0 };
-        let command = match (mv.is_on(), r != 0.0) {
+        let described = match (mv.is_on(), r != 0.0) {
             (true, step) => format!(
                 "minimum-jerk move of {:.2} deg over {} s from t = {} s{} (motor target {:.2} deg)",
                 mv.angle.to_degrees(),
@@ -396,39 +392,56 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         };
         writeln!(
             s,
-            "  command {command}, {stop} s in steps of {} s",
+            "  command {described}, {stop} s in steps of {} s",
             args.step
         )
         .unwrap();
-        let move_end = mv.is_on().then(|| mv.t_end());
+        let cmd = Command {
+            target,
+            t_end: if mv.is_on() { mv.t_end() } else { 0.0 },
+        };
         let line = |name: &str, y: &[f64]| {
-            let f = step_figures(t, y, target, 0.02);
-            let settling =
-                f.settling.map_or(
-                    format!("not settled within {stop} s"),
-                    |ts| match move_end {
-                        Some(end) => format!("{ts:.3} s (the move ends at {end} s)"),
-                        None => format!("{ts:.3} s"),
-                    },
-                );
             format!(
-                "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling (2 %) {settling}\n",
+                "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling ({} %, from t = {} s) {}\n",
                 last(y).to_degrees(),
-                f.overshoot_pct
+                manoeuvre::overshoot_pct(y, target),
+                manoeuvre::BAND * 100.0,
+                cmd.t_end,
+                manoeuvre::settling_text(manoeuvre::settling(t, y, target, cmd.t_end))
             )
         };
         s.push_str(&line("motor", &theta_motor));
         if p.motor_coupled && !hub_locked(p) {
             s.push_str(&line("hub", &theta_hub));
         }
+        command = Some(cmd);
     }
     let w_tip = col("w_tip");
-    let tail = (w_tip.len() * 9) / 10;
+    let residual = match command {
+        None => "no residual measures (no command target)".to_string(),
+        Some(c) => match manoeuvre::residual_peak(t, &w_tip, c.t_end) {
+            None => format!(
+                "no residual measures (the run ends before t = {} s)",
+                c.t_end
+            ),
+            Some(peak) => format!(
+                "from t = {} s residual peak {:.3} mm, ring-down to {} mm {}",
+                c.t_end,
+                peak * 1e3,
+                manoeuvre::RING_LEVEL * 1e3,
+                manoeuvre::ring_down_text(manoeuvre::ring_down(
+                    t,
+                    &w_tip,
+                    c.t_end,
+                    manoeuvre::RING_LEVEL
+                ))
+            ),
+        },
+    };
     writeln!(
         s,
-        "  tip     peak |w_tip| {:.3} mm, residual {:.4} mm (largest |w_tip| over the last 10 % of the run)",
-        max_abs(&w_tip) * 1e3,
-        max_abs(&w_tip[tail.min(w_tip.len())..]) * 1e3
+        "  tip     peak |w_tip| {:.3} mm; {residual}",
+        max_abs(&w_tip) * 1e3
     )
     .unwrap();
     let bar = |y: &[f64]| {
@@ -484,14 +497,20 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         )
         .unwrap();
     }
+    let l = &p.limits;
+    let plate_rule = if l.plate_sigma_f <= l.plate_sigma_y {
+        "fatigue"
+    } else {
+        "yield"
+    };
     writeln!(
         s,
-        "  validity peak w_tip/a {:.3} (limit {TIP_RATIO_LIMIT}), plate stress {:.1} MPa and bar shear {:.1} MPa ({:.2} and {:.2} of yield), (omega_hub/omega_1)^2 {:.3} (limit {SPIN_LIMIT})",
+        "  validity peak w_tip/a {:.3} (limit {TIP_RATIO_LIMIT}), plate stress {:.1} MPa (limit {:.2}, {plate_rule} at the root), bar shear {:.1} MPa (limit {:.1}, half of yield), (omega_hub/omega_1)^2 {:.3} (limit {SPIN_LIMIT})",
         max_abs(&col("plate.w_tip_ratio")),
         max_abs(&col("plate.stress")) * 1e-6,
+        Monitor::PlateStress.limit(l) * 1e-6,
         max_abs(&col("torsion_bar.stress")) * 1e-6,
-        max_abs(&col("plate.stress")) / p.limits.plate_sigma_y,
-        max_abs(&col("torsion_bar.stress")) / p.limits.bar_tau_y,
+        Monitor::BarStress.limit(l) * 1e-6,
         max_abs(&col("hub.omega_ratio")).powi(2)
     )
     .unwrap();
@@ -545,17 +564,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn step_figures_of_a_known_series() {
+    fn time_where_sums_the_intervals() {
         let t: Vec<f64> = (0..=10).map(|i| i as f64).collect();
-        let y = [0.0, 0.5, 1.1, 1.05, 0.97, 1.01, 1.0, 1.0, 1.0, 1.0, 1.0];
-        let f = step_figures(&t, &y, 1.0, 0.02);
-        assert!((f.overshoot_pct - 10.0).abs() < 1e-9);
-        assert_eq!(f.settling, Some(5.0));
-        // Negative target, and a series that never settles.
-        let y: Vec<f64> = y.iter().map(|v| -v).collect();
-        assert!((step_figures(&t, &y, -1.0, 0.02).overshoot_pct - 10.0).abs() < 1e-9);
-        assert_eq!(step_figures(&t[..5], &y[..5], -1.0, 0.02).settling, None);
-        // Beyond the target at t = 2, 3 and 5: three intervals of 1 s.
+        let y = [
+            0.0, -0.5, -1.1, -1.05, -0.97, -1.01, -1.0, -1.0, -1.0, -1.0, -1.0,
+        ];
+        // Beyond -1 at t = 2, 3 and 5: three intervals of 1 s.
         assert!((time_where(&t, &y, |v| v < -1.0) - 3.0).abs() < 1e-12);
     }
 }

@@ -12,7 +12,7 @@ use hydraulic_slewing_plate::model::variables::MODEL_IDENTIFIER;
 use hydraulic_slewing_plate::SOURCE_HASH;
 use nalgebra::Complex;
 
-use super::super::{package, run, validate::num, Cli, Command, ModelArgs};
+use super::super::{fastest, package, run, validate::num, Cli, Command, ModelArgs};
 use crate::model_description::ModelDescription;
 
 /// What a generator gives for a block.
@@ -74,6 +74,13 @@ pub const GENERATORS: &[(&str, &str, Generate)] = &[
         "`run-summary [hsp run arguments]`: the summary `hsp run --no-build` prints on the \
          packaged FMU, without its wall-time line, as a text block",
         run_summary,
+    ),
+    (
+        "fastest-move",
+        "`fastest-move [hsp fastest-move arguments]`: what `hsp fastest-move --no-build` prints \
+         on the packaged FMU (the fastest move within w_tip/a 0.1 and its torque budget), as a \
+         text block",
+        fastest_move,
     ),
     (
         "run-solver",
@@ -342,6 +349,20 @@ fn run_summary(ctx: &Context, args: &[String]) -> Result<Output, String> {
                 .filter(|l| !l.starts_with(run::TIME_LINE))
                 .collect::<Vec<_>>()
                 .join("\n")
+        )),
+        Err(skip) => Output::Skip(skip),
+    })
+}
+
+/// `fastest-move [hsp fastest-move arguments]`: its report in a text block.
+fn fastest_move(ctx: &Context, args: &[String]) -> Result<Output, String> {
+    let Command::FastestMove(a) = command("fastest-move", args)? else {
+        return Err("fastest-move: not hsp fastest-move".into());
+    };
+    Ok(match fresh_fmu(ctx)? {
+        Ok(fmu) => Output::Text(format!(
+            "```text\n{}\n```",
+            fastest::report(&a, &fmu)?.trim_end()
         )),
         Err(skip) => Output::Skip(skip),
     })
