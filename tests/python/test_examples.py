@@ -5,6 +5,8 @@ scripts; each short example's output quoted in examples/README.md must equal wha
 (a line with a wall-clock time aside)."""
 
 import csv
+import json
+import pathlib
 import math
 import re
 import subprocess
@@ -66,7 +68,7 @@ def tool_output(tmp_path_factory):
     """The `hsp` outputs the scripts would otherwise compute themselves (cargo run)."""
     d = tmp_path_factory.mktemp("hsp")
     files = {"lin_ext": ["linearize", "--json", "--set", "controller.external=true"],
-             "lin": ["linearize", "--json"], "modes": ["modes", "--json"]}
+             "lin": ["linearize", "--json", "--as-integrated"], "modes": ["modes", "--json"]}
     for name, args in files.items():
         (d / f"{name}.json").write_text(hsp(*args))
     return {name: d / f"{name}.json" for name in files}
@@ -104,20 +106,26 @@ def test_model_exchange_needs_an_implicit_solver(fmu_path, tool_output, tmp_path
               "--linearization", tool_output["lin"], "--stop", 3)
     re_, im_ = find(r"fastest eigenvalue " + NUMBER + r" " + NUMBER + "j", out)
     h_euler, h_rk45 = find(r"explicit Euler " + NUMBER + r" s, RK45 \(Dormand-Prince\) " + NUMBER, out)
-    # Explicit Euler's bound for a complex pair is 2 |Re| / |lambda|^2 (the disc |1 + z| <= 1):
-    # the script's bisection over all eigenvalues must agree with the closed form for the fastest
-    # pair, to the 4 digits printed.
-    closed_form = 2 * abs(re_) / (re_ ** 2 + im_ ** 2)
+    # Explicit Euler's bound for an eigenvalue is 2 |Re| / |lambda|^2 (the disc |1 + z| <= 1):
+    # the script's bisection over all eigenvalues must agree with the smallest of these closed
+    # forms, to the 4 digits printed. (The fastest eigenvalue is the seal friction's real pole at
+    # rest; the bound is set by the spool's complex pair.)
+    ev = [complex(*z) for z in json.loads(pathlib.Path(tool_output["lin"]).read_text())["eigenvalues"]]
+    big = max(abs(z) for z in ev)
+    closed_form = min(2 * abs(z.real) / abs(z) ** 2 for z in ev if abs(z) > 1e-9 * big)
     assert abs(h_euler - closed_form) < 1e-3 * closed_form, (h_euler, closed_form)
+    assert abs(re_) > 1e5 and im_ == 0.0, (re_, im_)
     assert h_euler < h_rk45 < 1e-3
     # CVode (BDF, atol = rtol x nominals) reproduces co-simulation at rtol 1e-6 to 1e-4 of each
     # output's range (tests/python/test_model_exchange.py: 1e-6 at rtol 1e-9); without the
     # nominals, the hydraulic states (nominals 1e-9 m^3) are lost in the absolute tolerance.
-    me, me1 = find(r"max difference CVode-CS: " + NUMBER + r" of the range; without nominals: " + NUMBER, out)
+    me = find(r"max difference CVode-CS: " + NUMBER + r" of the range", out)[0]
     assert me < 1e-4, me
-    # Regression: without nominals 7.1 times worse with the default loop (above 10 times with the
-    # paper's loop, before the pressure feedback).
-    assert me1 > 5 * me, (me, me1)
+    # Without nominals CVode is either far off (regression: 35 times worse over 3 s with the
+    # default loop) or gives up where the ignored errors of the hydraulic states blow up.
+    if "without nominals: CVode failed" not in out:
+        me1 = find(r"without nominals: " + NUMBER, out)[0]
+        assert me1 > 5 * me, (me, me1)
     # The XML declares every state's nominal, the ones the FMU reports (tests/state_nominals.rs).
     assert "equal to fmi2GetNominalsOfContinuousStates: True" in out
     # Euler at 1 ms diverges: in the linearisation's modal coordinates the dominant mode's
@@ -125,7 +133,8 @@ def test_model_exchange_needs_an_implicit_solver(fmu_path, tool_output, tmp_path
     assert "explicit Euler, h = 0.001 s: diverged" in out
     growth, steps, predicted = find(r"measured growth per step " + NUMBER + r" \((\d+) steps, the dominant "
                                     r"mode's amplitude\); \|1 \+ h lambda\| of its eigenvalue \S+: " + NUMBER, out)
-    assert steps >= 3, steps
+    # The friction's real pole multiplies the amplitude by 350 a step: the cap is reached in two.
+    assert steps >= 2, steps
     assert abs(growth - predicted) < 1e-3 * predicted, (growth, predicted)
     # Below its stable step Euler's increments shrink; above it they grow.
     below = find(r"h = 0.5 x \S+ s: \d+ steps; largest scaled increment at 5 ms / at 1 ms = " + NUMBER, out)[0]

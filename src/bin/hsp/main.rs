@@ -153,6 +153,11 @@ enum Command {
         /// Print JSON (the only format)
         #[arg(long)]
         json: bool,
+        /// Linearise the model as the integrators see it, the vane motor's seal friction with
+        /// its regularised slope at rest included (a stiff real pole, T_s / (omega_t I_m)); by
+        /// default the motor is sliding (docs/model-notes.md, item 31)
+        #[arg(long)]
+        as_integrated: bool,
         #[command(flatten)]
         model: ModelArgs,
     },
@@ -274,8 +279,12 @@ fn presets_text(json: bool) -> String {
     s.trim_end().to_string()
 }
 
-fn linearize(model: &ModelArgs) -> Result<String, String> {
-    let system = model.assembled()?;
+fn linearize(model: &ModelArgs, as_integrated: bool) -> Result<String, String> {
+    let system = if as_integrated {
+        Assembled::new(&model.parameters()?)?
+    } else {
+        model.assembled()?
+    };
     let x = system.initial_state();
     let lin = system.compiled().linearize(&x, system.inputs());
     let mut json = lin.to_json();
@@ -437,7 +446,11 @@ fn main() -> ExitCode {
             println!("{}", presets_text(json));
             Ok(())
         }
-        Command::Linearize { json: _, model } => linearize(&model).map(|s| println!("{s}")),
+        Command::Linearize {
+            json: _,
+            as_integrated,
+            model,
+        } => linearize(&model, as_integrated).map(|s| println!("{s}")),
         Command::Graph { model } => graph(&model).map(|s| println!("{s}")),
         Command::Info { json, model } => model_info(&model, json).map(|s| println!("{s}")),
         Command::Modes {
