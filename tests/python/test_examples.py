@@ -243,8 +243,13 @@ def test_libcosim_runs_the_ssp_as_fmpy_does(fmu_path):
     steps, d_y, d_p = find(r"max \|libcosim - fmpy\| over (\d+) steps: y_pot " + NUMBER + r" V, p_load "
                            + NUMBER + " Pa", out)
     assert steps == round(stop / step)
-    # The tolerances of tests/python/test_libcosim.py: the same FMU, the same steps.
-    assert d_y <= 1e-9 and d_p <= 1e-3, (d_y, d_p)
+    # The same FMU, the same steps; the importers' calls differ in their last bits (without the
+    # vane motor's seal friction the two agree to 3e-13 V and 1e-5 Pa). The friction's Stribeck
+    # fall, which the motor crosses as it slows at the end of the move (t = 2.3 s, where the
+    # difference sets in), amplifies that to 4.4e-2 Pa, 3e-8 of p_load's peak: a tenth of the
+    # solver's rtol (1e-6) bounds it.
+    peak_p = max(cosim[3], fmpy[3]) * 1e5
+    assert d_y <= 1e-9 and d_p <= 1e-7 * peak_p, (d_y, d_p, peak_p)
     assert cosim == fmpy
     # The position loop has an integrator (the vane motor): y_pot ends at the built-in move's
     # target (k_pot times reference.angle), within 2 %.
