@@ -15,6 +15,7 @@
 use hydraulic_slewing_plate::eigen::{eigenvalues, least_damped, Mode};
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
+use hydraulic_slewing_plate::model::margin;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
@@ -157,5 +158,53 @@ fn the_pressure_feedback_gain_has_margin_both_ways() {
             let m = least(pt, &[("controller.k_pl", &text)]);
             assert!(meets_rule(m, pt), "k_pl {k}: {}", report(pt, m));
         }
+    }
+}
+
+/// The FMU's margin takes the seal friction's slope at rest out of the model's own Jacobian
+/// (`margin::jacobian_sliding_at_rest`) instead of building the sliding model a second time: at
+/// every point of the box the two Jacobians agree entry by entry to 1e-12 of their row's largest
+/// entry (the sliding model sums its efforts without the friction's term, so the last bits of
+/// entries that are round-off themselves may differ), and
+/// so do the least damping ratios to 1e-9.
+#[test]
+fn the_margins_sliding_jacobian_is_the_sliding_models() {
+    for pt in points() {
+        let mut values = Values::from_start(&VARIABLES);
+        set_by_name(&mut values, "reference.angle", "0").unwrap();
+        for (n, v) in [
+            ("servo_valve.beta", pt.beta),
+            ("servo_valve.R_leak", r_leak(pt.leak)),
+            ("plate.zeta", pt.zeta),
+            ("torsion_bar.k", pt.k_bar),
+        ] {
+            set_by_name(&mut values, n, &v.to_string()).unwrap();
+        }
+        let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+        assert!(p.servo_valve.t_s > 0.0, "the default has seal friction");
+        let built = Assembled::new(&p).unwrap();
+        let a = margin::jacobian_sliding_at_rest(&built, &p);
+        let sliding = Assembled::new(&p.sliding()).unwrap();
+        let b = sliding
+            .compiled()
+            .linearize(&sliding.initial_state(), sliding.inputs())
+            .a;
+        for i in 0..a.nrows() {
+            let row = b.row(i).amax();
+            for j in 0..a.ncols() {
+                let (x, y) = (a[(i, j)], b[(i, j)]);
+                assert!(
+                    (x - y).abs() <= 1e-12 * row,
+                    "{pt:?}: A[{i}][{j}] {x} vs {y}"
+                );
+            }
+        }
+        let ma = margin::least_damped_sliding(&built, &p).unwrap();
+        let mb = margin::least_damped_mode(&eigenvalues(&b)).unwrap();
+        // (the damping ratio: several plate modes may share the least one, `plate.zeta`)
+        assert!(
+            (ma.zeta - mb.zeta).abs() <= 1e-9,
+            "{pt:?}: {ma:?} vs {mb:?}"
+        );
     }
 }

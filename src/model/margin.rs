@@ -15,12 +15,18 @@
 //! `controller.external` the FMU's analog loop is open (the user's controller closes it), so the
 //! monitor reports the plant with `e_in` held and does not warn.
 //!
+//! The vane motor's seal friction is left out of the linearisation (the motor sliding,
+//! [`Parameters::sliding`]): at rest its regularised slope would clamp the motor and hide the
+//! loop ([`jacobian_sliding_at_rest`]).
+//!
 //! Cost: one Jacobian and one eigenvalue problem of the state dimension when the model is built
 //! (again only when a parameter changes), none in the steps; `bench-margin` measures it.
 
 use nalgebra::Complex;
 
 use crate::eigen::{eigenvalues, least_damped, modulus, Mode};
+
+use crate::fragments::vane_motor;
 
 use super::assembly::Assembled;
 use super::parameters::Parameters;
@@ -43,6 +49,36 @@ pub fn eigenvalues_at_rest(system: &Assembled) -> Vec<Complex<f64>> {
     let u = vec![0.0; model.n_inputs()];
     model.jacobian(&system.initial_state(), &u, &mut a);
     eigenvalues(&a)
+}
+
+/// The Jacobian at rest with zero inputs of the loop with the vane motor sliding
+/// ([`Parameters::sliding`]), from the model as built. The seal friction is a resistor on the
+/// rotor's 1-junction, whose flow is the rotor's momentum over `I_m`
+/// ([`crate::fragments::vane_motor`]): its slope at rest, `T'(0)`, enters `A` at the rotor
+/// momentum's own entry only, as `−T'(0) / I_m`, which is added back here. (The same matrix as
+/// the sliding model's own Jacobian, without building that model a second time:
+/// `tests/loop_margin.rs`.)
+pub fn jacobian_sliding_at_rest(system: &Assembled, p: &Parameters) -> nalgebra::DMatrix<f64> {
+    let model = system.compiled();
+    let n = model.n_states();
+    let mut a = nalgebra::DMatrix::zeros(n, n);
+    let u = vec![0.0; model.n_inputs()];
+    let x = system.initial_state();
+    model.jacobian(&x, &u, &mut a);
+    let sv = &p.servo_valve;
+    if let Some(i) = model.state_index("servo_valve.I_m.p") {
+        if sv.t_s > 0.0 {
+            let (_, slope) = vane_motor::friction(sv.t_c, sv.t_s, sv.omega_s, x[i] / sv.i_m);
+            a[(i, i)] += slope / sv.i_m;
+        }
+    }
+    a
+}
+
+/// The least damped mode at rest of the loop with the vane motor sliding, what the FMU's monitor
+/// reports ([`jacobian_sliding_at_rest`]); `None` when every eigenvalue is a zero.
+pub fn least_damped_sliding(system: &Assembled, p: &Parameters) -> Option<Mode> {
+    least_damped_mode(&eigenvalues(&jacobian_sliding_at_rest(system, p)))
 }
 
 /// The least damped mode of the eigenvalues `ev` of a model at rest, leaving out the zeros

@@ -91,11 +91,7 @@ impl HydraulicSlewingPlate {
         let parameters = Parameters::from_values(values, experiment)?;
         if self.parameters.as_ref() != Some(&parameters) || self.system.is_none() {
             let system = Assembled::new(&parameters)?;
-            self.margin = if parameters.servo_valve.t_s > 0.0 {
-                margin::least_damped_at_rest(&Assembled::new(&parameters.sliding())?)
-            } else {
-                margin::least_damped_at_rest(&system)
-            };
+            self.margin = margin::least_damped_sliding(&system, &parameters);
             self.margin_logged = false;
             self.system = Some(system);
             self.parameters = Some(parameters);
