@@ -510,6 +510,52 @@ both_versions!(
 );
 
 both_versions!(
+    a_crafted_states_long_guid_is_quoted_briefly,
+    /// Campaign finding F5: a crafted state with a 10 MB GUID (checksum recomputed) is refused
+    /// with a message that quotes the GUID's start and length, not the whole of it.
+    fn rule<D: Driver>() {
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.init(0.0), St::Ok);
+        let (_, s) = f.get_state();
+        let mut p = payload(&f.serialize(s));
+        f.free_state(s);
+        p["guid"] = "{".repeat(10_000_000).into();
+        let (status, _) = f.deserialize(&blob(&p));
+        assert_eq!(status, St::Error);
+        let last = f.last();
+        assert!(
+            last.contains("belongs to GUID {{{{") && last.contains("(10000000 bytes)"),
+            "{}",
+            &last[..last.len().min(300)]
+        );
+        assert_short::<D>(&last);
+        // The instance is in the error state: a step is an illegal call, never Fatal.
+        assert_eq!(f.step(0.0, 1e-3), St::Error);
+    }
+);
+
+both_versions!(
+    the_current_drives_constants_are_refused_at_the_set_call,
+    /// Issue 41, item 7: `servo_valve.G_i`, `K_i` and `U_c` must be positive (the current
+    /// drive's gain, loop gain and supply); the XML's `<Positive>` list now says so, so a zero is
+    /// refused at the set call, naming the variable, not at initialisation.
+    fn rule<D: Driver>() {
+        for name in ["servo_valve.G_i", "servo_valve.K_i", "servo_valve.U_c"] {
+            let f = D::new(Kind::CoSimulation);
+            assert_eq!(f.set_real(name, 0.0), St::Error, "{name}");
+            assert!(
+                f.last().contains(name) && f.last().contains("must be positive"),
+                "{}",
+                f.last()
+            );
+            // A positive value is taken.
+            let g = D::new(Kind::CoSimulation);
+            assert_eq!(g.set_real(name, 1.0), St::Ok, "{name}: {}", g.last());
+        }
+    }
+);
+
+both_versions!(
     a_step_that_cannot_advance_time_is_an_error,
     /// D6.
     fn rule<D: Driver>() {

@@ -279,3 +279,40 @@ fn adjoint_derivative_without_knowns_is_checked_like_any_call() {
     assert_eq!(h.init(0.0), Fmi3Status::Ok);
     assert_eq!(adjoint(&h, "y_pot"), Fmi3Status::Ok, "{}", h.last());
 }
+
+/// `fmi3GetAdjointDerivative` checks its seed as the directional derivative does (campaign
+/// finding F2: a NaN seed returned OK when the call had no knowns, whose loop never read it):
+/// refused, naming the element, with knowns and without.
+#[test]
+fn adjoint_derivative_refuses_a_non_finite_seed() {
+    let f = Fmu3::new();
+    assert_eq!(f.init(0.0), Fmi3Status::Ok);
+    let unknown = [Fmu3::vr("y_pot")];
+    let adjoint = |knowns: &[u32], seed: f64| {
+        let mut sensitivity = vec![0.0; knowns.len()];
+        unsafe {
+            fmi3GetAdjointDerivative(
+                f.c,
+                unknown.as_ptr(),
+                1,
+                knowns.as_ptr(),
+                knowns.len(),
+                [seed].as_ptr(),
+                1,
+                sensitivity.as_mut_ptr(),
+                knowns.len(),
+            )
+        }
+    };
+    for (knowns, bad) in [(vec![], f64::NAN), (vec![Fmu3::vr("r")], f64::INFINITY)] {
+        assert_eq!(
+            adjoint(&knowns, bad),
+            Fmi3Status::Error,
+            "{knowns:?}: {}",
+            f.last()
+        );
+        assert!(f.last().contains("seed[0]"), "{}", f.last());
+        // A finite seed is still answered.
+        assert_eq!(adjoint(&knowns, 1.0), Fmi3Status::Ok, "{}", f.last());
+    }
+}

@@ -723,6 +723,11 @@ pub unsafe fn partial_derivative<M: FmuModel>(
             if let Err(s) = inst.check_derivative_call(&u2, &k2) {
                 return s;
             }
+            // The seed is checked up front as the directional derivative checks its own: with
+            // no knowns the loop below would never look at it.
+            if let Some(j) = seed.iter().position(|v| !v.is_finite()) {
+                return inst.refuse(&format!("seed[{j}] = {} is not finite", seed[j]));
+            }
             let mut direction = vec![0.0; k2.len()];
             let mut column = vec![0.0; u2.len()];
             for j in 0..k2.len() {

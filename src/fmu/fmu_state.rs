@@ -108,9 +108,41 @@ impl<S: Serialize + for<'de> Deserialize<'de>> SavedState<S> {
         if snapshot.guid != guid {
             return Err(format!(
                 "the serialized FMU state belongs to GUID {}, not to this FMU ({guid})",
-                snapshot.guid
+                bounded(&snapshot.guid)
             ));
         }
         Ok(SavedState::new(snapshot))
+    }
+}
+
+/// The most characters of a crafted text a message quotes.
+pub const QUOTED_CHARS: usize = 64;
+
+/// `text` as a message quotes it: whole up to [`QUOTED_CHARS`] characters, else its start and
+/// its length (a crafted state's 10 MB GUID is not copied into the log).
+pub fn bounded(text: &str) -> String {
+    match text.char_indices().nth(QUOTED_CHARS) {
+        None => text.to_string(),
+        Some((cut, _)) => format!("{}... ({} bytes)", &text[..cut], text.len()),
+    }
+}
+
+#[cfg(test)]
+mod quoting_tests {
+    use super::*;
+
+    #[test]
+    fn long_texts_are_quoted_by_their_start_and_length() {
+        assert_eq!(bounded("{abc}"), "{abc}");
+        let long = "x".repeat(10_000_000);
+        let q = bounded(&long);
+        assert!(q.starts_with(&"x".repeat(QUOTED_CHARS)) && q.ends_with("... (10000000 bytes)"));
+        assert!(q.len() < 100);
+        // cut on a character boundary
+        let wide = "é".repeat(100);
+        assert_eq!(
+            bounded(&wide),
+            format!("{}... (200 bytes)", "é".repeat(QUOTED_CHARS))
+        );
     }
 }
