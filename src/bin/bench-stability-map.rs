@@ -21,7 +21,7 @@ use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::DEFAULT_K_PL;
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::margin::{
-    eigenvalues_at_rest, least_damped_mode, verdict, Verdict, ROUND_OFF, THRESHOLD_FRACTION,
+    eigenvalues_sliding_at_rest, least_damped_mode, verdict, Verdict, ROUND_OFF, THRESHOLD_FRACTION,
 };
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
@@ -55,8 +55,8 @@ fn cell(sets: &[(&str, String)], zeta_rule: f64, default: bool) -> String {
         set_by_name(&mut values, n, v).unwrap_or_else(|e| panic!("{e}"));
     }
     let p = Parameters::from_values(&values, &Experiment::default()).expect("parameters");
-    let system = Assembled::new(&p.sliding()).expect("model");
-    let ev = eigenvalues_at_rest(&system);
+    let system = Assembled::new(&p).expect("model");
+    let ev = eigenvalues_sliding_at_rest(&system, &p);
     let slow: Option<Mode> = least_damped(
         &ev.iter()
             .copied()

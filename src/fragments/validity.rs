@@ -74,10 +74,39 @@ impl Limits {
         self.plate_sigma_f.min(self.plate_sigma_y)
     }
 
+    /// Which strength [`Limits::plate_strength`] is: the fatigue strength unless the yield
+    /// strength is the smaller.
+    pub fn plate_rule(&self) -> PlateRule {
+        if self.plate_sigma_f <= self.plate_sigma_y {
+            PlateRule {
+                word: "fatigue",
+                strength: "fatigue strength at 5e8 reversed cycles",
+                parameter: "sigma_f",
+            }
+        } else {
+            PlateRule {
+                word: "yield",
+                strength: "yield strength",
+                parameter: "sigma_y",
+            }
+        }
+    }
+
     /// The shear stress at the surface of the bar per unit torque, `16 / (pi d^3)` \[Pa/(N m)\].
     pub fn bar_stress_per_torque(&self) -> f64 {
         16.0 / (std::f64::consts::PI * self.bar_d.powi(3))
     }
+}
+
+/// The plate strength a monitor compares with, as its messages name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PlateRule {
+    /// One word: `fatigue` or `yield`.
+    pub word: &'static str,
+    /// What the strength is.
+    pub strength: &'static str,
+    /// Its parameter, after `plate.`.
+    pub parameter: &'static str,
 }
 
 /// One monitored quantity.
@@ -135,16 +164,8 @@ impl Monitor {
                 value.abs() * 1e-6,
                 self.limit(limits) * 1e-6,
                 ROOT_CONCENTRATION,
-                if limits.plate_sigma_f <= limits.plate_sigma_y {
-                    "fatigue strength at 5e8 reversed cycles"
-                } else {
-                    "yield strength"
-                },
-                if limits.plate_sigma_f <= limits.plate_sigma_y {
-                    "sigma_f"
-                } else {
-                    "sigma_y"
-                },
+                limits.plate_rule().strength,
+                limits.plate_rule().parameter,
                 limits.plate_strength() * 1e-6
             ),
             Monitor::BarStress => format!(

@@ -41,23 +41,13 @@ pub const THRESHOLD_FRACTION: f64 = 1.0 / 3.0;
 /// mode with `plate.zeta = 0`, whose real part is round-off) does not warn.
 pub const ROUND_OFF: f64 = 1e-9;
 
-/// The balanced eigenvalues of the model linearised at rest with zero inputs.
-pub fn eigenvalues_at_rest(system: &Assembled) -> Vec<Complex<f64>> {
-    let model = system.compiled();
-    let n = model.n_states();
-    let mut a = nalgebra::DMatrix::zeros(n, n);
-    let u = vec![0.0; model.n_inputs()];
-    model.jacobian(&system.initial_state(), &u, &mut a);
-    eigenvalues(&a)
-}
-
 /// The Jacobian at rest with zero inputs of the loop with the vane motor sliding
 /// ([`Parameters::sliding`]), from the model as built. The seal friction is a resistor on the
 /// rotor's 1-junction, whose flow is the rotor's momentum over `I_m`
 /// ([`crate::fragments::vane_motor`]): its slope at rest, `T'(0)`, enters `A` at the rotor
 /// momentum's own entry only, as `−T'(0) / I_m`, which is added back here. (The same matrix as
 /// the sliding model's own Jacobian, without building that model a second time:
-/// `tests/loop_margin.rs`.)
+/// `tests/robust_plant.rs`, `the_margins_sliding_jacobian_is_the_sliding_models`.)
 pub fn jacobian_sliding_at_rest(system: &Assembled, p: &Parameters) -> nalgebra::DMatrix<f64> {
     let model = system.compiled();
     let n = model.n_states();
@@ -75,10 +65,16 @@ pub fn jacobian_sliding_at_rest(system: &Assembled, p: &Parameters) -> nalgebra:
     a
 }
 
+/// The balanced eigenvalues at rest of the loop with the vane motor sliding
+/// ([`jacobian_sliding_at_rest`]).
+pub fn eigenvalues_sliding_at_rest(system: &Assembled, p: &Parameters) -> Vec<Complex<f64>> {
+    eigenvalues(&jacobian_sliding_at_rest(system, p))
+}
+
 /// The least damped mode at rest of the loop with the vane motor sliding, what the FMU's monitor
-/// reports ([`jacobian_sliding_at_rest`]); `None` when every eigenvalue is a zero.
+/// reports; `None` when every eigenvalue is a zero.
 pub fn least_damped_sliding(system: &Assembled, p: &Parameters) -> Option<Mode> {
-    least_damped_mode(&eigenvalues(&jacobian_sliding_at_rest(system, p)))
+    least_damped_mode(&eigenvalues_sliding_at_rest(system, p))
 }
 
 /// The least damped mode of the eigenvalues `ev` of a model at rest, leaving out the zeros
@@ -86,11 +82,6 @@ pub fn least_damped_sliding(system: &Assembled, p: &Parameters) -> Option<Mode> 
 pub fn least_damped_mode(ev: &[Complex<f64>]) -> Option<Mode> {
     let largest = ev.iter().map(|z| modulus(*z)).fold(0.0, f64::max);
     least_damped(ev, ZERO_FRACTION * largest)
-}
-
-/// The least damped mode of the model at rest, `None` when every eigenvalue is a zero.
-pub fn least_damped_at_rest(system: &Assembled) -> Option<Mode> {
-    least_damped_mode(&eigenvalues_at_rest(system))
 }
 
 /// How a damping ratio stands against the warning threshold.

@@ -10,9 +10,9 @@ use clap::Args;
 use hydraulic_slewing_plate::fragments::validity::TIP_RATIO_LIMIT;
 use hydraulic_slewing_plate::model::parameters::HydraulicsModel;
 
-use super::manoeuvre;
+use super::manoeuvre::{self, Command};
 use super::results::Results;
-use super::run::{self, Profile, RunArgs};
+use super::run::{self, max_abs, Profile, RunArgs};
 
 #[derive(Args)]
 pub struct FastestArgs {
@@ -30,10 +30,6 @@ pub fn main(args: &FastestArgs) -> Result<(), String> {
     let fmu = run::fmu_for(&args.run)?;
     print!("{}", report(args, &fmu)?);
     Ok(())
-}
-
-fn max_abs(y: &[f64]) -> f64 {
-    y.iter().fold(0.0, |m, v| m.max(v.abs()))
 }
 
 /// One move of `ms` milliseconds: its results and its peak `|w_tip|/a`.
@@ -60,27 +56,28 @@ pub fn report(args: &FastestArgs, fmu: &Path) -> Result<String, String> {
     }
     let mut lo = (args.from * 1000.0).round() as u32;
     let mut hi = (p.reference.duration * 1000.0).round() as u32;
-    let (lo_peak, hi_peak) = (trial(args, lo, fmu)?.1, trial(args, hi, fmu)?.1);
-    if lo_peak <= args.limit || hi_peak > args.limit || lo >= hi {
+    let lo_peak = trial(args, lo, fmu)?.1;
+    // The fastest move within the limit so far, with its results.
+    let (mut res, mut peak) = trial(args, hi, fmu)?;
+    if lo_peak <= args.limit || peak > args.limit || lo >= hi {
         return Err(format!(
             "the bisection needs a move of --from ({lo} ms) beyond the limit and the run's \
-             reference.duration ({hi} ms) within it: peak w_tip/a {lo_peak:.4} and {hi_peak:.4}"
+             reference.duration ({hi} ms) within it: peak w_tip/a {lo_peak:.4} and {peak:.4}"
         ));
     }
     let mut below = lo_peak;
     while hi - lo > 1 {
         let mid = (lo + hi) / 2;
-        let peak = trial(args, mid, fmu)?.1;
-        if peak <= args.limit {
-            hi = mid;
+        let (mid_res, mid_peak) = trial(args, mid, fmu)?;
+        if mid_peak <= args.limit {
+            (hi, res, peak) = (mid, mid_res, mid_peak);
         } else {
-            (lo, below) = (mid, peak);
+            (lo, below) = (mid, mid_peak);
         }
     }
-    let (res, peak) = trial(args, hi, fmu)?;
     let col = |n: &str| res.column(n).unwrap_or_default();
     let torque = max_abs(&col("torsion_bar.torque"));
-    let target = p.reference.angle + args.run.r() / p.controller.k_pot;
+    let target = Command::of(&p, args.run.r()).target;
     let sv = &p.servo_valve;
     let motor = sv.d_m * 2.0 / 3.0 * sv.p_supply;
     Ok(format!(

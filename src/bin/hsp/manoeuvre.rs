@@ -18,6 +18,8 @@
 //!
 //! Every measure reads the series at the communication points only.
 
+use hydraulic_slewing_plate::model::parameters::Parameters;
+
 /// The settling band, a fraction of the commanded change.
 pub const BAND: f64 = 0.02;
 /// The level of `|w_tip|` of the ring-down time \[m\]: 1 mm at the 1.41 m plate's tip is
@@ -33,6 +35,18 @@ pub struct Command {
     pub target: f64,
     /// The time the command ends \[s\].
     pub t_end: f64,
+}
+
+impl Command {
+    /// The command of a run whose loop is the FMU's: the built-in move, when it is on, with a
+    /// step of `r` \[V\] from t = 0.
+    pub fn of(p: &Parameters, r: f64) -> Self {
+        let mv = &p.reference;
+        Command {
+            target: r / p.controller.k_pot + if mv.is_on() { mv.angle } else { 0.0 },
+            t_end: if mv.is_on() { mv.t_end() } else { 0.0 },
+        }
+    }
 }
 
 /// The first index at or after `t_end`; `None` when the run ends before it.

@@ -310,7 +310,7 @@ fn time_where(t: &[f64], y: &[f64], pred: impl Fn(f64) -> bool) -> f64 {
         .fold(0.0, |a, b| a + b)
 }
 
-fn max_abs(y: &[f64]) -> f64 {
+pub(super) fn max_abs(y: &[f64]) -> f64 {
     y.iter().fold(0.0, |m, v| m.max(v.abs()))
 }
 
@@ -371,7 +371,8 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     } else {
         let r = args.r();
         let mv = &p.reference;
-        let target = r / p.controller.k_pot + if mv.is_on() { mv.angle } else { 0.0 };
+        let cmd = Command::of(p, r);
+        let target = cmd.target;
         let described = match (mv.is_on(), r != 0.0) {
             (true, step) => format!(
                 "minimum-jerk move of {:.2} deg over {} s from t = {} s{} (motor target {:.2} deg)",
@@ -396,10 +397,6 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
             args.step
         )
         .unwrap();
-        let cmd = Command {
-            target,
-            t_end: if mv.is_on() { mv.t_end() } else { 0.0 },
-        };
         let line = |name: &str, y: &[f64]| {
             format!(
                 "  {name:<7} final {:.3} deg, overshoot {:.2} %, settling ({} %, from t = {} s) {}\n",
@@ -498,11 +495,7 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
         .unwrap();
     }
     let l = &p.limits;
-    let plate_rule = if l.plate_sigma_f <= l.plate_sigma_y {
-        "fatigue"
-    } else {
-        "yield"
-    };
+    let plate_rule = l.plate_rule().word;
     writeln!(
         s,
         "  validity peak w_tip/a {:.3} (limit {TIP_RATIO_LIMIT}), plate stress {:.1} MPa (limit {:.2}, {plate_rule} at the root), bar shear {:.1} MPa (limit {:.1}, half of yield), (omega_hub/omega_1)^2 {:.3} (limit {SPIN_LIMIT})",

@@ -138,10 +138,9 @@ impl ServoValveParameters {
     pub fn voltage_driven() -> Self {
         ServoValveParameters {
             drive: CoilDrive::Voltage,
-            t_c: 0.0,
-            t_s: 0.0,
             ..Self::default()
         }
+        .sliding()
     }
 
     /// The same valve and motor without the motor's Coulomb and breakaway friction: the motor
