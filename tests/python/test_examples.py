@@ -116,11 +116,25 @@ def test_model_exchange_needs_an_implicit_solver(fmu_path, tool_output, tmp_path
     assert abs(h_euler - closed_form) < 1e-3 * closed_form, (h_euler, closed_form)
     assert abs(re_) > 1e5 and im_ == 0.0, (re_, im_)
     assert h_euler < h_rk45 < 1e-3
-    # CVode (BDF, atol = rtol x nominals) reproduces co-simulation at rtol 1e-6 to 1e-4 of each
-    # output's range (tests/python/test_model_exchange.py: 1e-6 at rtol 1e-9); without the
-    # nominals, the hydraulic states (nominals 1e-9 m^3) are lost in the absolute tolerance.
-    me = find(r"max difference CVode-CS: " + NUMBER + r" of the range", out)[0]
-    assert me < 1e-4, me
+    # CVode (BDF, atol = rtol x nominals) against co-simulation, every output (docs/model-exchange.md).
+    # The accelerometers were 0.19 to 0.27 of their range off over these 3 s while every plate mode
+    # had the same 1 mm nominal: a 200 Hz mode's error reached them amplified by its omega^2. With
+    # the nominals scaled per mode: 1.5e-4 at rtol 1e-6, 1.9e-5 at 1e-7 (measured).
+    groups = dict((g, (a, b)) for g, a, b in re.findall(
+        r"^(\S[\w ,:]+?)\s+\d+\s+(" + NUMBER[1:-1] + r")\s+(" + NUMBER[1:-1] + r")\s+\S+\s+\S+$", out, re.M))
+    assert set(groups) == {"angles and rates", "plate: tip, stress", "accelerometers", "bar", "hydraulics",
+                           "pilot stage", "energy"}, groups
+    acc, acc10 = (float(x) for x in groups["accelerometers"])
+    assert acc < 1e-3 and acc10 < acc / 3, (acc, acc10)
+    # Every output but the pilot stage's within 1e-4 of its range at rtol 1e-7 (the importer's
+    # tolerance a tenth of the FMU's default, docs/model-exchange.md), and 1e-3 at rtol 1e-6.
+    me, me10 = find(r"max difference CVode-CS \(all outputs but the pilot stage\): " + NUMBER
+                    + r" of the range, at rtol/10 " + NUMBER, out)
+    assert me < 1e-3 and me10 < 1e-4, (me, me10)
+    # The pilot stage moves by 1e-3 of its own scale in this move: against that scale it is as
+    # accurate as the rest.
+    pilot = find(r"pilot stage against its own scale \(.*\): " + NUMBER, out)[0]
+    assert pilot < 1e-4, pilot
     # Without nominals CVode is either far off (regression: 35 times worse over 3 s with the
     # default loop) or gives up where the ignored errors of the hydraulic states blow up.
     if "without nominals: CVode failed" not in out:

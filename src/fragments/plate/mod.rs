@@ -265,15 +265,25 @@ pub struct PlateModel {
 }
 
 /// Typical magnitudes of the plate's states, stated by [`add_plate`] on the elements that own
-/// them ([`BondGraph::set_nominal`]).
+/// them ([`BondGraph::set_nominal`]). They scale the absolute tolerance of the FMU's integrator
+/// and of an importer's (Model Exchange, `rtol × nominal`).
+///
+/// The lowest plate coordinate gets the scalar magnitudes below; a coordinate `j` of higher
+/// frequency gets them scaled by [`PlateModel::mode_scale`] `s_j = ω_1/ω_j`: its displacement by
+/// `s_j²`, its momentum by `s_j`. That keeps the tolerance of every coordinate at the same
+/// acceleration `ω_j² q_j`, which is what the accelerometers measure (a uniform 1 mm let the
+/// error of a 200 Hz mode pass into `acc_tip` 4·10⁴ times amplified against the first mode's;
+/// docs/model-exchange.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlateNominal {
-    /// A modal displacement \[m\]: 1 mm.
+    /// The lowest plate coordinate's displacement \[m\]: 1 mm.
     pub displacement: f64,
-    /// A modal momentum: the arm's mass `m a b` moving at 0.1 m/s \[kg m/s\].
+    /// The lowest plate coordinate's momentum: the arm's mass `m a b` moving at 0.1 m/s
+    /// \[kg m/s\].
     pub momentum: f64,
     /// A momentum of the I-field (hub and modes together, consistent formulation): the modal
-    /// momentum, or the hub's at 1 mrad/s if larger.
+    /// momentum, or the hub's at 1 mrad/s if larger; the hub's entry, and the lowest plate
+    /// coordinate's.
     pub field_momentum: f64,
 }
 
@@ -322,6 +332,20 @@ impl PlateModel {
     /// Index of the first plate coordinate (1 with a hub, 0 without).
     pub fn first_plate(&self) -> usize {
         usize::from(self.hub)
+    }
+
+    /// The frequency of each plate coordinate relative to the lowest, inverted:
+    /// `s_j = ω_min/ω_j ≤ 1` with `ω_j² = K_jj/M_jj` (the coordinate's own Rayleigh quotient:
+    /// its natural frequency when the mass matrix is diagonal, an estimate of it when the
+    /// consistent formulation couples the hub). Indexed by plate coordinate (0 = the first).
+    /// What [`PlateNominal`]'s magnitudes are scaled by.
+    pub fn mode_scale(&self) -> Vec<f64> {
+        let first = self.first_plate();
+        let omega_sq: Vec<f64> = (first..self.dim())
+            .map(|k| self.stiffness[(k, k)] / self.mass[(k, k)])
+            .collect();
+        let lowest = omega_sq.iter().copied().fold(f64::INFINITY, f64::min);
+        omega_sq.iter().map(|&w| (lowest / w).sqrt()).collect()
     }
 
     /// Whether the mass matrix is diagonal (one-port inertias suffice).
@@ -417,6 +441,7 @@ pub fn add_plate(
     let n = model.dim();
     let first = model.first_plate();
     let np = n - first;
+    let scale = model.mode_scale();
     // coordinate junctions: hub junction, then one per plate coordinate
     let mut coord = Vec::with_capacity(n);
     if let Some(h) = hub {
@@ -436,12 +461,16 @@ pub fn add_plate(
                 format!("{prefix}.I[{}]", j + 1),
                 model.mass[(first + j, first + j)],
             );
-            g.set_nominal(i, &[model.nominal.momentum]);
+            g.set_nominal(i, &[model.nominal.momentum * scale[j]]);
             inertia_bonds.push(g.bond(coord[first + j], i));
         }
     } else {
         let field = g.add_i_field(format!("{prefix}.inertia"), model.mass.clone());
-        g.set_nominal(field, &vec![model.nominal.field_momentum; n]);
+        let mut momenta = vec![model.nominal.field_momentum; n];
+        for (m, s) in momenta[first..].iter_mut().zip(&scale) {
+            *m *= s;
+        }
+        g.set_nominal(field, &momenta);
         for (k, &c) in coord.iter().enumerate() {
             let b = g.bond(c, field);
             if k == 0 {
@@ -463,7 +492,7 @@ pub fn add_plate(
             );
         }
         let c = g.add_c(format!("{prefix}.C[{}]", j + 1), 1.0 / k);
-        g.set_nominal(c, &[model.nominal.displacement]);
+        g.set_nominal(c, &[model.nominal.displacement * scale[j] * scale[j]]);
         g.bond(coord[first + j], c);
         c_elems.push(c);
         if model.damping[j] > 0.0 {
