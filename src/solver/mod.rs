@@ -101,18 +101,23 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 mod common;
+mod constant_jacobian;
 mod dense;
 pub mod fixed;
 mod integrator;
 pub mod jacobian;
 pub mod linalg;
+mod method;
 pub mod radau5;
+mod registry;
 pub mod rodas5p;
 mod step_map;
 pub mod testset;
 
 pub use integrator::Integrator;
 pub use jacobian::finite_difference_jacobian;
+pub use method::{OdeMethod, Stepper};
+pub use registry::{register, Method};
 
 /// An ODE system x' = f(t, x). Inputs (e.g. zero-order-held FMU inputs) are held by the model
 /// itself; the solver only sees f.
@@ -181,45 +186,6 @@ pub trait OdeSystem {
     /// minimal API; the default keeps existing implementors unchanged.
     fn time_derivative(&self, _t: f64, _x: &[f64], _dfdt: &mut [f64]) -> bool {
         false
-    }
-}
-
-/// Integration method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Method {
-    /// Rosenbrock method Rodas5P (Steinebach 2023). Default.
-    Rodas5P,
-    /// Radau IIA, 3 stages, order 5 (Hairer & Wanner, RADAU5).
-    Radau5,
-    /// Rodas5P's step at a fixed step size, for real time: every call to `t_end` takes
-    /// [`SolverOptions::substeps`] equal steps, none rejected, at a cost independent of the
-    /// solution (see [`fixed`]). No error control: the tolerances only scale the error estimate
-    /// it reports.
-    Rodas5PFixed,
-}
-
-impl Method {
-    /// Lower-case name as used on command lines ("rodas5p", "radau5").
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Rodas5P => "rodas5p",
-            Method::Radau5 => "radau5",
-            Method::Rodas5PFixed => "rodas5p-fixed",
-        }
-    }
-}
-
-impl std::str::FromStr for Method {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s.to_ascii_lowercase().as_str() {
-            "rodas5p" => Ok(Method::Rodas5P),
-            "radau5" | "radau" | "radauiia5" => Ok(Method::Radau5),
-            "rodas5p-fixed" | "rodas5pfixed" | "fixed" => Ok(Method::Rodas5PFixed),
-            _ => Err(format!(
-                "unknown method {s:?}; expected rodas5p, radau5 or rodas5p-fixed"
-            )),
-        }
     }
 }
 

@@ -8,10 +8,12 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
+use super::State;
 use super::{Work, GAMMA};
+use crate::solver::constant_jacobian::front_factorisation;
 use crate::solver::dense::DenseInverse;
-use crate::solver::integrator::{front_factorisation, Integrator};
 use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition, VaryingRows};
+use crate::solver::method::Stepper;
 use crate::solver::step_map;
 use crate::solver::{Method, OdeSystem};
 
@@ -104,7 +106,7 @@ fn factor(
 /// step a new one in the memory of the last. Returns the step size to take (that of the
 /// factorisation) and false if W is singular.
 pub(super) fn factorise<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lus: &mut Vec<Factor>,
@@ -115,9 +117,10 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
     match stamp {
         Some(_) => {
             let h_lu = integ
+                .state
                 .counted
                 .factorisation_step(h, &mut integ.stats, 1, shorten);
-            let jac = &integ.cache.jac;
+            let jac = &integ.state.cache.jac;
             let pattern = &mut w.pattern;
             let ok = front_factorisation(
                 lus,
@@ -167,7 +170,7 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
 /// `w.jac`, no varying pattern, too many varying rows, more than `step_map::MAX_DIM` states,
 /// or a singular constant block): the general LU then factorises.
 fn factorise_by_rows<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lus: &mut Vec<Factor>,
@@ -181,6 +184,7 @@ fn factorise_by_rows<S: OdeSystem + ?Sized>(
         return None;
     }
     let h_lu = integ
+        .state
         .counted
         .factorisation_step(h, &mut integ.stats, 0, false);
     let c = 1.0 / (h_lu * GAMMA);
