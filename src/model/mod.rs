@@ -7,7 +7,7 @@
 //! - [`presets`]: the paper's configurations as named parameter sets (`hsp run --preset NAME`).
 //! - [`compose`]: which fragments make up the model for a parameter set, as one bond graph.
 //! - [`assembly`]: that graph compiled, with its inputs, outputs and states placed among the FMU's
-//!   variables: the [`OdeSystem`] the integrator advances.
+//!   variables: the [`OdeSystem`](crate::solver::OdeSystem) the integrator advances.
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`validity`]: the warnings of the validity monitors at the communication points.
 //! - [`margin`]: the loop-margin monitor, the least damped mode at rest, at initialisation.

@@ -26,7 +26,7 @@
 //! error of the slow, accurate part is O(h⁵) but unmonitored, and a mode of frequency ω is
 //! resolved only while ω h is well below 1. The step's embedded error estimate is still
 //! computed (it comes free with the stages) and the largest of a call is reported by
-//! [`Integrator::fixed_step_error`], relative to the tolerances as the adaptive control would
+//! [`Integrator::fixed_step_error`](super::Integrator::fixed_step_error), relative to the tolerances as the adaptive control would
 //! judge it (above 1: a step the adaptive driver would have rejected).
 //!
 //! A step whose stages are not finite, or whose W is singular, ends the call with an error; the
@@ -35,7 +35,6 @@
 //! 5e-324 s step is) is one explicit Euler step instead, as in the adaptive drivers.
 
 use super::common::{euler_floor, Outputs};
-use super::constant_jacobian::{Cache, Counted};
 use super::method::OdeMethod;
 use super::method::Stepper;
 use super::rodas5p::State;
@@ -79,11 +78,7 @@ impl OdeMethod for Rodas5PFixed {
     }
 
     fn reset(state: &mut State, resized: bool) {
-        if resized {
-            state.cache = Cache::default();
-            state.counted = Counted::default();
-        }
-        Self::notify_discontinuity(state);
+        <rodas5p::Rodas5P as OdeMethod>::reset(state, resized);
     }
 
     fn after_failure(state: &mut State) {

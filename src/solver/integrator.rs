@@ -194,7 +194,7 @@ impl Integrator {
         Ok(())
     }
 
-    /// [`Method::Rodas5PFixed`]: the largest embedded error estimate of the steps of the last
+    /// [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed): the largest embedded error estimate of the steps of the last
     /// call, as a multiple of the tolerances (the RMS norm the adaptive drivers test against 1:
     /// above 1, a step they would have rejected). 0 before the first call and after a
     /// discontinuity, and always 0 for the adaptive methods (whose step-size controller keeps

@@ -6,6 +6,14 @@
 //!
 //! What a newcomer needs to know:
 //!
+//! * **Methods behind one trait.** Each method is a module with its own state behind
+//!   [`OdeMethod`] (as diffsol's `OdeSolverMethod`, and as each of Hairer's codes keeps its own
+//!   WORK arrays): [`rodas5p`], [`radau5`], [`fixed`]. The [`Integrator`] is the driver they
+//!   share: it checks every call's arguments, keeps the point every method advances (a
+//!   [`Stepper`]: options, t, x, the next step size, the counters) and hands the steps to the
+//!   method named by [`SolverOptions::method`]. A method is registered once ([`Method`]'s
+//!   constants for the crate's, [`register`] for one added at run time); see CONTRIBUTING.md,
+//!   "Adding a solver method".
 //! * **Methods.** [`Method::Rodas5P`] is the linearly implicit Rosenbrock method of
 //!   Steinebach (BIT Numer. Math. 63:27, 2023), 8 stages, order 5 with an embedded order-4
 //!   estimate, stiffly accurate, with an order-4 dense output; see [`rodas5p`].
@@ -30,7 +38,11 @@
 //!   changes the inputs or tolerances).
 //! * **Checkpointing.** [`Integrator`] is `Clone + Serialize + Deserialize` and holds
 //!   everything that influences later results (t, x, h, controller history, Radau's Newton
-//!   start polynomial, statistics, and the Jacobian Radau5 goes on with). LU factors are *not*
+//!   start polynomial, statistics, and the Jacobian Radau5 goes on with). Its saved form is the
+//!   shared point (`options`, `t`, `x`, `h`, `stats`) and the method's own state (`state`) in
+//!   the method's format, with that format's version (`state_version`,
+//!   [`OdeMethod::STATE_VERSION`]); a saved state of another version is refused when read,
+//!   with a message naming both versions. LU factors are *not*
 //!   saved: every `advance_to` call evaluates f afresh at its start (the inputs may have changed
 //!   since); Rodas5P evaluates J at every step, Radau5 keeps a varying J across calls while
 //!   Newton converges fast, as RADAU5 keeps it across steps, with its entries and the step size
@@ -117,7 +129,7 @@ pub mod testset;
 pub use integrator::Integrator;
 pub use jacobian::finite_difference_jacobian;
 pub use method::{OdeMethod, Stepper};
-pub use registry::{register, Method};
+pub use registry::{methods, register, Method};
 
 /// An ODE system x' = f(t, x). Inputs (e.g. zero-order-held FMU inputs) are held by the model
 /// itself; the solver only sees f.

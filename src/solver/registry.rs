@@ -171,6 +171,12 @@ pub fn register<M: OdeMethod>() -> Result<Method, String> {
     }
 }
 
+/// Every registered method: the crate's own, then those added by [`register`] (in the order
+/// registered). The tests of every method run over this list.
+pub fn methods() -> Vec<Method> {
+    registrations().iter().map(|r| Method(r.name)).collect()
+}
+
 /// A fresh stepper of the method `options.method`, at (t, x), with the counters `stats`.
 pub(crate) fn fresh(
     options: SolverOptions,
