@@ -161,7 +161,7 @@ fn contract(method: Method) {
     assert_eq!(value["options"]["method"], method.name());
     let version = value["state_version"].as_u64().expect("state_version");
     value["state_version"] = serde_json::json!(version + 1);
-    let err = serde_json::from_value::<Integrator>(value)
+    let err = serde_json::from_str::<Integrator>(&value.to_string())
         .unwrap_err()
         .to_string();
     let both = format!(

@@ -140,7 +140,7 @@ fn advance<S: OdeSystem + ?Sized>(
             rodas5p::jacobian_at_point(integ, sys, w, stamp, autonomous)?;
             // Never shortened: the step is the caller's.
             let (h, result) =
-                rodas5p::factorised_step(integ, sys, w, lus, stamp, h, false, autonomous);
+                rodas5p::factorised_step(integ, sys, w, lus, stamp, h, false, true, autonomous);
             let err = result.map_err(|why| {
                 let (kind, what) = match why {
                     Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),

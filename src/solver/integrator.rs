@@ -34,16 +34,22 @@ impl PartialEq for Integrator {
     }
 }
 
+/// The shared point; the method's state is in the saved form (serialise it to see all).
 impl std::fmt::Debug for Integrator {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        self.run.fmt(f)
+        f.debug_struct("Integrator")
+            .field("method", &self.options().method)
+            .field("t", &self.t())
+            .field("x", &self.x())
+            .field("h", &self.step_size())
+            .field("stats", self.stats())
+            .finish_non_exhaustive()
     }
 }
 
 impl Serialize for Integrator {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        self.run
-            .save()
+        registry::save_stepper(&*self.run)
             .map_err(serde::ser::Error::custom)?
             .serialize(s)
     }
@@ -180,18 +186,7 @@ impl Integrator {
         if let Some((i, x)) = x.iter().enumerate().find(|(_, x)| !x.is_finite()) {
             return Err(format!("its state x[{i}] = {x} is not finite"));
         }
-        self.run.check_restored(sys.jacobian_pattern())?;
-        // The fixed-step (real-time) driver's h is the communication step over `substeps`,
-        // which the maximum step does not bound: a state saved after a 1 s real-time step is
-        // valid.
-        if self.run.h_within_max_step() && self.run.h() > options.max_step {
-            return Err(format!(
-                "its integrator's next step h = {} is above the maximum step {}",
-                self.run.h(),
-                options.max_step
-            ));
-        }
-        Ok(())
+        registry::check_restored(&*self.run, sys.jacobian_pattern())
     }
 
     /// [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed): the largest embedded error estimate of the steps of the last

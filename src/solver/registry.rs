@@ -88,15 +88,64 @@ impl<'de> Deserialize<'de> for Method {
     }
 }
 
-/// What the registry knows of a method: its names, its state's version, how to make a fresh
-/// stepper and how to read a saved one.
+/// What the registry knows of a method: its names and how to make a fresh stepper. (How to save
+/// and read one is in [`Saving`], apart, so that a program that never saves an integrator, the
+/// browser page, carries no code for it.)
 #[derive(Clone, Copy)]
 struct Registration {
     name: &'static str,
     aliases: &'static [&'static str],
     type_id: fn() -> TypeId,
     fresh: fn(SolverOptions, f64, Vec<f64>, Stats) -> Box<dyn DynStepper>,
+}
+
+/// How to save, read and check a restored stepper of a registered method.
+#[derive(Clone, Copy)]
+struct Saving {
+    name: &'static str,
+    save: fn(&dyn Any) -> Result<Saved, String>,
     read: fn(Saved) -> Result<Box<dyn DynStepper>, String>,
+    check: fn(&dyn Any, Pattern<'_>) -> Result<(), String>,
+}
+
+/// A system's structural Jacobian pattern ([`OdeSystem::jacobian_pattern`]).
+type Pattern<'a> = Option<&'a [Vec<u32>]>;
+
+fn saving<M: OdeMethod>() -> Saving {
+    Saving {
+        name: M::NAME,
+        save: save::<M>,
+        read: read::<M>,
+        check: check::<M>,
+    }
+}
+
+/// The driver's checks of a restored stepper of method `M` (`run` is its `Driven<M>`) that are
+/// the method's: h, the maximum step where it bounds h, and the method's own state.
+fn check<M: OdeMethod>(run: &dyn Any, pattern: Option<&[Vec<u32>]>) -> Result<(), String> {
+    let s = &run
+        .downcast_ref::<Driven<M>>()
+        .ok_or_else(|| format!("not a stepper of {}", M::NAME))?
+        .0;
+    check_non_negative("h", s.h)?;
+    M::check_restored(s, pattern)?;
+    // The fixed-step (real-time) driver's h is the communication step over `substeps`, which
+    // the maximum step does not bound: a state saved after a 1 s real-time step is valid.
+    if M::H_WITHIN_MAX_STEP && s.h > s.options.max_step {
+        return Err(format!(
+            "its integrator's next step h = {} is above the maximum step {}",
+            s.h, s.options.max_step
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a restored stepper (see [`check`]).
+pub(crate) fn check_restored(
+    run: &dyn DynStepper,
+    pattern: Option<&[Vec<u32>]>,
+) -> Result<(), String> {
+    (saving_of(run.options().method.name())?.check)(run.as_any(), pattern)
 }
 
 fn registration<M: OdeMethod>() -> Registration {
@@ -115,21 +164,47 @@ fn registration<M: OdeMethod>() -> Registration {
                 state,
             }))
         },
-        read: read::<M>,
     }
 }
 
 /// The crate's methods, one line each (the registration of a method of this crate).
+macro_rules! built_in {
+    ($of:ident) => {
+        [
+            $of::<super::rodas5p::Rodas5P>(),
+            $of::<super::radau5::Radau5>(),
+            $of::<super::fixed::Rodas5PFixed>(),
+        ]
+    };
+}
+
 fn built_in() -> [Registration; 3] {
-    [
-        registration::<super::rodas5p::Rodas5P>(),
-        registration::<super::radau5::Radau5>(),
-        registration::<super::fixed::Rodas5PFixed>(),
-    ]
+    built_in!(registration)
+}
+
+fn built_in_saving() -> [Saving; 3] {
+    built_in!(saving)
 }
 
 /// The methods added by [`register`].
 static REGISTERED: Mutex<Vec<Registration>> = Mutex::new(Vec::new());
+/// How to save and read them.
+static REGISTERED_SAVING: Mutex<Vec<Saving>> = Mutex::new(Vec::new());
+
+fn saving_of(name: &str) -> Result<Saving, String> {
+    built_in_saving()
+        .into_iter()
+        .find(|r| r.name == name)
+        .or_else(|| {
+            REGISTERED_SAVING
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .iter()
+                .find(|r| r.name == name)
+                .copied()
+        })
+        .ok_or_else(|| format!("the solver method {name:?} cannot be saved"))
+}
 
 fn registrations() -> Vec<Registration> {
     let mut all = built_in().to_vec();
@@ -166,6 +241,10 @@ pub fn register<M: OdeMethod>() -> Result<Method, String> {
         )),
         None => {
             registered.push(registration::<M>());
+            REGISTERED_SAVING
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(saving::<M>());
             Ok(Method(M::NAME))
         }
     }
@@ -198,7 +277,9 @@ pub(crate) struct Saved {
     pub stats: Stats,
     /// [`OdeMethod::STATE_VERSION`] of the method that wrote `state`.
     pub state_version: u32,
-    pub state: serde_json::Value,
+    /// The method's state as the method wrote it (JSON text, read by the method once the version
+    /// is checked).
+    pub state: Box<serde_json::value::RawValue>,
 }
 
 /// Reads a saved stepper of method `M`, refusing a state of another format version.
@@ -211,7 +292,7 @@ fn read<M: OdeMethod>(saved: Saved) -> Result<Box<dyn DynStepper>, String> {
             M::STATE_VERSION
         ));
     }
-    let state: M::State = serde_json::from_value(saved.state)
+    let state: M::State = serde_json::from_slice(saved.state.get().as_bytes())
         .map_err(|e| format!("its {} solver state cannot be read: {e}", M::NAME))?;
     Ok(Box::new(Driven::<M>(Stepper {
         options: saved.options,
@@ -225,11 +306,34 @@ fn read<M: OdeMethod>(saved: Saved) -> Result<Box<dyn DynStepper>, String> {
 
 /// Reads a saved integrator (see [`Saved`]).
 pub(crate) fn read_saved(saved: Saved) -> Result<Box<dyn DynStepper>, String> {
-    (saved.options.method.registration().read)(saved)
+    (saving_of(saved.options.method.name())?.read)(saved)
+}
+
+/// The saved form of a stepper (see [`Saved`]).
+pub(crate) fn save_stepper(run: &dyn DynStepper) -> Result<Saved, String> {
+    (saving_of(run.options().method.name())?.save)(run.as_any())
+}
+
+/// Saves a stepper of method `M` (`run` is its `Driven<M>`).
+fn save<M: OdeMethod>(run: &dyn Any) -> Result<Saved, String> {
+    let s = &run
+        .downcast_ref::<Driven<M>>()
+        .ok_or_else(|| format!("not a stepper of {}", M::NAME))?
+        .0;
+    Ok(Saved {
+        options: s.options.clone(),
+        t: s.t,
+        x: s.x.clone(),
+        h: s.h,
+        stats: s.stats,
+        state_version: M::STATE_VERSION,
+        state: serde_json::value::to_raw_value(&s.state)
+            .map_err(|e| format!("cannot save the {} solver state: {e}", M::NAME))?,
+    })
 }
 
 /// The driver's view of a stepper of any method.
-pub(crate) trait DynStepper: Send + std::fmt::Debug {
+pub(crate) trait DynStepper: Send {
     fn options(&self) -> &SolverOptions;
     fn t(&self) -> f64;
     fn x(&self) -> &[f64];
@@ -253,9 +357,6 @@ pub(crate) trait DynStepper: Send + std::fmt::Debug {
     fn is_past(&self) -> bool;
     fn reached(&self) -> f64;
     fn error_estimate(&self) -> f64;
-    fn h_within_max_step(&self) -> bool;
-    fn check_restored(&self, pattern: Option<&[Vec<u32>]>) -> Result<(), String>;
-    fn save(&self) -> Result<Saved, String>;
     fn clone_box(&self) -> Box<dyn DynStepper>;
     fn as_any(&self) -> &dyn Any;
     fn eq_dyn(&self, other: &dyn DynStepper) -> bool;
@@ -263,12 +364,6 @@ pub(crate) trait DynStepper: Send + std::fmt::Debug {
 
 /// The stepper of method `M`.
 struct Driven<M: OdeMethod>(Stepper<M::State>);
-
-impl<M: OdeMethod> std::fmt::Debug for Driven<M> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        self.0.fmt(f)
-    }
-}
 
 impl<M: OdeMethod> DynStepper for Driven<M> {
     fn options(&self) -> &SolverOptions {
@@ -325,26 +420,6 @@ impl<M: OdeMethod> DynStepper for Driven<M> {
     }
     fn error_estimate(&self) -> f64 {
         M::error_estimate(&self.0.state)
-    }
-    fn h_within_max_step(&self) -> bool {
-        M::H_WITHIN_MAX_STEP
-    }
-    fn check_restored(&self, pattern: Option<&[Vec<u32>]>) -> Result<(), String> {
-        check_non_negative("h", self.0.h)?;
-        M::check_restored(&self.0, pattern)
-    }
-    fn save(&self) -> Result<Saved, String> {
-        let s = &self.0;
-        Ok(Saved {
-            options: s.options.clone(),
-            t: s.t,
-            x: s.x.clone(),
-            h: s.h,
-            stats: s.stats,
-            state_version: M::STATE_VERSION,
-            state: serde_json::to_value(&s.state)
-                .map_err(|e| format!("cannot save the {} solver state: {e}", M::NAME))?,
-        })
     }
     fn clone_box(&self) -> Box<dyn DynStepper> {
         Box::new(Driven::<M>(self.0.clone()))

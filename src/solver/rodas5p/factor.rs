@@ -15,7 +15,7 @@ use crate::solver::dense::DenseInverse;
 use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition, VaryingRows};
 use crate::solver::method::Stepper;
 use crate::solver::step_map;
-use crate::solver::{Method, OdeSystem};
+use crate::solver::OdeSystem;
 
 /// The LU of W = I/(h γ) - J for the step size `h`, and for a constant J of a small system
 /// (n ≤ [`step_map::MAX_DIM`]) its explicit inverse, with which the step's eight solves are
@@ -103,8 +103,10 @@ fn factor(
 /// for a constant Jacobian `stamp`, the integrator's cache) holds: for a constant J a kept
 /// factorisation if one was made for this step size (to within `SAME_STEP`) or, if `shorten`,
 /// for a step up to `SHORTER` times shorter, else a new one; for a J that changes from step to
-/// step a new one in the memory of the last. Returns the step size to take (that of the
+/// step a new one in the memory of the last (with `by_rows`, the fixed-step driver's, by its
+/// varying rows where that applies: [`factorise_by_rows`]). Returns the step size to take (that of the
 /// factorisation) and false if W is singular.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn factorise<S: OdeSystem + ?Sized>(
     integ: &mut Stepper<State>,
     sys: &S,
@@ -113,6 +115,7 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
     stamp: Option<u64>,
     h: f64,
     shorten: bool,
+    by_rows: bool,
 ) -> (f64, bool) {
     match stamp {
         Some(_) => {
@@ -143,7 +146,7 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
                 lus.extend(w.spare.take());
             }
             lus.truncate(1);
-            if integ.options.method == Method::Rodas5PFixed {
+            if by_rows {
                 if let Some(done) = factorise_by_rows(integ, sys, w, lus, h) {
                     return done;
                 }

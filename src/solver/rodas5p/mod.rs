@@ -404,7 +404,8 @@ pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
 /// One step from the current point, with f0, J (and ∂f/∂t) there already in `w`: W factorised
 /// for about `h` (see [`factorise`]; `shorten` lets a constant J's kept LU shorten the step),
 /// then the stages. Returns the step size taken and the step's error norm, or why it failed.
-/// The adaptive driver and the fixed-step one (`super::fixed`) step through this.
+/// The adaptive driver and the fixed-step one (`super::fixed`, with `by_rows`: a J varying in
+/// few rows factorised by its varying rows' Schur complement) step through this.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn factorised_step<S: OdeSystem + ?Sized>(
     integ: &mut Stepper<State>,
@@ -414,9 +415,10 @@ pub(super) fn factorised_step<S: OdeSystem + ?Sized>(
     stamp: Option<u64>,
     h: f64,
     shorten: bool,
+    by_rows: bool,
     autonomous: bool,
 ) -> (f64, Result<f64, Reject>) {
-    let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten);
+    let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten, by_rows);
     let result = match lus.first() {
         Some(f) if ok => step(integ, sys, w, f, h, autonomous),
         _ => Err(Reject::Singular),
@@ -634,7 +636,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
         // W = I/(h γ) - J, one LU for all 8 stages. A step free to go past t_end that does
         // not end on the limit may be shortened to use a kept LU of a constant J.
         let shorten = limit > t_end && !last;
-        let (h, result) = factorised_step(integ, sys, w, lus, stamp, h, shorten, autonomous);
+        let (h, result) = factorised_step(integ, sys, w, lus, stamp, h, shorten, false, autonomous);
         match result {
             Ok(err) if err <= 1.0 => {
                 let t1 = if last { limit } else { t + h };
