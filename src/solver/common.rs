@@ -52,7 +52,7 @@ fn keep_factorisations<L>(slot: &mut Vec<L>, mut lus: Vec<L>, stamp: Option<u64>
     *slot = lus;
 }
 
-/// A method's buffers, kept between `advance` calls in the integrator's cache so that a call
+/// A method's buffers, kept between `advance` calls in the method's cache so that a call
 /// allocates nothing once they exist.
 pub(crate) trait Workspace {
     /// The method's factorisations of its iteration matrices.
@@ -95,7 +95,7 @@ pub(crate) fn with_kept_memory<St, W: Workspace, R>(
 }
 
 /// J = ∂f/∂x at the integrator's current point, into `jac`, or, for a constant Jacobian
-/// (`stamp`, [`OdeSystem::constant_jacobian`]), the one kept in the integrator's cache
+/// (`stamp`, [`OdeSystem::constant_jacobian`]), the one kept in the method's cache
 /// (evaluated once per stamp). `fd_tolerances` are the (atol, rtol) of a finite-difference
 /// Jacobian (None: the integrator's own). `holds` is the stamp of the constant part of the J
 /// that `jac` holds ([`OdeSystem::jacobian_constant_part`]), None when it holds none: with it,

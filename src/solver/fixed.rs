@@ -95,7 +95,7 @@ impl OdeMethod for Rodas5PFixed {
 }
 
 /// Advances `integ` to exactly `t_end` in `integ.options.substeps` equal Rodas5P steps (called
-/// by `Integrator::advance_to*` for [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed)).
+/// through [`OdeMethod::advance`] for [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed)).
 fn advance<S: OdeSystem + ?Sized>(
     integ: &mut Stepper<State>,
     sys: &S,

@@ -6,7 +6,7 @@
 //! arguments of every call; the method owns the rest (its controller's history, its kept
 //! Jacobian, its buffers) in its [`OdeMethod::State`] and takes the steps. A method is one
 //! module (or folder) with a type implementing [`OdeMethod`], plus one registration: a line of
-//! [`BUILT_IN`](super::registry) for the methods of the crate, or [`register`](super::register)
+//! the `built_in!` list of `registry.rs` for the methods of the crate, or [`register`](super::register)
 //! at run time (how a test adds one). See CONTRIBUTING.md, "Adding a solver method".
 //!
 //! The saved state of an integrator is the shared point and the method's state in the format

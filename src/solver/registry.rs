@@ -1,4 +1,4 @@
-//! The registered methods: the crate's own ([`BUILT_IN`], one line each) and those added at run
+//! The registered methods: the crate's own (the `built_in!` list, one line each) and those added at run
 //! time by [`register`]; the [`Method`] handle that names one; and the type-erased stepper the
 //! driver holds, with the versioned saved form of an integrator.
 

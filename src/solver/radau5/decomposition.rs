@@ -69,7 +69,7 @@ pub(super) fn factor(
 
 /// The Jacobian J = ∂f/∂y at the current point (RADCOR label 20: analytic or by finite
 /// differences). A constant J ([`OdeSystem::constant_jacobian`]) is the same everywhere and is
-/// kept in the integrator's cache with its factorisations; otherwise J goes into `work.jac` and
+/// kept in the method's cache with its factorisations; otherwise J goes into `work.jac` and
 /// the factorisations of the old J are dropped (their memory kept as the spare). False if J is
 /// not finite.
 pub(super) fn jacobian_at<S: OdeSystem + ?Sized>(

@@ -41,7 +41,7 @@
 //! A Jacobian that varies is kept across calls too, as RADAU5 keeps it across steps, while Newton
 //! converges fast: a call that ends on every communication point would otherwise evaluate J and
 //! factorise twice at every step. Its entries and the step size of its factorisations are part
-//! of the saved state (the integrator's `KeptJacobian`); a restored integrator rebuilds J and the
+//! of the saved state (its state's `KeptJacobian`); a restored integrator rebuilds J and the
 //! factorisations from them, uncounted, and continues bit-identically. A constant Jacobian
 //! ([`OdeSystem::constant_jacobian`]) and its factorisations are kept in the cache instead,
 //! rebuilt identically after a restore.
@@ -129,7 +129,7 @@ impl Why {
     }
 }
 
-/// Advance `integ` to exactly `t_end` with Radau IIA (called by `Integrator::advance_to*`), with
+/// Advance `integ` to exactly `t_end` with Radau IIA (called through [`OdeMethod::advance`](crate::solver::OdeMethod::advance)), with
 /// the tunables' defaults ([`Radau5Options::default`]).
 pub(crate) fn advance<S: OdeSystem + ?Sized>(
     integ: &mut Stepper<State>,

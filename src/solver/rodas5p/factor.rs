@@ -100,7 +100,7 @@ fn factor(
 }
 
 /// W = I/(h γ) - J for the step size `h`, at the front of `lus`, with the J that `w.jac` (or,
-/// for a constant Jacobian `stamp`, the integrator's cache) holds: for a constant J a kept
+/// for a constant Jacobian `stamp`, the method's cache) holds: for a constant J a kept
 /// factorisation if one was made for this step size (to within `SAME_STEP`) or, if `shorten`,
 /// for a step up to `SHORTER` times shorter, else a new one; for a J that changes from step to
 /// step a new one in the memory of the last (with `by_rows`, the fixed-step driver's, by its

@@ -318,7 +318,7 @@ pub(super) enum Reject {
     Singular,
 }
 
-/// Workspace of `advance`, kept between calls in the integrator's cache (no allocation per
+/// Workspace of `advance`, kept between calls in the method's cache (no allocation per
 /// call); its contents are overwritten before they are read.
 pub(crate) struct Work {
     pub(super) f0: Vec<f64>,
@@ -555,9 +555,9 @@ pub(super) fn eval_f0<S: OdeSystem + ?Sized>(
     }
 }
 
-/// Advance `integ` to exactly `t_end` with Rodas5P (called by `Integrator::advance_to*`), or
+/// Advance `integ` to exactly `t_end` with Rodas5P (called through [`OdeMethod::advance`](crate::solver::OdeMethod::advance)), or
 /// with steps free to run past it up to `limit` (`Integrator::advance_past`): the step that
-/// covers `t_end` is then kept in `integ.state.ahead` and `t_end`'s state read from its dense output.
+/// covers `t_end` is then kept in the state's `ahead` and `t_end`'s state read from its dense output.
 pub(crate) fn advance<S: OdeSystem + ?Sized>(
     integ: &mut Stepper<State>,
     sys: &S,
