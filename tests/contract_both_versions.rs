@@ -611,3 +611,66 @@ both_versions!(
         assert!(m.starts_with(&function), "{m}");
     }
 );
+
+both_versions!(
+    a_state_of_another_format_version_is_refused_naming_both_versions,
+    /// Issue 40: the saved FMU state is a versioned format. The serialised state's header
+    /// carries the version of its layout, and within it the solver method's state carries the
+    /// version of the method's own format (`state_version`), written and checked by the method.
+    /// A state of another version of either is refused with Error, naming both versions; a
+    /// state of this version restores the instance. (The GUID does not change when the solver's
+    /// state does.)
+    fn rule<D: Driver>() {
+        use hydraulic_slewing_plate::fmu::fmu_state::STATE_FORMAT;
+        use hydraulic_slewing_plate::solver::rodas5p::STATE_VERSION;
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.init(0.0), St::Ok);
+        for k in 0..3 {
+            assert_eq!(f.step(k as f64 * 1e-3, 1e-3), St::Ok, "{}", f.last());
+        }
+        let (s, saved) = f.get_state();
+        assert_eq!(s, St::Ok);
+        let bytes = f.serialize(saved);
+        // As serialised, the state reads back.
+        let (s, same) = f.deserialize(&bytes);
+        assert_eq!(s, St::Ok, "{}", f.last());
+        assert_eq!(f.set_state(same), St::Ok, "{}", f.last());
+        f.free_state(same);
+
+        // The header's format version (its eighth byte, a digit).
+        assert_eq!(bytes[7], b'0' + STATE_FORMAT);
+        let older = STATE_FORMAT - 1;
+        let mut old = bytes.clone();
+        old[7] = b'0' + older;
+        let (s, _) = f.deserialize(&old);
+        assert_eq!(s, St::Error);
+        let m = f.last();
+        assert!(m.starts_with(D::PREFIX), "{m}");
+        let both = format!("format version {older}, this FMU reads format version {STATE_FORMAT}");
+        assert!(m.contains(&both), "{m}");
+        assert_short::<D>(&m);
+
+        // The method's state version (the default method is Rodas5P).
+        let mut p = payload(&bytes);
+        let version = find_key(&mut p, "state_version").expect("the solver state's version");
+        assert_eq!(*version, serde_json::json!(STATE_VERSION));
+        *version = serde_json::json!(STATE_VERSION + 1);
+        let (s, _) = f.deserialize(&blob(&p));
+        assert_eq!(s, St::Error);
+        let m = f.last();
+        assert!(m.starts_with(D::PREFIX), "{m}");
+        let both = format!(
+            "rodas5p solver state is of format version {}, this build reads version {STATE_VERSION}",
+            STATE_VERSION + 1
+        );
+        assert!(m.contains(&both), "{m}");
+        assert_short::<D>(&m);
+
+        // The refusal leaves the instance in the error state, from which the state it saved
+        // restores it.
+        assert_eq!(f.step(3e-3, 1e-3), St::Error);
+        assert_eq!(f.set_state(saved), St::Ok, "{}", f.last());
+        assert_eq!(f.step(3e-3, 1e-3), St::Ok, "{}", f.last());
+        f.free_state(saved);
+    }
+);

@@ -26,9 +26,17 @@ pub struct Snapshot<S> {
     pub model: S,
 }
 
-/// Magic bytes at the start of a serialised FMU state.
-const SERIAL_MAGIC: &[u8; 8] = b"HSPFMUS1";
+/// Magic bytes at the start of a serialised FMU state, followed by the digit of its format
+/// version ([`STATE_FORMAT`]).
+const SERIAL_MAGIC: &[u8; 7] = b"HSPFMUS";
 const SERIAL_HEADER: usize = 8 + 8 + 8;
+
+/// The version of the serialised FMU state's format, the eighth byte of its header as an ASCII
+/// digit. Raised with any change of the payload's layout that an older reader would misread;
+/// within it, the solver method's state carries a version of its own (`state_version`, written
+/// and checked by the method). 1: the payload of issue 24; 2: the solver's state as the shared
+/// point and the method's own versioned state (issue 40).
+pub const STATE_FORMAT: u8 = 2;
 
 /// Guards against pointers that are not FMU states of this library (an instance, say, or a state
 /// already freed).
@@ -75,6 +83,7 @@ impl<S: Serialize + for<'de> Deserialize<'de>> SavedState<S> {
                 .map_err(|e| format!("cannot serialise the FMU state: {e}"))?;
             let mut bytes = Vec::with_capacity(SERIAL_HEADER + payload.len());
             bytes.extend_from_slice(SERIAL_MAGIC);
+            bytes.push(b'0' + STATE_FORMAT);
             bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
             bytes.extend_from_slice(&fnv1a64(&payload).to_le_bytes());
             bytes.extend_from_slice(&payload);
@@ -83,12 +92,20 @@ impl<S: Serialize + for<'de> Deserialize<'de>> SavedState<S> {
         Ok(self.serialized.as_deref().unwrap_or_default())
     }
 
-    /// Reads a serialised state, checking its header, length, checksum and GUID.
+    /// Reads a serialised state, checking its header and format version, length, checksum and
+    /// GUID.
     pub fn deserialize(bytes: &[u8], guid: &str) -> Result<Self, String> {
-        if bytes.len() < SERIAL_HEADER || &bytes[..8] != SERIAL_MAGIC {
+        if bytes.len() < SERIAL_HEADER || &bytes[..7] != SERIAL_MAGIC || !bytes[7].is_ascii_digit()
+        {
             return Err(format!(
                 "the serialized FMU state ({} bytes) does not start with this FMU's header",
                 bytes.len()
+            ));
+        }
+        let format = bytes[7] - b'0';
+        if format != STATE_FORMAT {
+            return Err(format!(
+                "the serialized FMU state is of format version {format}, this FMU reads format version {STATE_FORMAT}"
             ));
         }
         let len = u64::from_le_bytes(bytes[8..16].try_into().unwrap_or_default());

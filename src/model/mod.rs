@@ -7,7 +7,7 @@
 //! - [`presets`]: the paper's configurations as named parameter sets (`hsp run --preset NAME`).
 //! - [`compose`]: which fragments make up the model for a parameter set, as one bond graph.
 //! - [`assembly`]: that graph compiled, with its inputs, outputs and states placed among the FMU's
-//!   variables: the [`OdeSystem`] the integrator advances.
+//!   variables: the [`OdeSystem`](crate::solver::OdeSystem) the integrator advances.
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
 //! - [`validity`]: the warnings of the validity monitors at the communication points.
 //! - [`margin`]: the loop-margin monitor, the least damped mode at rest, at initialisation.
@@ -30,13 +30,13 @@ pub mod variables;
 use serde::{Deserialize, Serialize};
 
 use crate::eigen;
-use crate::fmu::logging::Short;
+use crate::fmu::logging::{shorten_numbers, Short};
 use crate::fmu::variables::reals_of;
 use crate::fmu::{
     Causality, Experiment, FmuModel, LogCategory, StepFailure, StepLog, Value, Values, Variable,
 };
 use crate::fragments::validity::Monitor;
-use crate::solver::{Integrator, Method, OdeSystem};
+use crate::solver::Integrator;
 use assembly::Assembled;
 use parameters::Parameters;
 use variables::idx;
@@ -336,9 +336,8 @@ impl FmuModel for HydraulicSlewingPlate {
         // After a communication step shorter than the solver's minimum step, the step size it
         // carries on with is as short and may not grow past that minimum in the next step:
         // let the next step start from a fresh estimate instead.
-        if integrator.h > 0.0 && integrator.h < integrator.options().min_step {
-            integrator.h = 0.0;
-        }
+        let min_step = integrator.options().min_step;
+        integrator.forget_step_size_below(min_step);
         self.step_start.clear();
         self.step_start.extend_from_slice(integrator.x());
         let result = integrator.advance_past(&*system, t_end, limit);
@@ -510,12 +509,13 @@ impl FmuModel for HydraulicSlewingPlate {
         let (Some(system), Some(parameters)) = (&mut self.system, &self.parameters) else {
             return Err("the model was not built".into());
         };
-        check_restored_integrator(
-            integrator,
-            &parameters.solver_options(system),
-            system.dim(),
-            time.unwrap_or(experiment.start_time),
-        )?;
+        integrator
+            .check_restored(
+                &*system,
+                &parameters.solver_options(system),
+                time.unwrap_or(experiment.start_time),
+            )
+            .map_err(|e| shorten_numbers(&e))?;
         if state.inputs.len() != system.inputs().len() {
             return Err(format!(
                 "it holds {} inputs, the model has {}",
@@ -523,9 +523,6 @@ impl FmuModel for HydraulicSlewingPlate {
                 system.inputs().len()
             ));
         }
-        integrator
-            .kept_jac
-            .check(system.dim(), system.jacobian_pattern())?;
         if let Some(u) = state.inputs.iter().find(|u| !u.is_finite()) {
             return Err(format!("a held input is not finite: {u}"));
         }
@@ -563,76 +560,4 @@ fn with_suspects(message: String, values: &Values) -> String {
             changed.join(", ")
         )
     }
-}
-
-/// Checks a restored integrator as strictly as a fresh one: its options must be exactly those
-/// its parameters give (so they pass the same checks), its time the FMU's, its state and step
-/// history finite and of the model's size.
-fn check_restored_integrator(
-    integrator: &Integrator,
-    options: &crate::solver::SolverOptions,
-    dim: usize,
-    time: f64,
-) -> Result<(), String> {
-    if integrator.x().len() != dim {
-        return Err(format!(
-            "its integrator has {} states, the model {dim}",
-            integrator.x().len()
-        ));
-    }
-    if integrator.options() != options {
-        return Err(
-            "its solver options differ from those its parameters give (solver.*, tolerance)".into(),
-        );
-    }
-    options.validate(dim).map_err(|e| e.message)?;
-    if integrator.t().to_bits() != time.to_bits() {
-        return Err(format!(
-            "its integrator is at t = {}, the FMU at t = {}",
-            Short(integrator.t()),
-            Short(time)
-        ));
-    }
-    if let Some((i, x)) = integrator
-        .x()
-        .iter()
-        .enumerate()
-        .find(|(_, x)| !x.is_finite())
-    {
-        return Err(format!("its state x[{i}] = {x} is not finite"));
-    }
-    let h = &integrator.hist;
-    let history = [
-        ("h", integrator.h),
-        ("err_prev", h.err_prev),
-        ("h_acc", h.h_acc),
-        ("err_acc", h.err_acc),
-        ("h_old", h.h_old),
-        ("faccon", h.faccon),
-    ];
-    if let Some((name, v)) = history.iter().find(|(_, v)| !(v.is_finite() && *v >= 0.0)) {
-        return Err(format!(
-            "its integrator's {name} = {} is not a finite non-negative number",
-            Short(*v)
-        ));
-    }
-    if !(h.cont.is_empty() || h.cont.len() == 3 * dim) || h.cont.iter().any(|c| !c.is_finite()) {
-        return Err(format!(
-            "its integrator's interpolation history has {} entries, not 0 or {}, or a non-finite one",
-            h.cont.len(),
-            3 * dim
-        ));
-    }
-    // The fixed-step (real-time) driver's h is the communication step over `substeps`, which
-    // the maximum step does not bound: a state saved after a 1 s real-time step is valid.
-    if options.method != Method::Rodas5PFixed && integrator.h > options.max_step {
-        return Err(format!(
-            "its integrator's next step h = {} is above the maximum step {}",
-            Short(integrator.h),
-            Short(options.max_step)
-        ));
-    }
-    integrator
-        .ahead
-        .check(dim, time, integrator.x(), options.max_step)
 }

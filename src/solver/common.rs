@@ -6,7 +6,8 @@
 
 use nalgebra::DMatrix;
 
-use super::integrator::{Cache, Integrator};
+use super::constant_jacobian::{Cache, Counted};
+use super::method::Stepper;
 use super::{Atol, OdeSystem, SolverError, SolverErrorKind, SolverOptions, Stats};
 
 /// Error weights `atol_i + rtol * max(|a_i|, |b_i|)`, floored at the smallest normal number so
@@ -51,7 +52,7 @@ fn keep_factorisations<L>(slot: &mut Vec<L>, mut lus: Vec<L>, stamp: Option<u64>
     *slot = lus;
 }
 
-/// A method's buffers, kept between `advance` calls in the integrator's cache so that a call
+/// A method's buffers, kept between `advance` calls in the method's cache so that a call
 /// allocates nothing once they exist.
 pub(crate) trait Workspace {
     /// The method's factorisations of its iteration matrices.
@@ -64,45 +65,45 @@ pub(crate) trait Workspace {
     fn spare(&mut self) -> &mut Option<Self::Lu>;
 }
 
-/// Picks a method's two slots in the integrator's cache: its buffers and its factorisations.
-pub(crate) type Slots<W> = fn(&mut Cache) -> (&mut Option<Box<W>>, &mut Vec<<W as Workspace>::Lu>);
-
 /// Runs one method's `advance` body `run` with the method's buffers and factorisations taken out
-/// of the integrator's cache (`slots` picks the method's two slots) and puts them back after,
-/// whatever the outcome: the buffers always, the factorisations of a constant Jacobian for the
-/// next call, and otherwise the memory of the last one as the buffers' spare.
-pub(crate) fn with_kept_memory<W: Workspace, R>(
-    integ: &mut Integrator,
+/// of its cache (`cache` picks it in the method's state) and puts them back after, whatever the
+/// outcome: the buffers always, the factorisations of a constant Jacobian for the next call, and
+/// otherwise the memory of the last one as the buffers' spare.
+pub(crate) fn with_kept_memory<St, W: Workspace, R>(
+    integ: &mut Stepper<St>,
     stamp: Option<u64>,
-    slots: Slots<W>,
-    run: impl FnOnce(&mut Integrator, &mut W, &mut Vec<W::Lu>) -> R,
+    cache: fn(&mut St) -> &mut Cache<W>,
+    run: impl FnOnce(&mut Stepper<St>, &mut W, &mut Vec<W::Lu>) -> R,
 ) -> R {
     let n = integ.x.len();
-    let mut w = match slots(&mut integ.cache).0.take() {
+    let c = cache(&mut integ.state);
+    let mut w = match c.work.take() {
         Some(w) if w.dim() == n => w,
         _ => Box::new(W::new(n)),
     };
-    let cached = integ.cache.stamp;
-    let mut lus = take_factorisations(slots(&mut integ.cache).1, cached, stamp);
+    let cached = c.stamp;
+    let mut lus = take_factorisations(&mut c.lu, cached, stamp);
     let result = run(integ, &mut w, &mut lus);
     if stamp.is_none() {
         let spare = w.spare();
         *spare = lus.pop().or(spare.take());
     }
-    let (work_slot, lu_slot) = slots(&mut integ.cache);
-    *work_slot = Some(w);
-    keep_factorisations(lu_slot, lus, stamp);
+    let c = cache(&mut integ.state);
+    c.work = Some(w);
+    keep_factorisations(&mut c.lu, lus, stamp);
     result
 }
 
 /// J = ∂f/∂x at the integrator's current point, into `jac`, or, for a constant Jacobian
-/// (`stamp`, [`OdeSystem::constant_jacobian`]), the one kept in the integrator's cache
+/// (`stamp`, [`OdeSystem::constant_jacobian`]), the one kept in the method's cache
 /// (evaluated once per stamp). `fd_tolerances` are the (atol, rtol) of a finite-difference
 /// Jacobian (None: the integrator's own). `holds` is the stamp of the constant part of the J
 /// that `jac` holds ([`OdeSystem::jacobian_constant_part`]), None when it holds none: with it,
 /// only the varying entries are written. False if J is not finite.
-pub(crate) fn jacobian_here<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn jacobian_here<St, W: Workspace, S: OdeSystem + ?Sized>(
+    integ: &mut Stepper<St>,
+    kept: fn(&mut St) -> (&mut Counted, &mut Cache<W>),
     sys: &S,
     stamp: Option<u64>,
     f0: &[f64],
@@ -110,17 +111,19 @@ pub(crate) fn jacobian_here<S: OdeSystem + ?Sized>(
     jac: &mut DMatrix<f64>,
     holds: &mut Option<u64>,
 ) -> bool {
-    let Integrator {
+    let Stepper {
         t,
         x,
         stats,
-        counted,
-        cache,
+        state,
         options,
         ..
     } = integ;
     match stamp {
-        Some(stamp) => cache.constant_jacobian(sys, stamp, *t, x, stats, counted),
+        Some(stamp) => {
+            let (counted, cache) = kept(state);
+            cache.constant_jacobian(sys, stamp, *t, x, stats, counted)
+        }
         None => {
             let (atol, rtol) = fd_tolerances.unwrap_or((&options.atol, options.rtol));
             super::jacobian::evaluate(sys, stats, *t, x, f0, atol, rtol, jac, holds)
@@ -166,14 +169,14 @@ pub(crate) fn h_min(opts: &SolverOptions, t: f64) -> f64 {
 /// weights of the error norm: h0 from |x|/|f|, then one explicit Euler probe estimates the
 /// second derivative, and h = (0.01 / max(|f|, |f'|))^(1/(p+1)). The controller corrects it.
 /// From the integrator's current point, with its options; `f0` is f there, `order` is p.
-pub(crate) fn initial_step<S: OdeSystem + ?Sized>(
+pub(crate) fn initial_step<St, S: OdeSystem + ?Sized>(
     sys: &S,
-    integ: &mut Integrator,
+    integ: &mut Stepper<St>,
     f0: &[f64],
     t_end: f64,
     order: f64,
 ) -> f64 {
-    let Integrator {
+    let Stepper {
         options: opts,
         stats,
         t,
@@ -311,11 +314,11 @@ pub(crate) enum NextStep {
 /// `t_end` below [`euler_floor`] (a few ulp of t, or a denormal step) with an explicit Euler
 /// step, error O(remaining^2); counts the attempt
 /// against `max_steps`; clips h to `max_step` and to `limit` (`t_end`, or beyond it when the
-/// caller lets steps go past `t_end`: [`Integrator::advance_past`]); and fails when h has fallen below
+/// caller lets steps go past `t_end`: [`Integrator::advance_past`](super::Integrator::advance_past)); and fails when h has fallen below
 /// the minimum step, with the kind and reason `why_small` gives. A final step shorter than the
 /// minimum is fine: its size is dictated by `t_end`, not by error control.
-pub(crate) fn plan_step(
-    integ: &mut Integrator,
+pub(crate) fn plan_step<St>(
+    integ: &mut Stepper<St>,
     t_end: f64,
     limit: f64,
     f0: &[f64],

@@ -26,7 +26,7 @@
 //! error of the slow, accurate part is O(h⁵) but unmonitored, and a mode of frequency ω is
 //! resolved only while ω h is well below 1. The step's embedded error estimate is still
 //! computed (it comes free with the stages) and the largest of a call is reported by
-//! [`Integrator::fixed_step_error`], relative to the tolerances as the adaptive control would
+//! [`Integrator::fixed_step_error`](super::Integrator::fixed_step_error), relative to the tolerances as the adaptive control would
 //! judge it (above 1: a step the adaptive driver would have rejected).
 //!
 //! A step whose stages are not finite, or whose W is singular, ends the call with an error; the
@@ -35,14 +35,69 @@
 //! 5e-324 s step is) is one explicit Euler step instead, as in the adaptive drivers.
 
 use super::common::{euler_floor, Outputs};
-use super::integrator::Integrator;
+use super::method::OdeMethod;
+use super::method::Stepper;
+use super::rodas5p::State;
 use super::rodas5p::{self, Reject};
-use super::{OdeSystem, SolverError, SolverErrorKind};
+use super::{OdeSystem, SolverError, SolverErrorKind, SolverOptions};
+
+/// Rodas5P's step at a fixed step size, for real time (see the module documentation). Its state
+/// is Rodas5P's ([`State`]): the controller's error field holds the largest error estimate of
+/// the last call; no step is ever kept past the reported point.
+pub struct Rodas5PFixed;
+
+/// The version of the fixed-step driver's saved state (Rodas5P's [`State`]).
+pub const STATE_VERSION: u32 = 1;
+
+impl OdeMethod for Rodas5PFixed {
+    const NAME: &'static str = "rodas5p-fixed";
+    const ALIASES: &'static [&'static str] = &["rodas5pfixed", "fixed"];
+    const STATE_VERSION: u32 = STATE_VERSION;
+    // h is the communication step over `substeps`, which the maximum step does not bound.
+    const H_WITHIN_MAX_STEP: bool = false;
+    type State = State;
+
+    fn fresh(_: &SolverOptions, _: usize) -> State {
+        State::default()
+    }
+
+    /// Real time: the caller's step, in equal substeps, never past t_end (`limit` is ignored).
+    fn advance(
+        run: &mut Stepper<State>,
+        sys: &dyn OdeSystem,
+        t_end: f64,
+        _limit: f64,
+        times: &[f64],
+        out: &mut dyn FnMut(f64, &[f64]),
+    ) -> Result<(), SolverError> {
+        advance(run, sys, t_end, times, out)
+    }
+
+    fn notify_discontinuity(state: &mut State) {
+        <rodas5p::Rodas5P as OdeMethod>::notify_discontinuity(state);
+    }
+
+    fn reset(state: &mut State, resized: bool) {
+        <rodas5p::Rodas5P as OdeMethod>::reset(state, resized);
+    }
+
+    fn after_failure(state: &mut State) {
+        <rodas5p::Rodas5P as OdeMethod>::after_failure(state);
+    }
+
+    fn check_restored(run: &Stepper<State>, _: Option<&[Vec<u32>]>) -> Result<(), String> {
+        rodas5p::check_restored(run)
+    }
+
+    fn error_estimate(state: &State) -> f64 {
+        state.hist.err_prev
+    }
+}
 
 /// Advances `integ` to exactly `t_end` in `integ.options.substeps` equal Rodas5P steps (called
-/// by `Integrator::advance_to*` for [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed)).
-pub(crate) fn advance<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+/// through [`OdeMethod::advance`] for [`Method::Rodas5PFixed`](super::Method::Rodas5PFixed)).
+fn advance<S: OdeSystem + ?Sized>(
+    integ: &mut Stepper<State>,
     sys: &S,
     t_end: f64,
     times: &[f64],
@@ -56,7 +111,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
         let t0 = integ.t;
         let h = (t_end - t0) / f64::from(substeps);
         let mut outputs = Outputs::new(times, t0, n);
-        integ.hist.err_prev = 0.0;
+        integ.state.hist.err_prev = 0.0;
         if h <= euler_floor(t0) {
             // A step too short for Rodas5P's 1/h terms (an importer's 5e-324 s): one explicit
             // Euler step over the whole call, as the adaptive drivers take (see `euler_floor`).
@@ -85,7 +140,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             rodas5p::jacobian_at_point(integ, sys, w, stamp, autonomous)?;
             // Never shortened: the step is the caller's.
             let (h, result) =
-                rodas5p::factorised_step(integ, sys, w, lus, stamp, h, false, autonomous);
+                rodas5p::factorised_step(integ, sys, w, lus, stamp, h, false, true, autonomous);
             let err = result.map_err(|why| {
                 let (kind, what) = match why {
                     Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
@@ -125,7 +180,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
             integ.x.copy_from_slice(&w.x1);
             integ.t = t1;
             integ.stats.accepted += 1;
-            integ.hist.err_prev = integ.hist.err_prev.max(err);
+            integ.state.hist.err_prev = integ.state.hist.err_prev.max(err);
         }
         integ.h = h;
         Ok(())

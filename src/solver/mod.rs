@@ -6,6 +6,14 @@
 //!
 //! What a newcomer needs to know:
 //!
+//! * **Methods behind one trait.** Each method is a module with its own state behind
+//!   [`OdeMethod`] (as diffsol's `OdeSolverMethod`, and as each of Hairer's codes keeps its own
+//!   WORK arrays): [`rodas5p`], [`radau5`], [`fixed`]. The [`Integrator`] is the driver they
+//!   share: it checks every call's arguments, keeps the point every method advances (a
+//!   [`Stepper`]: options, t, x, the next step size, the counters) and hands the steps to the
+//!   method named by [`SolverOptions::method`]. A method is registered once ([`Method`]'s
+//!   constants for the crate's, [`register`] for one added at run time); see CONTRIBUTING.md,
+//!   "Adding a solver method".
 //! * **Methods.** [`Method::Rodas5P`] is the linearly implicit Rosenbrock method of
 //!   Steinebach (BIT Numer. Math. 63:27, 2023), 8 stages, order 5 with an embedded order-4
 //!   estimate, stiffly accurate, with an order-4 dense output; see [`rodas5p`].
@@ -30,7 +38,11 @@
 //!   changes the inputs or tolerances).
 //! * **Checkpointing.** [`Integrator`] is `Clone + Serialize + Deserialize` and holds
 //!   everything that influences later results (t, x, h, controller history, Radau's Newton
-//!   start polynomial, statistics, and the Jacobian Radau5 goes on with). LU factors are *not*
+//!   start polynomial, statistics, and the Jacobian Radau5 goes on with). Its saved form is the
+//!   shared point (`options`, `t`, `x`, `h`, `stats`) and the method's own state (`state`) in
+//!   the method's format, with that format's version (`state_version`,
+//!   [`OdeMethod::STATE_VERSION`]); a saved state of another version is refused when read,
+//!   with a message naming both versions. LU factors are *not*
 //!   saved: every `advance_to` call evaluates f afresh at its start (the inputs may have changed
 //!   since); Rodas5P evaluates J at every step, Radau5 keeps a varying J across calls while
 //!   Newton converges fast, as RADAU5 keeps it across steps, with its entries and the step size
@@ -101,18 +113,23 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 mod common;
+mod constant_jacobian;
 mod dense;
 pub mod fixed;
 mod integrator;
 pub mod jacobian;
 pub mod linalg;
+mod method;
 pub mod radau5;
+mod registry;
 pub mod rodas5p;
 mod step_map;
 pub mod testset;
 
 pub use integrator::Integrator;
 pub use jacobian::finite_difference_jacobian;
+pub use method::{OdeMethod, Stepper};
+pub use registry::{methods, register, Method};
 
 /// An ODE system x' = f(t, x). Inputs (e.g. zero-order-held FMU inputs) are held by the model
 /// itself; the solver only sees f.
@@ -181,45 +198,6 @@ pub trait OdeSystem {
     /// minimal API; the default keeps existing implementors unchanged.
     fn time_derivative(&self, _t: f64, _x: &[f64], _dfdt: &mut [f64]) -> bool {
         false
-    }
-}
-
-/// Integration method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Method {
-    /// Rosenbrock method Rodas5P (Steinebach 2023). Default.
-    Rodas5P,
-    /// Radau IIA, 3 stages, order 5 (Hairer & Wanner, RADAU5).
-    Radau5,
-    /// Rodas5P's step at a fixed step size, for real time: every call to `t_end` takes
-    /// [`SolverOptions::substeps`] equal steps, none rejected, at a cost independent of the
-    /// solution (see [`fixed`]). No error control: the tolerances only scale the error estimate
-    /// it reports.
-    Rodas5PFixed,
-}
-
-impl Method {
-    /// Lower-case name as used on command lines ("rodas5p", "radau5").
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Rodas5P => "rodas5p",
-            Method::Radau5 => "radau5",
-            Method::Rodas5PFixed => "rodas5p-fixed",
-        }
-    }
-}
-
-impl std::str::FromStr for Method {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s.to_ascii_lowercase().as_str() {
-            "rodas5p" => Ok(Method::Rodas5P),
-            "radau5" | "radau" | "radauiia5" => Ok(Method::Radau5),
-            "rodas5p-fixed" | "rodas5pfixed" | "fixed" => Ok(Method::Rodas5PFixed),
-            _ => Err(format!(
-                "unknown method {s:?}; expected rodas5p, radau5 or rodas5p-fixed"
-            )),
-        }
     }
 }
 

@@ -13,7 +13,8 @@ pub fn payload(bytes: &[u8]) -> serde_json::Value {
 
 pub fn blob(payload: &serde_json::Value) -> Vec<u8> {
     let p = serde_json::to_vec(payload).unwrap();
-    let mut b = b"HSPFMUS1".to_vec();
+    let mut b = b"HSPFMUS".to_vec();
+    b.push(b'0' + hydraulic_slewing_plate::fmu::fmu_state::STATE_FORMAT);
     b.extend_from_slice(&(p.len() as u64).to_le_bytes());
     b.extend_from_slice(&fnv1a64(&p).to_le_bytes());
     b.extend_from_slice(&p);

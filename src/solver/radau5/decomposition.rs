@@ -7,11 +7,13 @@ use std::sync::Arc;
 use nalgebra::{Complex, DMatrix};
 
 use super::coefficients::inverse_eigenvalues;
+use super::state::State;
 use super::workspace::Work;
 use super::Radau5Options;
 use crate::solver::common::jacobian_here;
-use crate::solver::integrator::{front_factorisation, Integrator, SAME_STEP};
+use crate::solver::constant_jacobian::{front_factorisation, SAME_STEP};
 use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition};
+use crate::solver::method::Stepper;
 use crate::solver::step_map::StepMap;
 use crate::solver::OdeSystem;
 
@@ -67,11 +69,11 @@ pub(super) fn factor(
 
 /// The Jacobian J = ∂f/∂y at the current point (RADCOR label 20: analytic or by finite
 /// differences). A constant J ([`OdeSystem::constant_jacobian`]) is the same everywhere and is
-/// kept in the integrator's cache with its factorisations; otherwise J goes into `work.jac` and
+/// kept in the method's cache with its factorisations; otherwise J goes into `work.jac` and
 /// the factorisations of the old J are dropped (their memory kept as the spare). False if J is
 /// not finite.
 pub(super) fn jacobian_at<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     work: &mut Work,
     lus: &mut Vec<Lu>,
@@ -87,6 +89,7 @@ pub(super) fn jacobian_at<S: OdeSystem + ?Sized>(
     let fd = Some((&work.atol_for_fd, rtol));
     jacobian_here(
         integ,
+        |s: &mut State| (&mut s.counted, &mut s.cache),
         sys,
         stamp,
         &work.f0,
@@ -107,7 +110,7 @@ pub(super) fn jacobian_at<S: OdeSystem + ?Sized>(
 /// same bits). A changing J is refactorised in the memory of its last factorisation, with the
 /// partition of the system's structural pattern (`structure`) if it has one.
 pub(super) fn decompose(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     work: &mut Work,
     lus: &mut Vec<Lu>,
     (stamp, structure): (Option<u64>, Option<&[Vec<u32>]>),
@@ -123,9 +126,10 @@ pub(super) fn decompose(
     match stamp {
         Some(_) => {
             let lu_h = integ
+                .state
                 .counted
                 .factorisation_step(h, &mut integ.stats, 2, false);
-            let jac = &integ.cache.jac;
+            let jac = &integ.state.cache.jac;
             front_factorisation(
                 lus,
                 lu_h,

@@ -2,13 +2,14 @@
 //! (CONTR5).
 
 use super::coefficients::nodes;
+use super::state::State;
 use crate::solver::common::Outputs;
-use crate::solver::integrator::Integrator;
+use crate::solver::method::Stepper;
 
 /// The collocation polynomial of an accepted step (CONT(N+1..4N) of RADAU5) from its stage
 /// increments, into the integrator's history, and the outputs due within the step from it.
 pub(super) fn collocation_polynomial(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     (z1, z2, z3): (&[f64], &[f64], &[f64]),
     x1: &[f64],
     outputs: &mut Outputs,
@@ -22,7 +23,7 @@ pub(super) fn collocation_polynomial(
     let (c1m1, c2m1, c1mc2) = (c1 - 1.0, c2 - 1.0, c1 - c2);
     let (r_c1m1, r_c2m1, r_c1mc2, r_c1, r_c2) =
         (1.0 / c1m1, 1.0 / c2m1, 1.0 / c1mc2, 1.0 / c1, 1.0 / c2);
-    let mut cont = std::mem::take(&mut integ.hist.cont);
+    let mut cont = std::mem::take(&mut integ.state.hist.cont);
     cont.resize(3 * n, 0.0);
     for i in 0..n {
         let k1 = (z2[i] - z3[i]) * r_c2m1;
@@ -36,7 +37,7 @@ pub(super) fn collocation_polynomial(
     if outputs.pending(t1) {
         outputs.emit(t, h, t1, x1, &mut |th, buf| dense(x1, &cont, th, buf), out);
     }
-    integ.hist.cont = cont;
+    integ.state.hist.cont = cont;
 }
 
 /// The collocation polynomial of a step at θ ∈ [0, 1] of it (RADAU5's CONTR5, with

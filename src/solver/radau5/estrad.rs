@@ -4,10 +4,11 @@ use nalgebra::DVector;
 
 use super::coefficients::error_weights;
 use super::decomposition::Lu;
+use super::state::State;
 use super::workspace::Work;
 use super::{Radau5Options, Why};
 use crate::solver::common::{all_finite, eval};
-use crate::solver::integrator::Integrator;
+use crate::solver::method::Stepper;
 use crate::solver::OdeSystem;
 
 /// The local error estimate (RADAU5's ESTRAD; Hairer & Wanner IV.8, eqs. 8.19–8.20):
@@ -15,7 +16,7 @@ use crate::solver::OdeSystem;
 /// filter suppressing the stiff components. On the first step or after a rejection an estimate
 /// ≥ 1 is refined once with f(y0 + err) in place of f(y0), as ESTRAD does.
 pub(super) fn estrad<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     work: &mut Work,
     lu: &Lu,
@@ -46,7 +47,7 @@ pub(super) fn estrad<S: OdeSystem + ?Sized>(
         (s / n as f64).sqrt().max(opts.err_floor)
     };
     let mut err = norm(rr);
-    if err >= 1.0 && (integ.hist.first || integ.hist.last_rejected) {
+    if err >= 1.0 && (integ.state.hist.first || integ.state.hist.last_rejected) {
         // Refined estimate with one more f evaluation (stiff components).
         for i in 0..n {
             ytmp[i] = integ.x[i] + rr[i];

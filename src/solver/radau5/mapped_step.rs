@@ -5,10 +5,11 @@ use nalgebra::Complex;
 
 use super::coefficients::{error_weights, T, TI};
 use super::decomposition::Lu;
+use super::state::State;
 use super::workspace::Work;
 use super::Radau5Options;
-use crate::solver::integrator::Integrator;
 use crate::solver::linalg::Factorisation;
+use crate::solver::method::Stepper;
 
 /// Steps taken with one factorisation before its step map is built, ⌈n /
 /// [`map_after_divisor`](Radau5Options::map_after_divisor)⌉ (n/2 by default): building costs
@@ -24,7 +25,7 @@ pub(super) fn map_after(n: usize, opts: &Radau5Options) -> u32 {
 /// Newton iteration converged in one iteration (it has the exact J of an affine f), so the
 /// convergence-rate memory ages as in [`newton`](super::newton::newton).
 pub(super) fn mapped_step(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     work: &mut Work,
     lu: &mut Lu,
     opts: &Radau5Options,
@@ -49,12 +50,14 @@ pub(super) fn mapped_step(
         )
     };
     if !lu.map.is_built() {
-        lu.map.build(2 * n, &integ.cache.jac, c0, response);
+        lu.map.build(2 * n, &integ.state.cache.jac, c0, response);
     } else if !lu.map.fits(c0) {
         lu.map.refit(c0, response);
     }
-    integ.hist.faccon =
-        crate::math::powf(integ.hist.faccon.max(f64::EPSILON), opts.faccon_exponent);
+    integ.state.hist.faccon = crate::math::powf(
+        integ.state.hist.faccon.max(f64::EPSILON),
+        opts.faccon_exponent,
+    );
     lu.map.apply(&integ.x, &mut work.mapped);
     let (z3, e) = work.mapped.split_at(n);
     let mut sum = 0.0;

@@ -41,7 +41,7 @@
 //! A Jacobian that varies is kept across calls too, as RADAU5 keeps it across steps, while Newton
 //! converges fast: a call that ends on every communication point would otherwise evaluate J and
 //! factorise twice at every step. Its entries and the step size of its factorisations are part
-//! of the saved state (the integrator's `KeptJacobian`); a restored integrator rebuilds J and the
+//! of the saved state (its state's `KeptJacobian`); a restored integrator rebuilds J and the
 //! factorisations from them, uncounted, and continues bit-identically. A constant Jacobian
 //! ([`OdeSystem::constant_jacobian`]) and its factorisations are kept in the cache instead,
 //! rebuilt identically after a restore.
@@ -77,17 +77,17 @@ mod mapped_step;
 mod newton;
 mod options;
 mod radcor;
+mod state;
 mod step_control;
 mod tolerances;
 mod workspace;
 
 pub use coefficients::{error_weights, inverse_eigenvalues, nodes, T, TI};
-pub(crate) use decomposition::Lu;
 pub use options::Radau5Options;
-pub(crate) use workspace::Work;
+pub use state::{Radau5, State, STATE_VERSION};
 
 use super::common::with_kept_memory;
-use super::integrator::Integrator;
+use super::method::Stepper;
 use super::{OdeSystem, SolverError, SolverErrorKind};
 use kept_jacobian::{keep_jacobian, resume_kept_jacobian};
 use radcor::radcor;
@@ -129,10 +129,10 @@ impl Why {
     }
 }
 
-/// Advance `integ` to exactly `t_end` with Radau IIA (called by `Integrator::advance_to*`), with
+/// Advance `integ` to exactly `t_end` with Radau IIA (called through [`OdeMethod::advance`](crate::solver::OdeMethod::advance)), with
 /// the tunables' defaults ([`Radau5Options::default`]).
 pub(crate) fn advance<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     t_end: f64,
     times: &[f64],
@@ -143,7 +143,7 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
     with_kept_memory(
         integ,
         stamp,
-        |c| (&mut c.radau, &mut c.radau_lu),
+        |s: &mut State| &mut s.cache,
         |integ, w, lus| {
             let mut need_jac = !resume_kept_jacobian(integ, sys, w, lus, stamp);
             let jac_evals = integ.stats.jac_evals;

@@ -5,25 +5,29 @@ use nalgebra::Complex;
 
 use super::coefficients::{inverse_eigenvalues, nodes, T, TI};
 use super::decomposition::Lu;
+use super::state::State;
 use super::tolerances::Tolerances;
 use super::workspace::Work;
 use super::{Radau5Options, Why};
 use crate::solver::common::{all_finite, eval};
-use crate::solver::integrator::Integrator;
+use crate::solver::method::Stepper;
 use crate::solver::OdeSystem;
 
 /// Starting values of the simplified Newton iteration (RADCOR, "starting values for Newton
 /// iteration"; Hairer & Wanner IV.8, "starting values"): Z_i⁰ = q(c_i h), the previous step's collocation
 /// polynomial q extrapolated, and W⁰ = T⁻¹ Z⁰; zero on the first step or when there is no
 /// polynomial.
-pub(super) fn start_values(integ: &Integrator, work: &mut Work, h: f64) {
+pub(super) fn start_values(integ: &Stepper<State>, work: &mut Work, h: f64) {
     let n = integ.x.len();
     let Work {
         z: [z1, z2, z3],
         w: [w1, w2, w3],
         ..
     } = work;
-    if integ.hist.first || integ.hist.cont.len() != 3 * n || integ.hist.h_old <= 0.0 {
+    if integ.state.hist.first
+        || integ.state.hist.cont.len() != 3 * n
+        || integ.state.hist.h_old <= 0.0
+    {
         z1.fill(0.0);
         z2.fill(0.0);
         z3.fill(0.0);
@@ -34,9 +38,9 @@ pub(super) fn start_values(integ: &Integrator, work: &mut Work, h: f64) {
     }
     let (c1, c2) = nodes();
     let (c1m1, c2m1) = (c1 - 1.0, c2 - 1.0);
-    let c3q = h / integ.hist.h_old;
+    let c3q = h / integ.state.hist.h_old;
     let (c1q, c2q) = (c1 * c3q, c2 * c3q);
-    let cont = &integ.hist.cont;
+    let cont = &integ.state.hist.cont;
     for i in 0..n {
         let (k1, k2, k3) = (cont[i], cont[n + i], cont[2 * n + i]);
         let p = |q: f64| q * (k1 + (q - c2m1) * (k2 + (q - c1m1) * k3));
@@ -63,7 +67,7 @@ pub(super) struct Newton {
 /// η_k ‖ΔW^k‖ ≤ κ Tol, η_k = θ_k/(1 - θ_k); give up early (with a factor for h) when the
 /// predicted error after NIT iterations is too large. Leaves Z and W in `work`.
 pub(super) fn newton<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     work: &mut Work,
     lu: &Lu,
@@ -77,8 +81,10 @@ pub(super) fn newton<S: OdeSystem + ?Sized>(
     let (u1, alph, beta) = inverse_eigenvalues();
     let fac1 = u1 / h;
     let (alphn, betan) = (alph / h, beta / h);
-    integ.hist.faccon =
-        crate::math::powf(integ.hist.faccon.max(f64::EPSILON), opts.faccon_exponent);
+    integ.state.hist.faccon = crate::math::powf(
+        integ.state.hist.faccon.max(f64::EPSILON),
+        opts.faccon_exponent,
+    );
     let mut theta = opts.thet;
     let mut newt = 0;
     let nit = opts.nit;
@@ -138,9 +144,9 @@ pub(super) fn newton<S: OdeSystem + ?Sized>(
             };
             thqold = thq;
             if theta < opts.theta_diverge {
-                integ.hist.faccon = theta / (1.0 - theta);
-                let dyth =
-                    integ.hist.faccon * dyno * theta.powi((nit - 1 - newt) as i32) / tol.fnewt;
+                integ.state.hist.faccon = theta / (1.0 - theta);
+                let dyth = integ.state.hist.faccon * dyno * theta.powi((nit - 1 - newt) as i32)
+                    / tol.fnewt;
                 if dyth >= 1.0 {
                     // Would not converge within NIT iterations: smaller step.
                     let qnewt = dyth.clamp(opts.qnewt_min, opts.qnewt_max);
@@ -161,7 +167,7 @@ pub(super) fn newton<S: OdeSystem + ?Sized>(
             z2[i] = T[1][0] * w1[i] + T[1][1] * w2[i] + T[1][2] * w3[i];
             z3[i] = T[2][0] * w1[i] + w2[i];
         }
-        if integ.hist.faccon * dyno <= tol.fnewt {
+        if integ.state.hist.faccon * dyno <= tol.fnewt {
             return Ok(Newton {
                 iterations: newt,
                 theta,

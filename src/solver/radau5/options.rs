@@ -84,6 +84,16 @@ pub struct Radau5Options {
     /// ([`theta_diverge`](Radau5Options::theta_diverge)) or out of iterations. RADCOR's
     /// "unexpected step-rejection", label 78, H = H*0.5D0. Default 0.5, RADAU5's.
     pub unexpected_reject: f64,
+    /// Most singular iteration matrices in one call: at the `nsing`-th the call gives up with
+    /// [`SolverErrorKind::SingularMatrix`](crate::solver::SolverErrorKind::SingularMatrix)
+    /// instead of halving h again. RADAU5's NSING (RADCOR, label 78: `NSING=NSING+1; IF
+    /// (NSING.GE.5) GOTO 176`, "MATRIX IS REPEATEDLY SINGULAR", IDID = −4), counted over the
+    /// call, not reset by an accepted step. Default 5, RADAU5's. Why give up: a singular
+    /// (γ/h) I − J means γ/h (or (α ± iβ)/h) is an eigenvalue of J, or J's entries swamp the
+    /// diagonal; halving h a few times moves past an eigenvalue, and a matrix that stays
+    /// singular after that will stay so (without the limit the step was halved up to
+    /// `max_consecutive_rejections` = 50 times, to 1e-15 of itself, before failing).
+    pub nsing: u32,
     /// Factor of h when the first step (of a start, or after a discontinuity) is rejected by
     /// the error test, in place of the controller's proposal. RADCOR's H = H*0.1D0 (IF FIRST).
     /// Default 0.1, RADAU5's.
@@ -127,6 +137,7 @@ impl Default for Radau5Options {
             qnewt_min: 1e-4,
             qnewt_max: 20.0,
             unexpected_reject: 0.5,
+            nsing: 5,
             first_reject: 0.1,
             err_floor: 1e-10,
             erracc_floor: 1e-2,
@@ -153,6 +164,7 @@ mod tests {
             (0.8, 1e-4, 20.0)
         );
         assert_eq!((o.unexpected_reject, o.first_reject), (0.5, 0.1));
+        assert_eq!(o.nsing, 5);
         assert_eq!((o.err_floor, o.erracc_floor), (1e-10, 1e-2));
         assert_eq!((o.map_max_dim, o.map_after_divisor), (128, 2));
     }

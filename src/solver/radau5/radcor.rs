@@ -8,6 +8,7 @@ use super::decomposition::{decompose, jacobian_at, Lu};
 use super::estrad::estrad;
 use super::mapped_step::{map_after, mapped_step};
 use super::newton::{newton, start_values, Newton};
+use super::state::State;
 use super::step_control::{accept, step_size};
 use super::tolerances::{set_scal, transformed_tolerances, Tolerances};
 use super::workspace::Work;
@@ -15,7 +16,7 @@ use super::{nonfinite_here, Radau5Options, Why};
 use crate::solver::common::{
     all_finite, euler_floor, eval, initial_step, plan_step, NextStep, Outputs,
 };
-use crate::solver::integrator::Integrator;
+use crate::solver::method::Stepper;
 use crate::solver::{OdeSystem, SolverError, SolverErrorKind};
 
 /// Step loop of RADAU5 (subroutine RADCOR): plans each step, computes J where needed (RADCOR
@@ -25,7 +26,7 @@ use crate::solver::{OdeSystem, SolverError, SolverErrorKind};
 /// ([`mapped_step`]) in place of the Newton iteration and the error estimate.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn radcor<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     opts: &Radau5Options,
     t_end: f64,
@@ -59,7 +60,7 @@ pub(super) fn radcor<S: OdeSystem + ?Sized>(
                     continue;
                 }
                 // Rejected by the error test.
-                let first = integ.hist.first;
+                let first = integ.state.hist.first;
                 (if first { h * opts.first_reject } else { hnew }, Why::Error)
             }
             Err((why, fac)) => (h * fac, why),
@@ -107,6 +108,8 @@ struct StepLoop<'a, S: ?Sized> {
     jac_fresh: bool,
     attempts: u64,
     consecutive_rejections: u32,
+    /// Singular iteration matrices in this call (RADAU5's NSING; see [`Radau5Options::nsing`]).
+    singular: u32,
     /// Why the last attempt was rejected.
     why: Why,
     outputs: Outputs<'a>,
@@ -117,7 +120,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     /// (unless the steps may be mapped and there is a step size) and the initial step size if
     /// there is none.
     fn start(
-        integ: &mut Integrator,
+        integ: &mut Stepper<State>,
         sys: &'a S,
         opts: &'a Radau5Options,
         work: &mut Work,
@@ -141,6 +144,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
             jac_fresh: false,
             attempts: 0,
             consecutive_rejections: 0,
+            singular: 0,
             why: Why::Error,
             outputs: Outputs::new(times, integ.t, n),
         };
@@ -154,7 +158,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     }
 
     /// f at the integrator's current point into `work.f0`, unless it is there already.
-    fn f0_here(&mut self, integ: &mut Integrator, work: &mut Work) -> Result<(), SolverError> {
+    fn f0_here(&mut self, integ: &mut Stepper<State>, work: &mut Work) -> Result<(), SolverError> {
         if !self.f0_fresh {
             eval(self.sys, &mut integ.stats, integ.t, &integ.x, &mut work.f0);
             if !all_finite(&work.f0) {
@@ -169,7 +173,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     /// reached (a remnant before it below [`euler_floor`] covered by an Euler step from f0).
     fn plan(
         &mut self,
-        integ: &mut Integrator,
+        integ: &mut Stepper<State>,
         work: &mut Work,
         t_end: f64,
     ) -> Result<Option<(f64, bool, f64)>, SolverError> {
@@ -198,7 +202,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     /// finite.
     fn jacobian(
         &mut self,
-        integ: &mut Integrator,
+        integ: &mut Stepper<State>,
         work: &mut Work,
         lus: &mut Vec<Lu>,
     ) -> Result<(), SolverError> {
@@ -223,7 +227,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     /// not finite at the step's start.
     fn attempt(
         &mut self,
-        integ: &mut Integrator,
+        integ: &mut Stepper<State>,
         work: &mut Work,
         lus: &mut Vec<Lu>,
         h: f64,
@@ -242,7 +246,9 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
             let err = mapped_step(integ, work, lu, opts);
             // ESTRAD's refinement after a rejection or on the first step needs f at a
             // point off the map: such an attempt goes the ordinary way.
-            if err.is_finite() && (err < 1.0 || !(integ.hist.first || integ.hist.last_rejected)) {
+            if err.is_finite()
+                && (err < 1.0 || !(integ.state.hist.first || integ.state.hist.last_rejected))
+            {
                 let newton = Newton {
                     iterations: 1,
                     theta: opts.thet,
@@ -273,11 +279,11 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     /// May the attempt ending at `t1` be a mapped step? For a mappable system, with no output
     /// time within the step, once the front factorisation has served [`map_after`] steps, and
     /// with finite offsets f(t, 0) (evaluated when first asked in this call).
-    fn may_map(&mut self, integ: &mut Integrator, work: &mut Work, t1: f64) -> bool {
+    fn may_map(&mut self, integ: &mut Stepper<State>, work: &mut Work, t1: f64) -> bool {
         let sys = self.sys;
         self.mappable
             && !self.outputs.pending(t1)
-            && integ.counted.front_steps >= map_after(integ.x.len(), self.opts)
+            && integ.state.counted.front_steps >= map_after(integ.x.len(), self.opts)
             && *self.offsets.get_or_insert_with(|| {
                 work.ytmp.fill(0.0);
                 eval(sys, &mut integ.stats, integ.t, &work.ytmp, &mut work.c0);
@@ -293,7 +299,7 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
     /// while θ ≤ THET.
     fn accepted(
         &mut self,
-        integ: &mut Integrator,
+        integ: &mut Stepper<State>,
         work: &mut Work,
         step: &Attempt,
         (t, h, t1): (f64, f64, f64),
@@ -303,14 +309,14 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
         let (outputs, tol) = (&mut self.outputs, &self.tol);
         accept(integ, work, outputs, self.out, tol, (t, h, t1), step.mapped)?;
         if self.stamp.is_some() {
-            integ.counted.front_steps = integ.counted.front_steps.saturating_add(1);
+            integ.state.counted.front_steps = integ.state.counted.front_steps.saturating_add(1);
         }
         self.consecutive_rejections = 0;
         self.why = Why::Error;
-        if integ.hist.last_rejected {
+        if integ.state.hist.last_rejected {
             hnew = hnew.min(h);
         }
-        integ.hist.last_rejected = false;
+        integ.state.hist.last_rejected = false;
         hnew = hnew.min(integ.options.max_step);
         if last {
             integ.h = hnew.max(h_proposed);
@@ -340,20 +346,34 @@ impl<'a, S: OdeSystem + ?Sized> StepLoop<'a, S> {
 
     /// After a rejected attempt of size `h` from `t` (RADCOR, "step is rejected" and label 78):
     /// the next attempt's size `h_next`; RADAU5 recomputes J unless it is already current. An
-    /// error after more than `max_consecutive_rejections` in a row.
+    /// error at the [`Radau5Options::nsing`]-th singular matrix of the call, or after more than
+    /// `max_consecutive_rejections` in a row.
     fn rejected(
         &mut self,
-        integ: &mut Integrator,
+        integ: &mut Stepper<State>,
         (t, h, h_next): (f64, f64, f64),
         why: Why,
     ) -> Result<(), SolverError> {
         integ.h = h_next;
         self.why = why;
         integ.stats.rejected += 1;
-        integ.hist.last_rejected = true;
+        integ.state.hist.last_rejected = true;
         self.consecutive_rejections += 1;
         if !self.jac_fresh {
             *self.need_jac = true;
+        }
+        if why == Why::Singular {
+            self.singular += 1;
+            if self.singular >= self.opts.nsing {
+                return Err(SolverError::new(
+                    SolverErrorKind::SingularMatrix,
+                    t,
+                    format!(
+                        "the iteration matrix was singular {} times in this call (RADAU5's NSING = {}; last h = {h:e})",
+                        self.singular, self.opts.nsing
+                    ),
+                ));
+            }
         }
         let rejections = self.consecutive_rejections;
         if rejections > integ.options.max_consecutive_rejections {

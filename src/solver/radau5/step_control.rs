@@ -2,11 +2,12 @@
 //! "step is accepted").
 
 use super::dense_output::collocation_polynomial;
+use super::state::State;
 use super::tolerances::{set_scal, Tolerances};
 use super::workspace::Work;
 use super::{nonfinite_here, Radau5Options};
 use crate::solver::common::{all_finite, Outputs};
-use crate::solver::integrator::Integrator;
+use crate::solver::method::Stepper;
 use crate::solver::SolverError;
 
 /// The step size proposed after a step of size `h` with error `err` and `newt` Newton
@@ -15,7 +16,7 @@ use crate::solver::SolverError;
 /// [FACR, FACL]; for an accepted step Gustafsson's predictive controller (eq. 8.25) may shorten
 /// it, and its memory (the last accepted h and error) is updated.
 pub(super) fn step_size(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     opts: &Radau5Options,
     err: f64,
     h: f64,
@@ -27,16 +28,16 @@ pub(super) fn step_size(
     let mut quot = facr.max(facl.min(crate::math::powf(err, 0.25) / fac));
     let mut hnew = h / quot;
     if err < 1.0 {
-        if !integ.hist.first && integ.hist.h_acc > 0.0 {
-            let facgus = (integ.hist.h_acc / h)
-                * crate::math::powf(err * err / integ.hist.err_acc, 0.25)
+        if !integ.state.hist.first && integ.state.hist.h_acc > 0.0 {
+            let facgus = (integ.state.hist.h_acc / h)
+                * crate::math::powf(err * err / integ.state.hist.err_acc, 0.25)
                 / safe;
             let facgus = facgus.clamp(facr, facl);
             quot = quot.max(facgus);
             hnew = h / quot;
         }
-        integ.hist.h_acc = h;
-        integ.hist.err_acc = err.max(opts.erracc_floor);
+        integ.state.hist.h_acc = h;
+        integ.state.hist.err_acc = err.max(opts.erracc_floor);
     }
     hnew
 }
@@ -48,7 +49,7 @@ pub(super) fn step_size(
 /// ordinary step starts Newton from zero, which on the affine system it was made for costs
 /// nothing: one iteration converges from anywhere).
 pub(super) fn accept(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     work: &mut Work,
     outputs: &mut Outputs,
     out: &mut dyn FnMut(f64, &[f64]),
@@ -73,12 +74,12 @@ pub(super) fn accept(
         return Err(nonfinite_here(t));
     }
     if mapped {
-        integ.hist.cont.clear();
+        integ.state.hist.cont.clear();
     } else {
         collocation_polynomial(integ, (z1, z2, z3), x1, outputs, out, (t, h, t1));
     }
-    integ.hist.h_old = h;
-    integ.hist.first = false;
+    integ.state.hist.h_old = h;
+    integ.state.hist.first = false;
     integ.x.copy_from_slice(x1);
     integ.t = t1;
     integ.stats.accepted += 1;

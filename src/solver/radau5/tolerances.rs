@@ -1,9 +1,10 @@
 //! The tolerances the step control works with (RADAU5's prologue) and the error weights of the
 //! weighted RMS norm (RADCOR's SCAL).
 
+use super::state::State;
 use super::workspace::Work;
 use super::Radau5Options;
-use crate::solver::integrator::Integrator;
+use crate::solver::method::Stepper;
 use crate::solver::Atol;
 
 /// The tolerances the step control works with (RADAU5's prologue and RADCOR's FNEWT).
@@ -21,7 +22,7 @@ pub(super) struct Tolerances {
 /// scaled down with rtol'/rtol but never up (see the module docs for why this departs from
 /// RADAU5's atol' = rtol' atol/rtol).
 pub(super) fn transformed_tolerances(
-    integ: &Integrator,
+    integ: &Stepper<State>,
     work: &mut Work,
     opts: &Radau5Options,
 ) -> Tolerances {

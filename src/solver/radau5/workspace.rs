@@ -8,7 +8,7 @@ use crate::solver::common::Workspace;
 use crate::solver::linalg::PatternCache;
 use crate::solver::Atol;
 
-/// Buffers of `advance`, kept between calls in the integrator's cache (no allocation per call);
+/// Buffers of `advance`, kept between calls in the method's cache (no allocation per call);
 /// overwritten before they are read.
 pub(crate) struct Work {
     pub(super) jac: DMatrix<f64>,

@@ -8,12 +8,14 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
+use super::State;
 use super::{Work, GAMMA};
+use crate::solver::constant_jacobian::front_factorisation;
 use crate::solver::dense::DenseInverse;
-use crate::solver::integrator::{front_factorisation, Integrator};
 use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition, VaryingRows};
+use crate::solver::method::Stepper;
 use crate::solver::step_map;
-use crate::solver::{Method, OdeSystem};
+use crate::solver::OdeSystem;
 
 /// The LU of W = I/(h γ) - J for the step size `h`, and for a constant J of a small system
 /// (n ≤ [`step_map::MAX_DIM`]) its explicit inverse, with which the step's eight solves are
@@ -98,26 +100,30 @@ fn factor(
 }
 
 /// W = I/(h γ) - J for the step size `h`, at the front of `lus`, with the J that `w.jac` (or,
-/// for a constant Jacobian `stamp`, the integrator's cache) holds: for a constant J a kept
+/// for a constant Jacobian `stamp`, the method's cache) holds: for a constant J a kept
 /// factorisation if one was made for this step size (to within `SAME_STEP`) or, if `shorten`,
 /// for a step up to `SHORTER` times shorter, else a new one; for a J that changes from step to
-/// step a new one in the memory of the last. Returns the step size to take (that of the
+/// step a new one in the memory of the last (with `by_rows`, the fixed-step driver's, by its
+/// varying rows where that applies: [`factorise_by_rows`]). Returns the step size to take (that of the
 /// factorisation) and false if W is singular.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn factorise<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lus: &mut Vec<Factor>,
     stamp: Option<u64>,
     h: f64,
     shorten: bool,
+    by_rows: bool,
 ) -> (f64, bool) {
     match stamp {
         Some(_) => {
             let h_lu = integ
+                .state
                 .counted
                 .factorisation_step(h, &mut integ.stats, 1, shorten);
-            let jac = &integ.cache.jac;
+            let jac = &integ.state.cache.jac;
             let pattern = &mut w.pattern;
             let ok = front_factorisation(
                 lus,
@@ -140,7 +146,7 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
                 lus.extend(w.spare.take());
             }
             lus.truncate(1);
-            if integ.options.method == Method::Rodas5PFixed {
+            if by_rows {
                 if let Some(done) = factorise_by_rows(integ, sys, w, lus, h) {
                     return done;
                 }
@@ -167,7 +173,7 @@ pub(super) fn factorise<S: OdeSystem + ?Sized>(
 /// `w.jac`, no varying pattern, too many varying rows, more than `step_map::MAX_DIM` states,
 /// or a singular constant block): the general LU then factorises.
 fn factorise_by_rows<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lus: &mut Vec<Factor>,
@@ -181,6 +187,7 @@ fn factorise_by_rows<S: OdeSystem + ?Sized>(
         return None;
     }
     let h_lu = integ
+        .state
         .counted
         .factorisation_step(h, &mut integ.stats, 0, false);
     let c = 1.0 / (h_lu * GAMMA);

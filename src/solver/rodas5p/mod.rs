@@ -44,20 +44,23 @@ use nalgebra::{DMatrix, DVector};
 
 mod dense_output;
 mod factor;
+mod state;
 
 pub(crate) use dense_output::dense;
 use dense_output::dense_coefficients;
 pub(super) use dense_output::interpolate;
 use factor::factorise;
 pub(crate) use factor::Factor;
+pub(crate) use state::check_restored;
+pub use state::{Rodas5P, State, STATE_VERSION};
 
 use super::common::{
     all_finite, eval, initial_step, jacobian_here, plan_step, rms, scale_into, with_kept_memory,
     NextStep, Outputs, Workspace,
 };
-use super::integrator::Integrator;
 use super::jacobian;
 use super::linalg::PatternCache;
+use super::method::Stepper;
 use super::{OdeSystem, SolverError, SolverErrorKind};
 
 /// Number of stages.
@@ -315,7 +318,7 @@ pub(super) enum Reject {
     Singular,
 }
 
-/// Workspace of `advance`, kept between calls in the integrator's cache (no allocation per
+/// Workspace of `advance`, kept between calls in the method's cache (no allocation per
 /// call); its contents are overwritten before they are read.
 pub(crate) struct Work {
     pub(super) f0: Vec<f64>,
@@ -369,16 +372,24 @@ impl Workspace for Work {
 /// J (and, for a non-autonomous system, ∂f/∂t) at the integrator's current point into `w`, with
 /// f0 = f(t, x) already in `w.f0`; an error if either is not finite.
 pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     stamp: Option<u64>,
     autonomous: bool,
 ) -> Result<(), SolverError> {
     let t = integ.t;
-    let ok = jacobian_here(integ, sys, stamp, &w.f0, None, &mut w.jac, &mut w.jac_holds)
-        && (autonomous
-            || jacobian::time_derivative(sys, &mut integ.stats, t, &integ.x, &w.f0, &mut w.dfdt));
+    let ok = jacobian_here(
+        integ,
+        |s: &mut State| (&mut s.counted, &mut s.cache),
+        sys,
+        stamp,
+        &w.f0,
+        None,
+        &mut w.jac,
+        &mut w.jac_holds,
+    ) && (autonomous
+        || jacobian::time_derivative(sys, &mut integ.stats, t, &integ.x, &w.f0, &mut w.dfdt));
     if ok {
         Ok(())
     } else {
@@ -393,19 +404,21 @@ pub(super) fn jacobian_at_point<S: OdeSystem + ?Sized>(
 /// One step from the current point, with f0, J (and ∂f/∂t) there already in `w`: W factorised
 /// for about `h` (see [`factorise`]; `shorten` lets a constant J's kept LU shorten the step),
 /// then the stages. Returns the step size taken and the step's error norm, or why it failed.
-/// The adaptive driver and the fixed-step one (`super::fixed`) step through this.
+/// The adaptive driver and the fixed-step one (`super::fixed`, with `by_rows`: a J varying in
+/// few rows factorised by its varying rows' Schur complement) step through this.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn factorised_step<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lus: &mut Vec<Factor>,
     stamp: Option<u64>,
     h: f64,
     shorten: bool,
+    by_rows: bool,
     autonomous: bool,
 ) -> (f64, Result<f64, Reject>) {
-    let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten);
+    let (h, ok) = factorise(integ, sys, w, lus, stamp, h, shorten, by_rows);
     let result = match lus.first() {
         Some(f) if ok => step(integ, sys, w, f, h, autonomous),
         _ => Err(Reject::Singular),
@@ -420,7 +433,7 @@ pub(super) fn factorised_step<S: OdeSystem + ?Sized>(
 /// stage sums are vector updates over the states); multiplications and additions stay separate,
 /// so the bits are those of the portable code (see [`super::dense`]).
 fn step<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lu: &Factor,
@@ -444,7 +457,7 @@ fn step<S: OdeSystem + ?Sized>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn step_avx2<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lu: &Factor,
@@ -456,7 +469,7 @@ unsafe fn step_avx2<S: OdeSystem + ?Sized>(
 
 #[inline(always)]
 fn step_body<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     w: &mut Work,
     lu: &Factor,
@@ -526,7 +539,7 @@ fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
 
 /// Evaluate f0 (and Jacobian/∂f/∂t lazily later) at the current point, failing on NaN/inf.
 pub(super) fn eval_f0<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     f0: &mut [f64],
 ) -> Result<(), SolverError> {
@@ -542,11 +555,11 @@ pub(super) fn eval_f0<S: OdeSystem + ?Sized>(
     }
 }
 
-/// Advance `integ` to exactly `t_end` with Rodas5P (called by `Integrator::advance_to*`), or
+/// Advance `integ` to exactly `t_end` with Rodas5P (called through [`OdeMethod::advance`](crate::solver::OdeMethod::advance)), or
 /// with steps free to run past it up to `limit` (`Integrator::advance_past`): the step that
-/// covers `t_end` is then kept in `integ.ahead` and `t_end`'s state read from its dense output.
+/// covers `t_end` is then kept in the state's `ahead` and `t_end`'s state read from its dense output.
 pub(crate) fn advance<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     t_end: f64,
     limit: f64,
@@ -564,16 +577,16 @@ pub(crate) fn advance<S: OdeSystem + ?Sized>(
 /// Runs `body` with Rodas5P's workspace and its kept factorisations (see `with_kept_memory`),
 /// for the Jacobian `stamp`: the adaptive driver's and the fixed-step driver's (`super::fixed`).
 pub(super) fn with_memory<R>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     stamp: Option<u64>,
-    body: impl FnOnce(&mut Integrator, &mut Work, &mut Vec<Factor>) -> R,
+    body: impl FnOnce(&mut Stepper<State>, &mut Work, &mut Vec<Factor>) -> R,
 ) -> R {
-    with_kept_memory(integ, stamp, |c| (&mut c.rodas, &mut c.rodas_lu), body)
+    with_kept_memory(integ, stamp, |s: &mut State| &mut s.cache, body)
 }
 
 #[allow(clippy::too_many_arguments)]
 fn advance_with<S: OdeSystem + ?Sized>(
-    integ: &mut Integrator,
+    integ: &mut Stepper<State>,
     sys: &S,
     opts: &Rodas5POptions,
     (t_end, limit): (f64, f64),
@@ -623,7 +636,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
         // W = I/(h γ) - J, one LU for all 8 stages. A step free to go past t_end that does
         // not end on the limit may be shortened to use a kept LU of a constant J.
         let shorten = limit > t_end && !last;
-        let (h, result) = factorised_step(integ, sys, w, lus, stamp, h, shorten, autonomous);
+        let (h, result) = factorised_step(integ, sys, w, lus, stamp, h, shorten, false, autonomous);
         match result {
             Ok(err) if err <= 1.0 => {
                 let t1 = if last { limit } else { t + h };
@@ -643,9 +656,9 @@ fn advance_with<S: OdeSystem + ?Sized>(
                     );
                 }
                 if past {
-                    integ.ahead.keep(t, t1, h, &integ.x, &w.x1);
-                    dense_coefficients(&w.u, &mut integ.ahead.coef);
-                    let a = &integ.ahead;
+                    integ.state.ahead.keep(t, t1, h, &integ.x, &w.x1);
+                    dense_coefficients(&w.u, &mut integ.state.ahead.coef);
+                    let a = &integ.state.ahead;
                     dense(&a.x0, &a.x1, &a.coef, (t_end - t) / h, &mut integ.x);
                     integ.t = t_end;
                 } else {
@@ -657,20 +670,20 @@ fn advance_with<S: OdeSystem + ?Sized>(
                 last_nonfinite = false;
                 // PI step-size controller.
                 let e = err.max(opts.err_floor);
-                let mut fac = if integ.hist.err_prev > 0.0 {
+                let mut fac = if integ.state.hist.err_prev > 0.0 {
                     opts.safe
                         * crate::math::powf(e, -opts.beta1)
-                        * crate::math::powf(integ.hist.err_prev, opts.beta2)
+                        * crate::math::powf(integ.state.hist.err_prev, opts.beta2)
                 } else {
                     opts.safe * crate::math::powf(e, -1.0 / ERR_ORDER)
                 };
                 fac = fac.clamp(opts.fac_min, opts.fac_max);
-                if integ.hist.last_rejected {
+                if integ.state.hist.last_rejected {
                     fac = fac.min(1.0);
                 }
-                integ.hist.err_prev = e;
-                integ.hist.last_rejected = false;
-                integ.hist.first = false;
+                integ.state.hist.err_prev = e;
+                integ.state.hist.last_rejected = false;
+                integ.state.hist.first = false;
                 let mut h_new = h * fac;
                 if last {
                     // The step was shortened to hit the limit: do not let that shrink the next.
@@ -686,7 +699,7 @@ fn advance_with<S: OdeSystem + ?Sized>(
             result => {
                 integ.stats.rejected += 1;
                 consecutive_rejections += 1;
-                integ.hist.last_rejected = true;
+                integ.state.hist.last_rejected = true;
                 let fac = match result {
                     Ok(err) => {
                         last_nonfinite = false;
