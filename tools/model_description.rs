@@ -199,6 +199,25 @@ impl ModelDescription {
         get(&self.attributes, name)
     }
 
+    /// The switches that `<Tool name="{tool}">` of `<VendorAnnotations>` declares with
+    /// `<Enumeration variable="..." declaredType="..."/>`: `(variable, type)` pairs, in order.
+    /// Such a variable is an `<Integer>` in the FMI 2.0 description (libcosim and ecos skip FMI
+    /// 2.0 Enumerations) and an Enumeration of that type in FMI 3.0 and in the Rust table.
+    pub fn switches(&self, tool: &str) -> Vec<(&str, &str)> {
+        self.vendor_annotations
+            .iter()
+            .filter(|(name, _)| name == tool)
+            .flat_map(|(_, content)| content.iter())
+            .filter(|(tag, _)| tag == "Enumeration")
+            .map(|(_, a)| {
+                (
+                    get(a, "variable").unwrap_or(""),
+                    get(a, "declaredType").unwrap_or(""),
+                )
+            })
+            .collect()
+    }
+
     /// The enumeration type named `name`.
     pub fn enumeration(&self, name: &str) -> Option<&EnumerationType> {
         self.enumerations.iter().find(|t| t.name == name)
