@@ -253,7 +253,10 @@ fn generate(text: &str) -> Result<String, String> {
                     .collect::<Result<_, _>>()
                     .map_err(|_| at(&format!("{declared}: an item's value is not an integer")))?;
                 let (lo, hi) = (values.iter().min(), values.iter().max());
-                let range = (opt_i32(sv.min.as_deref(), &at("min"))?, opt_i32(sv.max.as_deref(), &at("max"))?);
+                let range = (
+                    opt_i32(sv.min.as_deref(), &at("min"))?,
+                    opt_i32(sv.max.as_deref(), &at("max"))?,
+                );
                 if range != (format!("{lo:?}"), format!("{hi:?}")) {
                     return Err(at(&format!(
                         "a switch of {declared} needs min=\"{}\" max=\"{}\" (its items' values)",

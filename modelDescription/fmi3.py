@@ -105,7 +105,7 @@ def generate(text):
     # The switches: an Integer in FMI 2.0 (libcosim and ecos skip FMI 2.0 Enumerations), an
     # Enumeration of the type the project's vendor annotation names in FMI 3.0.
     switches = {e.get("variable"): e.get("declaredType")
-                for e in root.findall("VendorAnnotations/Tool[@name='hydraulic-slewing-plate']/Enumeration")}
+                for e in root.findall("VendorAnnotations/Tool[@name='hydraulic-slewing-plate']//Enumeration")}
     for v in variables:
         if v.name in switches:
             v.kind = "Enumeration"
