@@ -21,7 +21,7 @@ mod model_description;
 
 use model_description::{get, EnumerationType, ModelDescription, Unit, Unknown};
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -137,6 +137,7 @@ fn generate(text: &str) -> Result<String, String> {
     }
 
     let enums = enumerations(&md)?;
+    let switches = switch_types(&md)?;
 
     let mut names = BTreeSet::new();
     let mut vrs = BTreeSet::new();
@@ -239,6 +240,38 @@ fn generate(text: &str) -> Result<String, String> {
                 opt_f64(sv.min.as_deref(), &at("min"))?,
                 opt_f64(sv.max.as_deref(), &at("max"))?
             ),
+            "Integer" if switches.contains_key(name) => {
+                // A switch: an Enumeration of its type everywhere but in this description.
+                let declared = switches[name];
+                let ty = md.enumeration(declared).ok_or(at(&format!(
+                    "the switch's declaredType '{declared}' is not an enumeration of <TypeDefinitions>"
+                )))?;
+                let values: Vec<i32> = ty
+                    .items
+                    .iter()
+                    .map(|i| i.value.parse::<i32>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| at(&format!("{declared}: an item's value is not an integer")))?;
+                let (lo, hi) = (values.iter().min(), values.iter().max());
+                let range = (
+                    opt_i32(sv.min.as_deref(), &at("min"))?,
+                    opt_i32(sv.max.as_deref(), &at("max"))?,
+                );
+                if range != (format!("{lo:?}"), format!("{hi:?}")) {
+                    return Err(at(&format!(
+                        "a switch of {declared} needs min=\"{}\" max=\"{}\" (its items' values)",
+                        lo.unwrap_or(&0),
+                        hi.unwrap_or(&0)
+                    )));
+                }
+                let start = opt_i32(start, &at("start"))?;
+                if let Some(s) = sv.start.as_deref() {
+                    if !ty.items.iter().any(|i| i.value == s) {
+                        return Err(at(&format!("start {s} is not an item of {declared}")));
+                    }
+                }
+                format!("Kind::Enumeration {{ start: {start}, declared: &{declared}::TYPE }}")
+            }
             "Integer" => format!(
                 "Kind::Integer {{ start: {}, min: {}, max: {} }}",
                 opt_i32(start, &at("start"))?,
@@ -435,6 +468,26 @@ fn positive_list(md: &ModelDescription, names: &BTreeSet<String>) -> Result<Vec<
             return Err(format!("<Positive> names '{name}' twice"));
         }
         out.push(i);
+    }
+    Ok(out)
+}
+
+/// The switches (`<Enumeration variable="..." declaredType="..."/>` of the project's `<Tool>`):
+/// variable name -> its enumeration type. Each must be an Integer parameter, named once.
+fn switch_types(md: &ModelDescription) -> Result<BTreeMap<&str, &str>, String> {
+    let mut out = BTreeMap::new();
+    for (name, declared) in md.switches(TOOL) {
+        let v = md.variables.iter().find(|v| v.name == name).ok_or(format!(
+            "<Enumeration variable=\"{name}\">: no such variable"
+        ))?;
+        if v.kind != "Integer" || v.causality != "parameter" {
+            return Err(format!(
+                "<Enumeration variable=\"{name}\">: a switch must be an Integer parameter"
+            ));
+        }
+        if out.insert(name, declared).is_some() {
+            return Err(format!("<Enumeration variable=\"{name}\"> twice"));
+        }
     }
     Ok(out)
 }

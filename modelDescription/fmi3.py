@@ -14,7 +14,8 @@ What changes from FMI 2.0 to 3.0:
   start="n"/>` and the value reference of `base[1]` (the accelerometers `acc`, the plate
   frequencies `plate.f`). The FMI 3.0 layer (src/fmi3/variables.rs) groups the same way, and the
   test suite checks that it finds exactly these arrays.
-- Real becomes Float64, Integer Int32, an Enumeration stays one (with its declaredType; the
+- Real becomes Float64, Integer Int32 (a switch, named by an <Enumeration variable=...> of the
+  project's vendor annotation, becomes an Enumeration of that type), an Enumeration stays one (with its declaredType; the
   importer reaches it through fmi3GetInt64/fmi3SetInt64), and each <SimpleType> with an
   <Enumeration> of <TypeDefinitions> becomes an <EnumerationType> with the same items; an `independent` variable `time` is added with value
   reference 0 (FMI 3.0 requires one; 0 is free in the FMI 2.0 table).
@@ -101,6 +102,16 @@ def group(variables):
 def generate(text):
     root = reader.parse(text)
     variables = reader.variables(root, Var)
+    # The switches: an Integer in FMI 2.0 (libcosim and ecos skip FMI 2.0 Enumerations), an
+    # Enumeration of the type the project's vendor annotation names in FMI 3.0.
+    switches = {e.get("variable"): e.get("declaredType")
+                for e in root.findall("VendorAnnotations/Tool[@name='hydraulic-slewing-plate']//Enumeration")}
+    for v in variables:
+        if v.name in switches:
+            v.kind = "Enumeration"
+            v.type_attrs = {"declaredType": switches.pop(v.name), "start": v.type_attrs["start"]}
+    if switches:
+        raise SystemExit(f"switches that are no variable: {sorted(switches)}")
     if any(v.vr == TIME_VR for v in variables):
         raise SystemExit(f"value reference {TIME_VR} is taken; the FMI 3.0 time variable needs it")
     groups = group(variables)

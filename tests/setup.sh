@@ -19,6 +19,8 @@
 #                                  test_web.py
 #            chromium-driver       /usr/bin/chromedriver, through which Selenium drives it
 #                                  (test_web.py, bench/web_speed.py)
+#            libtbb12              libtbb.so.12, which ecospy's libecosc.so needs (the ecos
+#                                  co-simulation runs of test_shipped_sets.py)
 #   rustup   x86_64-pc-windows-gnu      the Rust standard library for binaries/win64
 #            aarch64-unknown-linux-gnu  ... for binaries/aarch64-linux (FMI 3.0)
 #            x86_64-apple-darwin        ... for the macOS binaries (darwin64, x86_64-darwin,
@@ -26,7 +28,7 @@
 #                                           against the ziglang package's libSystem stubs: no
 #                                           Apple SDK needed
 #            wasm32-unknown-unknown     the browser build (docs/web/hsp.wasm, `hsp web`)
-#   .venv    tests/requirements.txt: fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest,
+#   .venv    tests/requirements.txt: fmpy, libcosimpy, ecospy, fmu_manipulation_toolbox, scipy, pytest,
 #            pytest-timeout, selenium, and
 #            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17;
 #            ziglang's libSystem.tbd for the macOS binaries)
@@ -45,6 +47,10 @@ have_libclang() {
         -regex '.*/libclang(-[0-9.]+)?\.so(\.[0-9]+)*' -print -quit 2>/dev/null | grep -q .
 }
 have() { command -v "$1" >/dev/null 2>&1; }
+# ecospy's libecosc.so is linked against libtbb.so.12 (oneTBB): the loader looks for that name.
+have_libtbb() {
+    find /usr/lib /usr/local/lib -maxdepth 3 -name 'libtbb.so.12' -print -quit 2>/dev/null | grep -q .
+}
 
 apt_packages=()
 have_libclang || apt_packages+=(libclang-dev)
@@ -58,6 +64,7 @@ have aarch64-linux-gnu-gcc || apt_packages+=(gcc-aarch64-linux-gnu)
 python3 -c "import venv, ensurepip" 2>/dev/null || apt_packages+=(python3-venv)
 have chromium || apt_packages+=(chromium)  # headless browser of test_docs.py and test_web.py
 have chromedriver || apt_packages+=(chromium-driver)  # Selenium's driver of that browser (test_web.py)
+have_libtbb || apt_packages+=(libtbb12)  # ecospy's libecosc.so needs it (test_shipped_sets.py)
 if [ "${#apt_packages[@]}" -gt 0 ]; then
     echo "setup: installing ${apt_packages[*]} (apt)"
     SUDO=""
@@ -83,7 +90,7 @@ done
 
 venv_complete() {
     [ -x .venv/bin/python ] && [ -x .venv/bin/cargo-zigbuild ] &&
-        .venv/bin/python -c "import fmpy, libcosimpy, fmu_manipulation_toolbox, scipy, pytest, pytest_timeout, distributed, matplotlib, selenium" 2>/dev/null &&
+        .venv/bin/python -c "import fmpy, libcosimpy, ecospy, fmu_manipulation_toolbox, scipy, pytest, pytest_timeout, distributed, matplotlib, selenium" 2>/dev/null &&
         .venv/bin/python -m ziglang version >/dev/null 2>&1
 }
 if ! venv_complete; then

@@ -34,8 +34,8 @@ pub struct ModelDescription {
     /// The enumeration types of `<TypeDefinitions>` (`<SimpleType>` with `<Enumeration>`), in
     /// order.
     pub enumerations: Vec<EnumerationType>,
-    /// The `<Tool>` elements of `<VendorAnnotations>`, by their `name`, with their child
-    /// elements' tag names and attributes.
+    /// The `<Tool>` elements of `<VendorAnnotations>`, by their `name`, with the tag names and
+    /// attributes of the elements inside (at any depth, in document order).
     pub vendor_annotations: Vec<(String, Vec<(String, Attributes)>)>,
     /// `<ModelVariables>`: the scalar variables in order (position `i` is FMI's index `i + 1`).
     pub variables: Vec<ScalarVariable>,
@@ -149,9 +149,11 @@ impl ModelDescription {
                 v.children()
                     .filter(|n| n.has_tag_name("Tool"))
                     .map(|tool| {
+                        // FMI 2.0 allows one element in a <Tool>: the rules sit in a wrapper
+                        // (<Rules>), read here at any depth.
                         let content = tool
-                            .children()
-                            .filter(|n| n.is_element())
+                            .descendants()
+                            .filter(|n| n.is_element() && *n != tool)
                             .map(|n| (n.tag_name().name().to_string(), attributes(n)))
                             .collect();
                         (tool.attribute("name").unwrap_or("").to_string(), content)
@@ -197,6 +199,25 @@ impl ModelDescription {
     /// The value of the root's attribute `name`.
     pub fn attribute(&self, name: &str) -> Option<&str> {
         get(&self.attributes, name)
+    }
+
+    /// The switches that `<Tool name="{tool}">` of `<VendorAnnotations>` declares with
+    /// `<Enumeration variable="..." declaredType="..."/>`: `(variable, type)` pairs, in order.
+    /// Such a variable is an `<Integer>` in the FMI 2.0 description (libcosim and ecos skip FMI
+    /// 2.0 Enumerations) and an Enumeration of that type in FMI 3.0 and in the Rust table.
+    pub fn switches(&self, tool: &str) -> Vec<(&str, &str)> {
+        self.vendor_annotations
+            .iter()
+            .filter(|(name, _)| name == tool)
+            .flat_map(|(_, content)| content.iter())
+            .filter(|(tag, _)| tag == "Enumeration")
+            .map(|(_, a)| {
+                (
+                    get(a, "variable").unwrap_or(""),
+                    get(a, "declaredType").unwrap_or(""),
+                )
+            })
+            .collect()
     }
 
     /// The enumeration type named `name`.

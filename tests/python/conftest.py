@@ -12,6 +12,7 @@ import shutil
 import subprocess
 import tempfile
 import zipfile
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
@@ -72,6 +73,21 @@ def md(fmu_path):
 @pytest.fixture(scope="session")
 def vr(md):
     return {v.name: v.valueReference for v in md.modelVariables}
+
+
+SSV_NS = {"ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
+
+
+def read_ssv(text):
+    """An SSP parameter set (.ssv) as {name: value}, each value typed by its ssv element."""
+    root = ET.fromstring(text)
+    cast = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true"}
+    values = {}
+    for p in root.iterfind("ssv:Parameters/ssv:Parameter", SSV_NS):
+        (typed,) = list(p)
+        kind = typed.tag.split("}")[1]
+        values[p.get("name")] = cast[kind](typed.get("value"))
+    return values
 
 
 @functools.lru_cache(maxsize=None)

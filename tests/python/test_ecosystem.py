@@ -6,6 +6,7 @@ terminals (terminalsAndIcons.xml valid against FMI 3.0's schema, its members var
 """
 
 import io
+import math
 import pathlib
 import re
 import subprocess
@@ -22,15 +23,15 @@ from libcosimpy.CosimExecution import CosimExecution
 from libcosimpy.CosimObserver import CosimObserver
 from PIL import Image
 
-from conftest import ROOT, _presets
+from conftest import ROOT, _presets, read_ssv
 
 LS_REF = "extra/org.fmi-standard.fmi-ls-ref"
 RESULT = f"{LS_REF}/HydraulicSlewingPlate_out.csv"
 FMU3 = ROOT / "fmu" / "fmi3" / "HydraulicSlewingPlate.fmu"
-SSP = ROOT / "fmu" / "HydraulicSlewingPlate.ssp"
+SSP = ROOT / "fmu" / "HydraulicSlewingPlate.ssp"  # SSP's form: the system's connectors
+OSP = ROOT / "fmu" / "HydraulicSlewingPlate-osp.ssp"  # libcosim's and ecos's: the component's
 SSP_SCHEMA = pathlib.Path(fmpy.__file__).parent / "ssp" / "schema"
 FMI3_SCHEMA = pathlib.Path(fmpy.__file__).parent / "schema" / "fmi3"
-SSV_NS = {"ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
 
 
 @pytest.fixture(scope="session")
@@ -52,18 +53,6 @@ def stated_tolerance(fmu):
                       result[0].get("description"))
     assert found, result[0].get("description")
     return float(found.group(1))
-
-
-def read_ssv(text):
-    """A parameter set as {name: value}, each value typed by its ssv element."""
-    root = ET.fromstring(text)
-    cast = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true"}
-    values = {}
-    for p in root.iterfind("ssv:Parameters/ssv:Parameter", SSV_NS):
-        (typed,) = list(p)
-        kind = typed.tag.split("}")[1]
-        values[p.get("name")] = cast[kind](typed.get("value"))
-    return values
 
 
 @pytest.mark.parametrize("version", ["fmi2", "fmi3"])
@@ -118,7 +107,7 @@ def ssp_files():
     return sorted((ROOT / "ssp").rglob("*.ss[dv]"))
 
 
-@pytest.mark.parametrize("path", ssp_files(), ids=lambda p: p.name)
+@pytest.mark.parametrize("path", ssp_files(), ids=lambda p: str(p.relative_to(ROOT / "ssp")))
 def test_ssp_files_are_valid_ssp_1_0(path):
     xsd = {".ssv": "SystemStructureParameterValues.xsd",
            ".ssd": "SystemStructureDescription.xsd"}[path.suffix]
@@ -153,22 +142,64 @@ def example_system():
     return binding.get("source"), float(experiment.get("stopTime")), step
 
 
-def test_ssp_archive_holds_the_system_the_fmu_and_its_parameter_set(fmu_path):
+@pytest.mark.parametrize("archive,ssd", [(SSP, "SystemStructure.ssd"), (OSP, "osp/SystemStructure.ssd")],
+                         ids=["ssp", "osp"])
+def test_ssp_archive_holds_the_system_the_fmu_and_its_parameter_set(fmu_path, archive, ssd):
     source, _, _ = example_system()
-    with zipfile.ZipFile(SSP) as z:
+    with zipfile.ZipFile(archive) as z:
         assert sorted(z.namelist()) == sorted(["SystemStructure.ssd", source,
                                                "resources/HydraulicSlewingPlate.fmu"])
-        assert z.read("SystemStructure.ssd") == (ROOT / "ssp" / "SystemStructure.ssd").read_bytes()
+        assert z.read("SystemStructure.ssd") == (ROOT / "ssp" / ssd).read_bytes()
         assert z.read(source) == (ROOT / "ssp" / source).read_bytes()
         assert z.read("resources/HydraulicSlewingPlate.fmu") == pathlib.Path(fmu_path).read_bytes()
 
 
+def test_the_two_forms_differ_only_in_the_systems_connectors():
+    """The libcosim/ecos form is SSP's with the system's <Connectors> and <Connections> taken out."""
+    exposed = (ROOT / "ssp" / "SystemStructure.ssd").read_text()
+    osp = (ROOT / "ssp" / "osp" / "SystemStructure.ssd").read_text()
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription"}
+    system = ET.fromstring(exposed).find("ssd:System", ns)
+    inputs = {c.get("name") for c in system.iterfind("ssd:Connectors/ssd:Connector", ns) if c.get("kind") == "input"}
+    assert inputs == {"r", "e_in", "F1", "F2"}
+    # Every input of the component is connected from the system (fmpy's runner needs that).
+    ends = {(c.get("endElement"), c.get("endConnector")) for c in system.iterfind("ssd:Connections/ssd:Connection", ns)}
+    assert {("plate", n) for n in inputs} <= ends
+    stripped = re.sub(r"    <ssd:Connectors>.*?</ssd:Connectors>\n", "", exposed, count=1, flags=re.S)
+    stripped = re.sub(r"    <ssd:Connections>.*?</ssd:Connections>\n", "", stripped, flags=re.S)
+    assert stripped == osp
+
+
+def test_fmpy_runs_the_example_system_and_its_move(fmu_path):
+    """fmpy's SSP runner opens fmu/HydraulicSlewingPlate.ssp (every input connected from the
+    system) and runs the bound preset, the FMU's defaults (the runner does not apply a system's
+    parameter bindings): the 30 deg move, as fmpy runs the FMU itself, every output point up to
+    the last (the runner passes no stop time)."""
+    from fmpy.ssp.simulation import simulate_ssp
+
+    _, stop, step = example_system()
+    res = simulate_ssp(str(SSP), stop_time=stop, step_size=step)
+    names = ["y_pot", "theta_motor", "p_load", "theta_hub", "acc_tip"]
+    ref = simulate_fmu(fmu_path, stop_time=stop, output_interval=step, output=names)
+    # The runner records the connectors after each step under the step's start time, and its
+    # summed time takes one step more than the grid (601 rows to 6 s): row k is time (k + 1) h.
+    assert len(res) >= len(ref) - 1
+    res = res[:len(ref) - 2]
+    assert abs(math.degrees(res["theta_hub"][-1]) - 30.0) < 0.1, math.degrees(res["theta_hub"][-1])
+    assert abs(math.degrees(ref["theta_hub"][-1]) - 30.0) < 0.1
+    for n in names:
+        assert np.array_equal(res[n], res[f"plate.{n}"]), n
+        span = np.ptp(ref[n])
+        d = np.max(np.abs(res[n] - ref[n][1:-1]))
+        assert d <= 1e-7 * span, (n, d, span)
+
+
 def test_libcosim_runs_the_ssp_as_fmpy_runs_the_same_parameter_set(fmu_path, vr):
-    """libcosim loads the .ssp (the FMU with the parameter set bound); the test adds a 1 V step of
+    """libcosim loads the -osp.ssp (the FMU with the parameter set bound); the test adds a 1 V step of
     r. fmpy runs the FMU with the values read from the same .ssv and the same step."""
     source, stop, step = example_system()
     values = read_ssv((ROOT / "ssp" / source).read_bytes())
-    execution = CosimExecution.from_ssp_file(str(SSP))
+    execution = CosimExecution.from_ssp_file(str(OSP))
     plate = execution.slave_index_from_instance_name("plate")
     assert plate is not None
     execution.real_initial_value(plate, vr["r"], 1.0)
@@ -201,13 +232,6 @@ def test_libcosim_runs_the_ssp_as_fmpy_runs_the_same_parameter_set(fmu_path, vr)
     for k, name in enumerate(["y_pot", "p_load"]):
         span = np.ptp(ref[name])
         assert abs(got[-1, k] - ref[name][-1]) < 1e-6 * span, (name, got[-1, k], ref[name][-1])
-    # What libcosim would skip does not matter: every Enumeration the set holds is at its start
-    # value (the premise of binding this preset, src/bin/hsp/ecosystem/ssp.rs).
-    md = fmpy.read_model_description(fmu_path)
-    enums = {v.name: v.start for v in md.modelVariables if v.type == "Enumeration"}
-    for name, value in values.items():
-        if name in enums:
-            assert int(value) == int(enums[name]), (name, value, enums[name])
 
 
 def test_icons_are_the_same_png_in_both_fmus(fmus):

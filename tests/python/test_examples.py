@@ -21,7 +21,7 @@ from conftest import ROOT, hsp, packaged_source_hash
 
 EXAMPLES = ROOT / "examples"
 FMU3 = ROOT / "fmu" / "fmi3" / "HydraulicSlewingPlate.fmu"
-SSP = ROOT / "fmu" / "HydraulicSlewingPlate.ssp"
+OSP = ROOT / "fmu" / "HydraulicSlewingPlate-osp.ssp"
 NUMBER = r"([-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|nan))"
 
 
@@ -236,7 +236,7 @@ def test_sweep_dask_runs_the_default_experiment_on_workers(fmu_path, md, tmp_pat
 
 
 def test_libcosim_runs_the_ssp_as_fmpy_does(fmu_path):
-    done = subprocess.run([sys.executable, str(EXAMPLES / "libcosim_ssp.py"), "--ssp", str(SSP)],
+    done = subprocess.run([sys.executable, str(EXAMPLES / "libcosim_ssp.py"), "--ssp", str(OSP)],
                           cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stdout + done.stderr
     out = done.stdout
@@ -244,12 +244,13 @@ def test_libcosim_runs_the_ssp_as_fmpy_does(fmu_path):
     # libcosim's log level is lowered: none of its log lines, on either stream.
     assert not re.search(r"\[(trace|debug|info|warning)\]", out + done.stderr), (out + done.stderr)[:2000]
     # The stop time and step of the system structure (read here from ssp/, which the archive holds).
-    root = ET.parse(ROOT / "ssp" / "SystemStructure.ssd").getroot()
+    root = ET.parse(ROOT / "ssp" / "osp" / "SystemStructure.ssd").getroot()
     stop = float(root.find("{http://ssp-standard.org/SSP1/SystemStructureDescription}DefaultExperiment").get("stopTime"))
     step = float(root.find(".//{http://opensimulationplatform.com/SSP/OSPAnnotations}FixedStepAlgorithm")
                  .get("baseStepSize"))
     assert f"0 to {stop:g} s at {step * 1e3:g} ms, r = 0 V" in out
-    assert "the set's values are the FMU's defaults: True" in out
+    # libcosim applied every switch of the set (Integers in the FMI 2.0 description).
+    assert "as the set has them: True" in out
     cosim = find(r"libcosim\s+y_pot final " + NUMBER + r" V, peak " + NUMBER + r" V; p_load final " + NUMBER
                  + r" bar, peak " + NUMBER, out)
     fmpy = find(r"fmpy\s+y_pot final " + NUMBER + r" V, peak " + NUMBER + r" V; p_load final " + NUMBER

@@ -1,11 +1,10 @@
 """Two instances of the FMU in one libcosim execution (stepped on libcosim's thread pool) agree
 with fmpy's results for the same experiments.
 
-libcosim ignores FMI 2.0 Enumeration variables (it logs "FMI 2.0 Enumeration variable type not
-supported"), so the FMU's switches (hydraulics.model, plate.formulation, ...) keep their defaults
-there: the test runs the full servo valve on the motor alone (preset servo-valve-motor) with the
-coil drive at its default (the current drive; the preset's voltage drive is an Enumeration that
-libcosim would skip), and checks that every switch it needs is a default."""
+The preset servo-valve-motor (the full servo valve on the motor alone, the paper's voltage drive)
+sets its switches through libcosim's integer setter: they are Integers in the FMI 2.0 description
+(libcosim ignores FMI 2.0 Enumeration variables, "Enumeration variable type not supported"), and
+the test reads them back."""
 
 import numpy as np
 from fmpy import simulate_fmu
@@ -16,8 +15,8 @@ from libcosimpy.CosimSlave import CosimLocalSlave
 from conftest import preset
 
 # The full servo valve on the motor alone (the two step responses differ by more than 0.1 V), the
-# coil driven by current, the default.
-PRESET = {**preset("servo-valve-motor"), "servo_valve.drive": 2}
+# coil driven by voltage, as the preset has it (away from the FMU's default, the current drive).
+PRESET = preset("servo-valve-motor")
 
 STEP_NS = 10_000_000  # 10 ms
 STEPS = 200  # to 2 s
@@ -29,16 +28,14 @@ def fmpy_run(fmu_path, r, a1):
                         input=inp, output=["y_pot", "p_load"], start_values={**PRESET, "controller.A1": a1})
 
 
-def test_the_preset_needs_no_enumeration(md):
-    """What libcosim cannot set must already be what the preset asks for."""
+def test_the_preset_sets_a_switch_away_from_its_default(md):
+    """The test needs a switch libcosim would have skipped as an FMI 2.0 Enumeration."""
     variables = {v.name: v for v in md.modelVariables}
-    for name, value in PRESET.items():
-        if variables[name].type == "Enumeration":
-            assert int(variables[name].start) == value, name
+    assert variables["servo_valve.drive"].type == "Integer"
+    assert PRESET["servo_valve.drive"] != int(variables["servo_valve.drive"].start)
 
 
 def test_two_instances_agree_with_fmpy(fmu_path, vr, md):
-    enumerations = {v.name for v in md.modelVariables if v.type == "Enumeration"}
     execution = CosimExecution.from_step_size(step_size=STEP_NS)
     a = execution.add_local_slave(CosimLocalSlave(fmu_path=fmu_path, instance_name="plate_a"))
     b = execution.add_local_slave(CosimLocalSlave(fmu_path=fmu_path, instance_name="plate_b"))
@@ -47,8 +44,6 @@ def test_two_instances_agree_with_fmpy(fmu_path, vr, md):
     execution.real_initial_value(b, vr["controller.A1"], 1.0)
     for s in (a, b):
         for name, value in PRESET.items():
-            if name in enumerations:  # libcosim cannot set them; the preset's are the defaults
-                continue
             setter = {bool: execution.boolean_initial_value, int: execution.integer_initial_value,
                       float: execution.real_initial_value}[type(value)]
             setter(s, vr[name], value)
@@ -60,6 +55,8 @@ def test_two_instances_agree_with_fmpy(fmu_path, vr, md):
         assert execution.step()
         for s in (a, b):
             got[s].append(observer.last_real_values(slave_index=s, variable_references=refs))
+    drive = observer.last_integer_values(slave_index=a, variable_references=[vr["servo_valve.drive"]])
+    assert list(drive) == [PRESET["servo_valve.drive"]]
     for s, (r, a1) in ((a, (1.0, 2.0)), (b, (0.5, 1.0))):
         ref = fmpy_run(fmu_path, r, a1)
         mine = np.array(got[s])

@@ -37,7 +37,7 @@ pub fn root() -> PathBuf {
 /// Builds and writes the FMUs with every binary the installed toolchains allow; returns the FMI 2.0
 /// one's path.
 pub fn package(output: &str) -> Result<String, String> {
-    package_with(output, Portability::IfInstalled).map(|[fmi2, _, _]| fmi2)
+    package_with(output, Portability::IfInstalled).map(|[fmi2, _, _, _]| fmi2)
 }
 
 /// Where the FMI 3.0 FMU goes: `fmi3/` beside the FMI 2.0 one.
@@ -46,9 +46,16 @@ pub fn fmi3_path(fmi2: &Path) -> PathBuf {
     fmi2.with_file_name("fmi3").join(name)
 }
 
-/// Where the example SSP system goes: beside the FMI 2.0 FMU, with the extension `.ssp`.
-pub fn ssp_path(fmi2: &Path) -> PathBuf {
-    fmi2.with_extension("ssp")
+/// Where the example SSP system goes: beside the FMI 2.0 FMU, with the extension `.ssp`; its
+/// form for libcosim and ecos with `-osp` added to the name ([`ecosystem::ssp::Form`]).
+pub fn ssp_path(fmi2: &Path, form: ecosystem::ssp::Form) -> PathBuf {
+    match form {
+        ecosystem::ssp::Form::Exposed => fmi2.with_extension("ssp"),
+        ecosystem::ssp::Form::Osp => {
+            let stem = fmi2.file_stem().unwrap_or_default().to_string_lossy();
+            fmi2.with_file_name(format!("{stem}-osp.ssp"))
+        }
+    }
 }
 
 /// Builds and writes the FMI 2.0 FMU at `output`, the FMI 3.0 FMU beside it (see
@@ -61,7 +68,7 @@ pub fn ssp_path(fmi2: &Path) -> PathBuf {
 /// `documentation/web/` and `docs/web/` keeps what it has. Nothing half-written is left behind:
 /// the archives are written under temporary names, renamed when all three are complete, and
 /// removed when anything fails.
-pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3], String> {
+pub fn package_with(output: &str, portability: Portability) -> Result<[String; 4], String> {
     let out = if Path::new(output).is_absolute() {
         PathBuf::from(output)
     } else {
@@ -70,7 +77,8 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
     let partial = [
         out.with_extension("fmu.partial"),
         fmi3_path(&out).with_extension("fmu.partial"),
-        ssp_path(&out).with_extension("ssp.partial"),
+        ssp_path(&out, ecosystem::ssp::Form::Exposed).with_extension("ssp.partial"),
+        ssp_path(&out, ecosystem::ssp::Form::Osp).with_extension("ssp.partial"),
     ];
     let result = write_all(&out, &partial, portability);
     if result.is_err() {
@@ -82,12 +90,12 @@ pub fn package_with(output: &str, portability: Portability) -> Result<[String; 3
 }
 
 /// [`package_with`]'s work: `partial` holds the temporary names of the FMI 2.0 FMU, the FMI 3.0
-/// FMU and the SSP file.
+/// FMU and the SSP files (SSP's form, libcosim's and ecos's).
 fn write_all(
     out: &Path,
-    partial: &[PathBuf; 3],
+    partial: &[PathBuf; 4],
     portability: Portability,
-) -> Result<[String; 3], String> {
+) -> Result<[String; 4], String> {
     let with_web = portability == Portability::Required || web::available();
     if !with_web {
         let consequence = format!(
@@ -120,7 +128,7 @@ fn write_all(
     // Write to a temporary name and rename, so that a reader never sees half an archive. The
     // documentation's figures come from running this very FMU: a first archive without them is
     // run, then the complete one is written.
-    let [tmp, tmp3, tmp_ssp] = partial;
+    let [tmp, tmp3, tmp_ssp, tmp_osp] = partial;
     write_archive(tmp, &entries)?;
     let docs = docpage::documentation(
         tmp,
@@ -167,15 +175,25 @@ fn write_all(
     }
     write_archive(tmp3, &entries3)?;
     let fmu2 = std::fs::read(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-    let ssp = ssp_path(out);
-    write_archive(tmp_ssp, &ecosystem::ssp::archive(fmu2)?)?;
+    let ssp = ssp_path(out, ecosystem::ssp::Form::Exposed);
+    let osp = ssp_path(out, ecosystem::ssp::Form::Osp);
+    write_archive(
+        tmp_ssp,
+        &ecosystem::ssp::archive(fmu2.clone(), ecosystem::ssp::Form::Exposed)?,
+    )?;
+    write_archive(
+        tmp_osp,
+        &ecosystem::ssp::archive(fmu2, ecosystem::ssp::Form::Osp)?,
+    )?;
     std::fs::rename(tmp, out).map_err(|e| format!("{}: {e}", out.display()))?;
     std::fs::rename(tmp3, &out3).map_err(|e| format!("{}: {e}", out3.display()))?;
     std::fs::rename(tmp_ssp, &ssp).map_err(|e| format!("{}: {e}", ssp.display()))?;
+    std::fs::rename(tmp_osp, &osp).map_err(|e| format!("{}: {e}", osp.display()))?;
     Ok([
         out.display().to_string(),
         out3.display().to_string(),
         ssp.display().to_string(),
+        osp.display().to_string(),
     ])
 }
 

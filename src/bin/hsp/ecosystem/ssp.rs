@@ -2,11 +2,13 @@
 //!
 //! - `<preset>.ssv`: one `<ssv:ParameterSet>` per preset of `src/model/presets.rs` (the one
 //!   definition), each setting typed as its FMU variable: `ssv:Real`, `ssv:Boolean`, and
-//!   `ssv:Integer` for the Integers and for the Enumerations (FMI 2.0 sets an Enumeration as an
-//!   Integer; libcosim cannot read `ssv:Enumeration`), with the item's name in a comment.
+//!   `ssv:Integer` for the Integers and for the switches (Integers in the FMI 2.0 description,
+//!   Enumerations in the FMI 3.0 one, which sets them as integers too), with the item's name in
+//!   a comment.
 //! - `SystemStructure.ssd`: a system of one component, the FMU, with the parameter set of
-//!   [`EXAMPLE`] bound to it, its inputs and main outputs as connectors, and a default
-//!   experiment whose fixed communication step libcosim reads from its OSP annotation.
+//!   [`EXAMPLE`] bound to it, its inputs and main outputs as connectors of the component and of
+//!   the system, connected, and a default experiment whose fixed communication step libcosim
+//!   reads from its OSP annotation.
 //! - `HydraulicSlewingPlate.ssp` (by `hsp package`, beside the FMUs): the `.ssd` with the FMI
 //!   2.0 FMU and the parameter set under `resources/`.
 //!
@@ -24,11 +26,10 @@ use hydraulic_slewing_plate::model::variables::{MODEL_IDENTIFIER, VARIABLES};
 use super::Entry;
 pub use crate::docpage::text::escape;
 
-/// The preset the example system binds. Its switches (the Enumerations) are the FMU's defaults:
-/// libcosim skips FMI 2.0 Enumeration variables (it warns that it does not support them), so an
-/// SSP imported there applies the Real, Integer and Boolean settings only. Since the default
-/// loop's current drive, `complete` is the only preset with that property: every other one
-/// switches `servo_valve.drive` or `hydraulics.model` (docs/ecosystem.md).
+/// The preset the example system binds: the complete system and its 30 deg move, the FMU's
+/// defaults (so that fmpy's SSP runner, which does not apply a system's parameter bindings,
+/// runs the same model). Every shipped set applies in libcosim and ecos
+/// (`tests/python/test_shipped_sets.py` binds each in turn).
 pub const EXAMPLE: &str = "complete";
 
 /// The example system's communication step and stop time, s.
@@ -116,8 +117,32 @@ pub fn parameter_set(p: &Preset) -> Result<String, String> {
     Ok(s)
 }
 
-/// The example system, `SystemStructure.ssd`.
-pub fn system_description() -> Result<String, String> {
+/// The two forms of the example system: SSP's own, whose system exposes the component's
+/// connectors (fmpy's SSP runner needs every input connected), and the one libcosim 0.0.6 and
+/// ecos 0.7.2 read, without system connectors (both refuse a connection without a
+/// `startElement`: "No such node (<xmlattr>.startElement)", "No element named: ").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Form {
+    /// `SystemStructure.ssd` of `HydraulicSlewingPlate.ssp`: inputs and outputs at the system.
+    Exposed,
+    /// `osp/SystemStructure.ssd`, of `HydraulicSlewingPlate-osp.ssp`: the component alone.
+    Osp,
+}
+
+impl Form {
+    pub const ALL: [Form; 2] = [Form::Exposed, Form::Osp];
+
+    /// The `.ssd`'s path in the repository's `ssp/`.
+    pub fn ssd(self) -> &'static str {
+        match self {
+            Form::Exposed => "SystemStructure.ssd",
+            Form::Osp => "osp/SystemStructure.ssd",
+        }
+    }
+}
+
+/// The example system, `SystemStructure.ssd`, in the given form.
+pub fn system_description(form: Form) -> Result<String, String> {
     let p = PRESETS
         .iter()
         .find(|p| p.name == EXAMPLE)
@@ -142,6 +167,21 @@ pub fn system_description() -> Result<String, String> {
         ))
     )
     .unwrap();
+    // The component's connectors again at the system's level, each connected to the
+    // component's: a tool that runs the system (fmpy's SSP runner needs every input connected)
+    // drives its inputs and reads its outputs there.
+    let exposed = form == Form::Exposed;
+    if exposed {
+        s.push_str("    <ssd:Connectors>\n");
+        for (name, kind) in CONNECTORS {
+            writeln!(
+                s,
+                "      <ssd:Connector name=\"{name}\" kind=\"{kind}\"><ssc:Real/></ssd:Connector>"
+            )
+            .unwrap();
+        }
+        s.push_str("    </ssd:Connectors>\n");
+    }
     s.push_str("    <ssd:Elements>\n");
     writeln!(
         s,
@@ -170,7 +210,26 @@ pub fn system_description() -> Result<String, String> {
     )
     .unwrap();
     s.push_str("        </ssd:ParameterBindings>\n      </ssd:Component>\n");
-    s.push_str("    </ssd:Elements>\n  </ssd:System>\n");
+    s.push_str("    </ssd:Elements>\n");
+    if exposed {
+        s.push_str("    <ssd:Connections>\n");
+    }
+    for (name, kind) in CONNECTORS.iter().filter(|_| exposed) {
+        let (start, end) = if *kind == "input" {
+            (String::new(), " endElement=\"plate\"")
+        } else {
+            (" startElement=\"plate\"".to_string(), "")
+        };
+        writeln!(
+            s,
+            "      <ssd:Connection{start} startConnector=\"{name}\"{end} endConnector=\"{name}\"/>"
+        )
+        .unwrap();
+    }
+    if exposed {
+        s.push_str("    </ssd:Connections>\n");
+    }
+    s.push_str("  </ssd:System>\n");
     writeln!(
         s,
         "  <ssd:DefaultExperiment startTime=\"0\" stopTime=\"{EXAMPLE_STOP}\">\n    \
@@ -186,7 +245,10 @@ pub fn system_description() -> Result<String, String> {
 
 /// The repository's `ssp/` files, by their path inside it (the archive's layout).
 pub fn files() -> Result<Vec<(String, String)>, String> {
-    let mut files = vec![("SystemStructure.ssd".to_string(), system_description()?)];
+    let mut files = Vec::new();
+    for form in Form::ALL {
+        files.push((form.ssd().to_string(), system_description(form)?));
+    }
     for p in PRESETS {
         files.push((format!("resources/{}", file_name(p)), parameter_set(p)?));
     }
@@ -209,7 +271,7 @@ pub fn write(dir: &Path) -> Result<Vec<PathBuf>, String> {
 
 /// The entries of the example `.ssp` archive: the system, the FMU and the example's parameter
 /// set.
-pub fn archive(fmu: Vec<u8>) -> Result<Vec<Entry>, String> {
+pub fn archive(fmu: Vec<u8>, form: Form) -> Result<Vec<Entry>, String> {
     let p = PRESETS
         .iter()
         .find(|p| p.name == EXAMPLE)
@@ -217,7 +279,7 @@ pub fn archive(fmu: Vec<u8>) -> Result<Vec<Entry>, String> {
     Ok(vec![
         (
             "SystemStructure.ssd".into(),
-            system_description()?.into_bytes(),
+            system_description(form)?.into_bytes(),
         ),
         (format!("resources/{MODEL_IDENTIFIER}.fmu"), fmu),
         (
