@@ -120,7 +120,7 @@ pub fn parameter_set(p: &Preset) -> Result<String, String> {
 /// The two forms of the example system: SSP's own, whose system exposes the component's
 /// connectors (fmpy's SSP runner needs every input connected), and the one libcosim 0.0.6 and
 /// ecos 0.7.2 read, without system connectors (both refuse a connection without a
-/// `startElement`: "No such node (<xmlattr>.startElement)", "No element named: ").
+/// `startElement`: `No such node (<xmlattr>.startElement)`, `No element named: `).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Form {
     /// `SystemStructure.ssd` of `HydraulicSlewingPlate.ssp`: inputs and outputs at the system.
