@@ -674,3 +674,90 @@ both_versions!(
         f.free_state(saved);
     }
 );
+
+/// The servo valve's outputs the real-time guard bounds (src/model/realtime_guard.rs).
+const VALVE: [&str; 5] = [
+    "servo_valve.x_v",
+    "servo_valve.p_1",
+    "servo_valve.p_2",
+    "servo_valve.p_a",
+    "servo_valve.p_b",
+];
+
+/// The complete system from rest with the reference `r` held from t = 0, `method` (1 adaptive,
+/// 3 real time with one substep), communication steps `h` up to 1 s: per communication step its
+/// status and the valve's outputs after it; the run stops at the first step that is not OK,
+/// with that step's message.
+fn valve_run<D: Driver>(method: i32, h: f64, r: f64) -> (Vec<(St, [f64; 5])>, String) {
+    let f = D::new(Kind::CoSimulation);
+    assert_eq!(f.set_integer("solver.method", method), St::Ok);
+    assert_eq!(f.set_integer("solver.substeps", 1), St::Ok);
+    assert_eq!(f.init(0.0), St::Ok, "{}", f.last());
+    assert_eq!(f.set_real("r", r), St::Ok);
+    let mut out = Vec::new();
+    let mut t = 0.0;
+    for k in 1..=(1.0 / h).round() as usize {
+        let status = f.step(t, h);
+        out.push((status, VALVE.map(|name| f.get_real(name).1)));
+        if status != St::Ok {
+            return (out, f.last());
+        }
+        t = k as f64 * h;
+    }
+    (out, String::new())
+}
+
+both_versions!(
+    the_real_time_mode_never_returns_ok_outside_the_valves_physical_range,
+    /// F1 of the fuzz round: the real-time mode (one fixed step per communication step, no error
+    /// control) returned OK for several steps with the spool metres past its 0.4 mm stroke and
+    /// pressures of 1e136 Pa before a step failed on a non-finite value. Now a step whose spool is
+    /// past what its end stops allow, or whose chamber pressure exceeds twice the supply, is
+    /// discarded at once, naming the quantity, and the outputs are the last good step's. The
+    /// FMU's own loop with r = +-2 V: at 10 ms it stays inside; at 20 ms it leaves at the third
+    /// step (measured: p_1 = 4.5e7 Pa, 3.2 times the supply) and is discarded there. The adaptive
+    /// method, run the same way, stays inside the bounds at every point (the bounds do not catch
+    /// what the model itself does).
+    fn rule<D: Driver>() {
+        use hydraulic_slewing_plate::fragments::servo_valve::ServoValveParameters;
+        use hydraulic_slewing_plate::model::realtime_guard::{spool_bound, PRESSURE_FACTOR};
+        let sv = ServoValveParameters::default();
+        let spool = spool_bound(&sv);
+        let ceiling = PRESSURE_FACTOR * (sv.p_supply - sv.p_tank);
+        let inside = |v: &[f64; 5]| v[0].abs() <= spool && v[1..].iter().all(|&p| p <= ceiling);
+        let mut discarded = 0;
+        for h in [0.01, 0.02] {
+            for r in [2.0, -2.0] {
+                let (steps, message) = valve_run::<D>(3, h, r);
+                for (k, (status, v)) in steps.iter().enumerate() {
+                    if *status == St::Ok {
+                        assert!(
+                            inside(v),
+                            "{}: h = {h}, r = {r}: step {k} OK with {v:?}",
+                            D::PREFIX
+                        );
+                        continue;
+                    }
+                    assert_eq!(*status, St::Discard, "{}: {message}", D::PREFIX);
+                    assert!(
+                        message.contains("physical range") && message.contains("servo_valve."),
+                        "{message}"
+                    );
+                    // The last good step's outputs, not the rejected step's.
+                    assert!(k > 0 && *v == steps[k - 1].1, "{}: {v:?}", D::PREFIX);
+                    discarded += 1;
+                }
+                let (adaptive, message) = valve_run::<D>(1, h, r);
+                assert!(adaptive.iter().all(|(s, _)| *s == St::Ok), "{message}");
+                assert!(
+                    adaptive.iter().all(|(_, v)| inside(v)),
+                    "adaptive, h = {h}, r = {r}"
+                );
+            }
+        }
+        assert_eq!(
+            discarded, 2,
+            "the 20 ms runs leave the range; the 10 ms ones do not"
+        );
+    }
+);

@@ -24,6 +24,7 @@ pub mod oscillation;
 pub mod paper;
 pub mod parameters;
 pub mod presets;
+pub mod realtime_guard;
 pub mod validity;
 pub mod variables;
 
@@ -173,6 +174,17 @@ impl HydraulicSlewingPlate {
     }
 
     /// Writes outputs and solver statistics for the integrator's current point.
+    /// In the real-time mode with the full servo valve: the first output outside its physical
+    /// bound ([`realtime_guard::check`]); `None` otherwise (the adaptive methods' error control
+    /// keeps them inside).
+    fn out_of_bounds(&self, values: &Values) -> Option<String> {
+        let p = self.parameters.as_ref()?;
+        let real_time = p.method == crate::solver::Method::Rodas5PFixed;
+        (real_time && p.hydraulics == variables::HydraulicsModel::ServoValve)
+            .then(|| realtime_guard::check(values, &p.servo_valve))
+            .flatten()
+    }
+
     fn write_outputs(&mut self, values: &mut Values) {
         self.on_demand.pending = false;
         let (Some(system), Some(integrator)) = (&self.system, &self.integrator) else {
@@ -370,6 +382,25 @@ impl FmuModel for HydraulicSlewingPlate {
             // start of the step, whose outputs were finite.
             let message = format!(
                 "output {bad} is not finite at t = {}, with the inputs {}",
+                Short(t_end),
+                Self::held_inputs(values)
+            );
+            if let Some(integrator) = &mut self.integrator {
+                integrator.reset(t_start, std::mem::take(&mut self.step_start));
+            }
+            self.write_outputs(values);
+            return Err(StepFailure {
+                last_successful_time: t_start,
+                message,
+            });
+        }
+        if let Some(bad) = self.out_of_bounds(values) {
+            // The real-time mode's fixed step has no error control: a step too long for what
+            // the inputs ask can land on a state the valve cannot be in (realtime_guard).
+            let message = format!(
+                "the real-time step to t = {} left the servo valve's physical range: {bad}, with \
+                 the inputs {}; take more solver.substeps, a shorter communication step or \
+                 an adaptive solver.method",
                 Short(t_end),
                 Self::held_inputs(values)
             );
