@@ -316,3 +316,41 @@ fn adjoint_derivative_refuses_a_non_finite_seed() {
         assert_eq!(adjoint(&knowns, 1.0), Fmi3Status::Ok, "{}", f.last());
     }
 }
+
+#[test]
+fn setters_of_types_the_fmu_has_not_name_the_value_reference_in_instantiated() {
+    // F3 of the fuzz round: the setters of types the FMU has no variable of answered "illegal
+    // call sequence" in Instantiated, where setting is allowed; they name the value reference
+    // and its type there, as the getters do in the states that allow getting.
+    let r = Fmu3::vr("r");
+    let check = |function: &str, call: &dyn Fn(&Fmu3) -> Fmi3Status| {
+        let f = Fmu3::new(); // Instantiated
+        assert_eq!(call(&f), Fmi3Status::Error, "{function}");
+        let m = f.last();
+        assert!(
+            m.starts_with(function) && m.contains("'r', a Float64") && !m.contains("illegal call"),
+            "{function}: {m}"
+        );
+    };
+    let s = c"text".as_ptr();
+    check("fmi3SetString", &|f| unsafe {
+        fmi3SetString(f.c, &r, 1, &s, 1)
+    });
+    check("fmi3SetFloat32", &|f| unsafe {
+        fmi3SetFloat32(f.c, &r, 1, &1.0f32, 1)
+    });
+    check("fmi3SetInt8", &|f| unsafe {
+        fmi3SetInt8(f.c, &r, 1, &1i8, 1)
+    });
+    check("fmi3SetUInt16", &|f| unsafe {
+        fmi3SetUInt16(f.c, &r, 1, &1u16, 1)
+    });
+    let bytes = [1u8];
+    let (b, size) = (bytes.as_ptr(), 1usize);
+    check("fmi3SetBinary", &|f| unsafe {
+        fmi3SetBinary(f.c, &r, 1, &size, &b, 1)
+    });
+    check("fmi3SetClock", &|f| unsafe {
+        fmi3SetClock(f.c, &r, 1, &true)
+    });
+}
