@@ -407,6 +407,7 @@ fn generate(text: &str) -> Result<String, String> {
         .map(|&(x, d)| format!("({}, {}), ", x - 1, d - 1))
         .collect();
     let n_states = derivatives.len();
+    let (smallest, largest) = magnitudes(&md)?;
     let n_positive = positive.len();
     let positive: String = positive.iter().map(|i| format!("{i}, ")).collect();
     Ok(format!(
@@ -421,6 +422,9 @@ fn generate(text: &str) -> Result<String, String> {
          /// zero), by position in [`VARIABLES`]: the `<Positive>` list of the XML's\n\
          /// `<VendorAnnotations>`.\n\
          pub static POSITIVE: [usize; {n_positive}] = [{positive}];\n\
+         /// The magnitudes a nonzero Real parameter may have, in SI units: the `<Magnitudes>`\n\
+         /// rule of the XML's `<VendorAnnotations>`.\n\
+         pub const MAGNITUDES: core::ops::RangeInclusive<f64> = {smallest:?}..={largest:?};\n\
          {enums}\
          /// The continuous states as (state, derivative) positions in [`VARIABLES`], in the order\n\
          /// of `<ModelStructure><Derivatives>`.\n\
@@ -490,6 +494,35 @@ fn switch_types(md: &ModelDescription) -> Result<BTreeMap<&str, &str>, String> {
         }
     }
     Ok(out)
+}
+
+/// The `<Magnitudes smallest="..." largest="..."/>` rule of the project's `<Tool>`: positive,
+/// finite, the smallest below the largest.
+fn magnitudes(md: &ModelDescription) -> Result<(f64, f64), String> {
+    let tool = md
+        .vendor_annotations
+        .iter()
+        .find(|(name, _)| name == TOOL)
+        .ok_or(format!("no <VendorAnnotations><Tool name=\"{TOOL}\">"))?;
+    let a = tool
+        .1
+        .iter()
+        .find(|(tag, _)| tag == "Magnitudes")
+        .map(|(_, a)| a)
+        .ok_or(format!("<Tool name=\"{TOOL}\"> has no <Magnitudes/>"))?;
+    let number = |key: &str| -> Result<f64, String> {
+        get(a, key)
+            .and_then(|s| s.parse::<f64>().ok())
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .ok_or(format!(
+                "<Magnitudes {key}=...> must be a positive finite number"
+            ))
+    };
+    let (smallest, largest) = (number("smallest")?, number("largest")?);
+    if smallest >= largest {
+        return Err("<Magnitudes>: smallest must be below largest".into());
+    }
+    Ok((smallest, largest))
 }
 
 /// A Rust identifier for an enumeration item: `ServoValve` stays, `rodas5p` -> `Rodas5p`.

@@ -342,8 +342,9 @@ both_versions!(
     }
 );
 
-/// With one input or parameter set, the FMU never returns OK with a non-finite output: the step
-/// is refused (Error) or discarded at its start (Discard), with a log line naming `name`.
+/// With one input or parameter set, the FMU never returns OK with a non-finite output: the set
+/// call, the initialisation or the step is refused (Error), or the step discarded at its start
+/// (Discard), with a log line naming `name`.
 fn never_ok_with_non_finite<D: Driver>(name: &str, value: f64, hydraulics: i32) {
     let f = D::new(Kind::CoSimulation);
     assert_eq!(f.set_integer("hydraulics.model", hydraulics), St::Ok);
@@ -351,7 +352,11 @@ fn never_ok_with_non_finite<D: Driver>(name: &str, value: f64, hydraulics: i32) 
     // outputs stay finite and OK is right: see
     // with_the_amplifier_limit_a_huge_r_drives_at_the_limit_with_finite_outputs).
     assert_eq!(f.set_boolean("controller.saturation", false), St::Ok);
-    assert_eq!(f.set_real(name, value), St::Ok);
+    // A parameter's magnitude is checked at the set call (the XML's <Magnitudes> rule).
+    if f.set_real(name, value) == St::Error {
+        assert!(f.last().contains(name), "{}", f.last());
+        return;
+    }
     assert_eq!(f.enter(0.0), St::Ok);
     let mut status = f.exit();
     let mut t = 0.0;
@@ -813,5 +818,32 @@ both_versions!(
         }
         g.free_state(edited);
         f.free_state(saved);
+    }
+);
+
+both_versions!(
+    a_parameters_magnitude_is_refused_at_the_set_call,
+    /// F6 of the fuzz round: values outside [1e-50, 1e50] were refused only at initialisation,
+    /// and neither model description said so. The rule is the XML's `<Magnitudes>` (both
+    /// versions' annotations state it): a nonzero Real parameter outside it is refused at the
+    /// set call, naming the variable and the rule; zero, where the parameter is not positive, and
+    /// values inside are taken.
+    fn rule<D: Driver>() {
+        for (name, value) in [
+            ("plate.E", 1e60),
+            ("plate.zeta", 1e-60),
+            ("controller.A1", -1e51),
+        ] {
+            let f = D::new(Kind::CoSimulation);
+            assert_eq!(f.set_real(name, value), St::Error, "{name} = {value:e}");
+            let m = f.last();
+            assert!(m.contains(name) && m.contains("<Magnitudes>"), "{m}");
+            assert_short::<D>(&m);
+        }
+        let f = D::new(Kind::CoSimulation);
+        assert_eq!(f.set_real("plate.zeta", 0.0), St::Ok, "{}", f.last());
+        assert_eq!(f.set_real("plate.E", 1e50), St::Ok, "{}", f.last());
+        assert_eq!(f.set_real("plate.E", 7e10), St::Ok, "{}", f.last());
+        assert_eq!(f.init(0.0), St::Ok, "{}", f.last());
     }
 );

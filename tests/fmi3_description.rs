@@ -111,3 +111,35 @@ fn the_fmi3_description_declares_what_the_layer_serves() {
         "the FMI 3.0 arrays"
     );
 }
+
+#[test]
+fn both_descriptions_state_the_rules_min_and_max_cannot() {
+    // F6 of the fuzz round: only the FMI 2.0 file stated that the <Positive> parameters refuse 0,
+    // and neither the magnitudes. The FMI 3.0 file's annotation now holds the same rules as the
+    // FMI 2.0 file's vendor annotation, which build.rs turns into the table the checks read.
+    use hydraulic_slewing_plate::model::variables::{MAGNITUDES, POSITIVE};
+    let text =
+        std::fs::read_to_string(root().join("modelDescription/fmi3/modelDescription.xml")).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let rules = doc
+        .descendants()
+        .find(|n| {
+            n.has_tag_name("Annotation") && n.attribute("type") == Some("hydraulic-slewing-plate")
+        })
+        .expect("the FMI 3.0 description's annotation of the rules");
+    let positive: Vec<&str> = rules
+        .descendants()
+        .find(|n| n.has_tag_name("Positive"))
+        .and_then(|n| n.attribute("names"))
+        .expect("<Positive names=...>")
+        .split_whitespace()
+        .collect();
+    let table: Vec<&str> = POSITIVE.iter().map(|&i| VARIABLES[i].name).collect();
+    assert_eq!(positive, table);
+    let magnitudes = rules
+        .descendants()
+        .find(|n| n.has_tag_name("Magnitudes"))
+        .expect("<Magnitudes>");
+    let read = |k: &str| magnitudes.attribute(k).unwrap().parse::<f64>().unwrap();
+    assert_eq!(read("smallest")..=read("largest"), MAGNITUDES);
+}

@@ -355,7 +355,7 @@ fn current_drive_replaces_the_coil_lag_by_the_current_loop() {
     let mut report = String::new();
     for f in log_frequencies(0.5, 100.0, 25) {
         let s = Complex::new(0.0, 2.0 * std::f64::consts::PI * f);
-        let ratio = response_at(&lin_c, 0, y, f) / response_at(&lin_v, 0, y, f);
+        let ratio = response_at(&lin_c, 0, y, f).unwrap() / response_at(&lin_v, 0, y, f).unwrap();
         let expected = (s * cur.l_bob + cur.r_bob) * (cur.g_i * cur.k_i)
             / (s * cur.l_bob + cur.r_bob + cur.k_i);
         let err = ratio / expected;

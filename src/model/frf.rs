@@ -20,8 +20,15 @@ pub struct FrequencyResponse {
     pub peaks: Vec<(f64, f64)>,
 }
 
-/// `H(j 2 pi f)` for one input and one output.
-pub fn response_at(lin: &Linearization, input: usize, output: usize, f_hz: f64) -> Complex<f64> {
+/// `H(j 2 pi f)` for one input and one output. An error, naming the frequency, where
+/// `j 2 pi f I - A` is singular (`j 2 pi f` an eigenvalue of A: an undamped mode there, or a
+/// free integrator at 0 Hz), where the response is unbounded.
+pub fn response_at(
+    lin: &Linearization,
+    input: usize,
+    output: usize,
+    f_hz: f64,
+) -> Result<Complex<f64>, String> {
     let n = lin.a.nrows();
     let s = Complex::new(0.0, 2.0 * std::f64::consts::PI * f_hz);
     let m = DMatrix::from_fn(n, n, |i, j| {
@@ -33,12 +40,17 @@ pub fn response_at(lin: &Linearization, input: usize, output: usize, f_hz: f64) 
         }
     });
     let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
-    let x = m.lu().solve(&b).unwrap_or_else(|| DVector::zeros(n));
+    let x = m.lu().solve(&b).ok_or_else(|| {
+        format!(
+            "the response is unbounded at {f_hz} Hz: j 2 pi f I - A is singular there (an \
+             undamped mode, or a free integrator at 0 Hz)"
+        )
+    })?;
     let mut y = Complex::new(lin.d[(output, input)], 0.0);
     for i in 0..n {
         y += x[i] * lin.c[(output, i)];
     }
-    y
+    Ok(y)
 }
 
 /// The response from `input` to `output` (names) on `points` log-spaced frequencies from
@@ -75,14 +87,18 @@ pub fn frequency_response(
     let f_hz: Vec<f64> = (0..points)
         .map(|k| from * crate::math::exp(ratio * k as f64))
         .collect();
-    let h: Vec<Complex<f64>> = f_hz.iter().map(|&f| response_at(lin, iu, iy, f)).collect();
+    let h: Vec<Complex<f64>> = f_hz
+        .iter()
+        .map(|&f| response_at(lin, iu, iy, f))
+        .collect::<Result<_, _>>()?;
     let magnitude: Vec<f64> = h.iter().map(|z| z.norm()).collect();
     let phase_deg = h.iter().map(|z| z.arg().to_degrees()).collect();
     let mut peaks = Vec::new();
     for k in 1..points - 1 {
         if magnitude[k] > magnitude[k - 1] && magnitude[k] >= magnitude[k + 1] {
             // golden-section refinement of |H| on [f_{k-1}, f_{k+1}]
-            let mag = |f: f64| response_at(lin, iu, iy, f).norm();
+            // An unbounded point inside the bracket is the peak itself.
+            let mag = |f: f64| response_at(lin, iu, iy, f).map_or(f64::INFINITY, |h| h.norm());
             let (mut lo, mut hi) = (f_hz[k - 1], f_hz[k + 1]);
             let g = (5f64.sqrt() - 1.0) / 2.0;
             let mut x1 = hi - g * (hi - lo);
@@ -115,4 +131,30 @@ pub fn frequency_response(
         phase_deg,
         peaks,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A free integrator (`x' = u`): unbounded at 0 Hz, 1/(j 2 pi f) elsewhere.
+    #[test]
+    fn a_singular_point_is_an_error_naming_the_frequency() {
+        let lin = Linearization {
+            a: DMatrix::zeros(1, 1),
+            b: DMatrix::from_element(1, 1, 1.0),
+            c: DMatrix::from_element(1, 1, 1.0),
+            d: DMatrix::zeros(1, 1),
+            state_names: vec!["x".into()],
+            input_names: vec!["u".into()],
+            output_names: vec!["y".into()],
+            x0: vec![0.0],
+            u0: vec![0.0],
+        };
+        let e = response_at(&lin, 0, 0, 0.0).unwrap_err();
+        assert!(e.contains("unbounded at 0 Hz"), "{e}");
+        let h = response_at(&lin, 0, 0, 1.0).unwrap();
+        let w = 2.0 * std::f64::consts::PI;
+        assert!((h - Complex::new(0.0, -1.0 / w)).norm() < 1e-15, "{h}");
+    }
 }

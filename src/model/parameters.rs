@@ -107,17 +107,33 @@ pub struct Parameters {
 /// The model-specific check of a value being set (type, range and enumeration items are checked
 /// before): the strictly positive parameters, [`POSITIVE`] (the XML's `<Positive>` list).
 pub fn check(index: usize, value: &Value) -> Result<(), String> {
-    if POSITIVE.contains(&index) {
-        if let Value::Real(v) = value {
-            if *v <= 0.0 {
-                return Err(format!(
-                    "{}: must be positive, got {v}",
-                    VARIABLES[index].name
-                ));
-            }
-        }
+    let Value::Real(v) = value else {
+        return Ok(());
+    };
+    if POSITIVE.contains(&index) && *v <= 0.0 {
+        return Err(format!(
+            "{}: must be positive (the model description's <Positive> rule), got {v}",
+            VARIABLES[index].name
+        ));
+    }
+    if VARIABLES[index].causality == Causality::Parameter && *v != 0.0 {
+        check_magnitude(VARIABLES[index].name, *v)?;
     }
     Ok(())
+}
+
+/// A nonzero Real parameter's magnitude within [`MAGNITUDES`]; the error names it and the rule.
+fn check_magnitude(name: &str, v: f64) -> Result<(), String> {
+    if MAGNITUDES.contains(&v.abs()) {
+        return Ok(());
+    }
+    Err(format!(
+        "{name}: {} is physically absurd: |value| must lie between {} and {} in SI units (the \
+         model description's <Magnitudes> rule), or be 0",
+        Short(v),
+        Short(*MAGNITUDES.start()),
+        Short(*MAGNITUDES.end())
+    ))
 }
 
 impl Parameters {
@@ -278,13 +294,11 @@ impl Parameters {
     }
 }
 
-/// The magnitudes a parameter or derived quantity may have, in SI units. The model's largest
-/// constant is the bulk modulus (about 1e9 Pa), its smallest the chamber compliances (about
-/// 1e-17 m^5/N); nothing physical in it comes near 1e-50 or 1e50. Inside this window the model's
-/// products and squares (energies, Jacobian entries) stay far inside double precision's range
-/// (1e-308 to 1e308); outside it they overflow or underflow, and the model would fail somewhere
+/// The magnitudes a parameter or derived quantity may have, in SI units: the XML's
+/// `<Magnitudes>` rule (the reason is there). Outside it the model's products and squares
+/// (energies, Jacobian entries) would overflow or underflow, and the model would fail somewhere
 /// that cannot name the cause.
-pub const MAGNITUDES: std::ops::RangeInclusive<f64> = 1e-50..=1e50;
+pub use super::variables::MAGNITUDES;
 
 /// Every nonzero Real parameter within [`MAGNITUDES`]; the error names it.
 fn check_magnitudes(values: &Values) -> Result<(), String> {
@@ -293,14 +307,8 @@ fn check_magnitudes(values: &Values) -> Result<(), String> {
             continue;
         }
         if let Value::Real(v) = values.get(i) {
-            if *v != 0.0 && !MAGNITUDES.contains(&v.abs()) {
-                return Err(format!(
-                    "{}: {} is physically absurd: |value| must lie between {} and {} in SI units",
-                    var.name,
-                    Short(*v),
-                    Short(*MAGNITUDES.start()),
-                    Short(*MAGNITUDES.end())
-                ));
+            if *v != 0.0 {
+                check_magnitude(var.name, *v)?;
             }
         }
     }

@@ -457,8 +457,11 @@ fn hydraulics(figures: &mut Vec<(String, String)>) -> Result<Section, String> {
     let g_model: Vec<Complex<f64>> = f
         .iter()
         .map(|&f| response_at(&open_valve, 0, ov, f))
-        .collect();
-    let g_loes: Vec<Complex<f64>> = f.iter().map(|&f| response_at(&open, 0, ol, f)).collect();
+        .collect::<Result<_, _>>()?;
+    let g_loes: Vec<Complex<f64>> = f
+        .iter()
+        .map(|&f| response_at(&open, 0, ol, f))
+        .collect::<Result<_, _>>()?;
     let g_paper: Vec<Complex<f64>> = f
         .iter()
         .map(|&f| g_est(2.0 * std::f64::consts::PI * f))

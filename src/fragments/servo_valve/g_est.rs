@@ -80,20 +80,20 @@ pub fn compare_with_g_est(
         .iter()
         .position(|n| n == "y_pot")
         .expect("y_pot output");
-    Ok(freqs_hz
+    freqs_hz
         .iter()
         .map(|&f| {
-            let g = response_at(&lin, 0, out, f);
+            let g = response_at(&lin, 0, out, f)?;
             let e = g_est(2.0 * std::f64::consts::PI * f);
-            GEstPoint {
+            Ok(GEstPoint {
                 f_hz: f,
                 mag_db: 20.0 * crate::math::log10(g.norm()),
                 mag_db_est: 20.0 * crate::math::log10(e.norm()),
                 phase_deg: g.arg().to_degrees(),
                 phase_deg_est: e.arg().to_degrees(),
-            }
+            })
         })
-        .collect())
+        .collect()
 }
 
 /// Log-spaced frequencies from `f0` to `f1` \[Hz\], `n` points.
