@@ -97,8 +97,7 @@ fn related(de: &DefaultExperiment) -> Vec<Related> {
         role: "result",
         description: format!(
             "Output of the default experiment: {}. Every output of the model description, one \
-             column each (an FMI 3.0 array one column, its elements separated by spaces), no \
-             inputs. {}",
+             column each (an FMI 3.0 array one column, its elements separated by spaces). {}",
             experiment_text(de),
             comparison_text(de)
         ),
