@@ -1,6 +1,6 @@
 """The FMI ecosystem's formats in the packaged FMUs and in ssp/ (docs/ecosystem.md): the reference
-results of the default experiment (FMI-LS-REF layout) reproduced by fmpy within the tolerance the
-manifest states, the presets as SSP 1.0 parameter sets valid against the SSP 1.0 schema, the
+results of the default experiment (the FMI-LS-REF manifest valid against its schema, every output
+in the Reference FMUs' layout) reproduced by fmpy and libcosim as the manifest states, the presets as SSP 1.0 parameter sets valid against the SSP 1.0 schema, the
 example SSP system run by libcosim agreeing with fmpy on the same parameter set, and the icon and
 terminals (terminalsAndIcons.xml valid against FMI 3.0's schema, its members variables of the FMU).
 """
