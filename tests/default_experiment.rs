@@ -1,9 +1,11 @@
 //! The default experiment of the README (`hsp run`: the complete system, the 30 deg
 //! minimum-jerk move over 2 s, 6 s at 5 ms communication steps, through the packaged FMU's C
 //! ABI) gives the same CSV to the byte as the committed reference
-//! `tests/reference/default_experiment.csv`. `hsp package` ships the same run in both FMUs as
-//! their FMI-LS-REF result (`extra/org.fmi-standard.fmi-ls-ref/HydraulicSlewingPlate_out.csv`;
-//! `tests/python/test_ecosystem.py` checks it is this file, docs/ecosystem.md).
+//! `tests/reference/default_experiment.csv`. The FMI-LS-REF result both FMUs ship
+//! (`extra/org.fmi-standard.fmi-ls-ref/HydraulicSlewingPlate_out.csv`, every output in the
+//! Reference FMUs' layout, written by `hsp package`'s own run) holds the same values in the
+//! columns both files have: `tests/python/test_ecosystem.py` checks it against this file to the
+//! bit (docs/ecosystem.md).
 //!
 //! The reference is a regression value, not an independent one: the CSV of the day the FMU core
 //! was restructured (issue 24), kept so that a refactoring that changes any result by one bit is

@@ -1,6 +1,6 @@
 """The FMI ecosystem's formats in the packaged FMUs and in ssp/ (docs/ecosystem.md): the reference
-results of the default experiment (FMI-LS-REF layout) reproduced by fmpy within the tolerance the
-manifest states, the presets as SSP 1.0 parameter sets valid against the SSP 1.0 schema, the
+results of the default experiment (the FMI-LS-REF manifest valid against its schema, every output
+in the Reference FMUs' layout) reproduced by fmpy and libcosim as the manifest states, the presets as SSP 1.0 parameter sets valid against the SSP 1.0 schema, the
 example SSP system run by libcosim agreeing with fmpy on the same parameter set, and the icon and
 terminals (terminalsAndIcons.xml valid against FMI 3.0's schema, its members variables of the FMU).
 """
@@ -9,8 +9,10 @@ import io
 import math
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -19,8 +21,12 @@ import numpy as np
 import pytest
 import xmlschema
 from fmpy import read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
+from fmpy.util import read_csv
 from libcosimpy.CosimExecution import CosimExecution
 from libcosimpy.CosimObserver import CosimObserver
+from libcosimpy.CosimSlave import CosimLocalSlave
 from PIL import Image
 
 from conftest import ROOT, _presets, read_ssv
@@ -71,36 +77,221 @@ def test_manifest_lists_the_result_and_every_preset_and_nothing_else(fmus, versi
     assert stated_tolerance(fmus[version]) == float(md.defaultExperiment.tolerance)
 
 
-@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
-def test_shipped_result_is_the_committed_reference(fmus, version):
-    """One result: the CSV in the FMU is `hsp run`'s on the packaged FMU, and
-    tests/default_experiment.rs checks that run against the same committed file."""
-    with zipfile.ZipFile(fmus[version]) as z:
-        shipped = z.read(RESULT)
-    assert shipped == (ROOT / "tests" / "reference" / "default_experiment.csv").read_bytes()
+def stated_without_stop_time(fmu):
+    """What the manifest states for an importer that passes no stop time: the largest deviation
+    relative to a column's largest magnitude, the same before the last points, and how many."""
+    result = [r for r in manifest(fmu).iter("Related") if r.get("role") == "result"]
+    found = re.search(r"one that passes no stop time \(libcosim\) reproduces the values within "
+                      r"([0-9.eE+-]+) of each column's largest magnitude, and within ([0-9.eE+-]+) "
+                      r"but at the last ([0-9]+) communication points", result[0].get("description"))
+    assert found, result[0].get("description")
+    return float(found.group(1)), float(found.group(2)), int(found.group(3))
 
 
-@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
-def test_fmpy_reproduces_the_shipped_result_within_the_stated_tolerance(fmus, version):
-    fmu = fmus[version]
+def fmi_ls_ref_schema():
+    """FMI-LS-REF's own schema (tests/schema/fmi-ls-ref/, its README says where from): the remote
+    locations it imports and includes mapped to the copies beside it, no network."""
+    folder = ROOT / "tests" / "schema" / "fmi-ls-ref"
+    remote = "https://raw.githubusercontent.com/modelica/fmi-standard/main/schema/"
+    return xmlschema.XMLSchema(
+        str(folder / "fmi3LayeredStandardReferenceManifest.xsd"), allow="local",
+        uri_mapper={remote + n: str(folder / n)
+                    for n in ("fmi3LayeredStandardManifest.xsd", "fmi3Annotation.xsd")})
+
+
+def manifest_text(fmu):
     with zipfile.ZipFile(fmu) as z:
-        ref = np.genfromtxt(io.BytesIO(z.read(RESULT)), delimiter=",", names=True, deletechars="")
+        return z.read(f"{LS_REF}/fmi-ls-manifest.xml").decode()
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_manifest_is_valid_against_the_fmi_ls_ref_schema(fmus, version):
+    fmi_ls_ref_schema().validate(manifest_text(fmus[version]))
+
+
+def test_the_schema_refuses_a_manifest_without_the_ls_description(fmus):
+    """The omission the Reference FMUs' manifests have (and ours had): the schema requires
+    fmi-ls:fmi-ls-description."""
+    text = manifest_text(fmus["fmi2"])
+    without = re.sub(r'\s+fmi-ls:fmi-ls-description="[^"]*"', "", text, count=1)
+    assert without != text
+    assert not fmi_ls_ref_schema().is_valid(without)
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_documentation_has_the_page_fmi_ls_ref_recommends(fmus, version):
+    """FMI-LS-REF recommends documentation/fmi-ls-ref.{txt|html} and a link to it from the main
+    documentation; the page names every file the manifest lists."""
+    with zipfile.ZipFile(fmus[version]) as z:
+        page = z.read("documentation/fmi-ls-ref.html").decode()
+        index = z.read("documentation/index.html").decode()
+    assert 'href="fmi-ls-ref.html"' in index
+    for r in manifest(fmus[version]).iter("Related"):
+        assert f"<code>{r.get('source')}</code>" in page, r.get("source")
+
+
+def output_columns(fmu):
+    """The result's columns as the Reference FMUs write them: every output of the model
+    description in its order, and how many values each cell holds (an FMI 3.0 array's size)."""
+    md = read_model_description(fmu)
+    return [(v.name, math.prod(int(d.start) for d in v.dimensions) if v.dimensions else 1)
+            for v in md.modelVariables if v.causality == "output"]
+
+
+def shipped_result(fmu):
+    """The result's text and the table fmpy's read_csv (the Reference FMUs' reader) makes of it."""
+    with zipfile.ZipFile(fmu) as z:
+        text = z.read(RESULT).decode()
+    with tempfile.TemporaryDirectory() as d:
+        path = pathlib.Path(d) / "result.csv"
+        path.write_text(text)
+        return text, read_csv(path)
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_shipped_result_holds_every_output_and_no_input_in_the_reference_fmus_layout(fmus, version):
+    text, ref = shipped_result(fmus[version])
+    columns = output_columns(fmus[version])
+    assert text.splitlines()[0].split(",") == ["time"] + [n for n, _ in columns]
+    for name, size in columns:
+        assert ref[name].shape[1:] == ((size,) if size > 1 else ()), name
+    if version == "fmi2":
+        assert [f"acc[{k}]" for k in range(1, 13)] == [n for n, _ in columns if n.startswith("acc[")]
+    else:
+        assert ("acc", 12) in columns
+    md = read_model_description(fmus[version])
+    de = md.defaultExperiment
+    grid = np.arange(round(float(de.stopTime) / float(de.stepSize)) + 1) * float(de.stepSize)
+    np.testing.assert_allclose(ref["time"], grid, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_shipped_result_is_the_committed_reference_of_hsp_run(fmus, version):
+    """Two runs of the default experiment on the same FMU: `hsp package`'s, which records every
+    output, and `hsp run`'s, which tests/default_experiment.rs checks writes
+    tests/reference/default_experiment.csv to the byte. The outputs both hold agree to the bit."""
+    _, ref = shipped_result(fmus[version])
+    committed = read_csv(ROOT / "tests" / "reference" / "default_experiment.csv")
+    shared = [n for n in committed.dtype.names if n in ref.dtype.names and n != "time"]
+    assert len(shared) >= 20, shared
+    assert np.array_equal(committed["time"], ref["time"])
+    for n in shared:
+        assert np.array_equal(committed[n], ref[n]), n
+
+
+def step_the_grid(fmu, version, stop_time_passed):
+    """The default experiment stepped through fmpy's low-level API, the stop time passed to the
+    FMU or not: every output at every communication point, as read_csv reads the result."""
     md = read_model_description(fmu)
     de = md.defaultExperiment
-    names = [n for n in ref.dtype.names if n != "time"]
-    start, stop, step, tol = (float(v) for v in (de.startTime, de.stopTime, de.stepSize,
-                                                  de.tolerance))
-    res = simulate_fmu(fmu, fmi_type="CoSimulation", start_time=start, stop_time=stop,
-                       output_interval=step, relative_tolerance=tol, output=names)
-    np.testing.assert_allclose(res["time"], ref["time"], rtol=0, atol=1e-12)
-    rtol = stated_tolerance(fmu)
+    stop, step, tol = float(de.stopTime), float(de.stepSize), float(de.tolerance)
+    outputs = [v for v in md.modelVariables if v.causality == "output"]
+    unzipped = fmpy.extract(fmu)
+    cls = FMU2Slave if version == "fmi2" else FMU3Slave
+    slave = cls(guid=md.guid, unzipDirectory=unzipped,
+                modelIdentifier=md.coSimulation.modelIdentifier, instanceName="reference")
+    slave.instantiate()
+    stop_arg = stop if stop_time_passed else None
+    if version == "fmi2":
+        slave.setupExperiment(tolerance=tol, startTime=0.0, stopTime=stop_arg)
+        slave.enterInitializationMode()
+    else:
+        slave.enterInitializationMode(tolerance=tol, startTime=0.0, stopTime=stop_arg)
+    slave.exitInitializationMode()
+
+    def row(t):
+        values = [t]
+        for v in outputs:
+            size = math.prod(int(d.start) for d in v.dimensions) if v.dimensions else 1
+            if v.type in ("Real", "Float64"):
+                got = (slave.getReal([v.valueReference]) if version == "fmi2"
+                       else slave.getFloat64([v.valueReference], nValues=size))
+            else:
+                got = (slave.getInteger([v.valueReference]) if version == "fmi2"
+                       else slave.getInt32([v.valueReference], nValues=size))
+            values.append(tuple(got) if size > 1 else got[0])
+        return tuple(values)
+
+    n = round(stop / step)
+    rows = [row(0.0)]
+    for k in range(n):
+        t, t_next = k * step, (stop if k + 1 == n else (k + 1) * step)
+        slave.doStep(t, t_next - t)
+        rows.append(row(t_next))
+    slave.terminate()
+    slave.freeInstance()
+    shutil.rmtree(unzipped, ignore_errors=True)
+    sizes = {v.name: (math.prod(int(d.start) for d in v.dimensions) if v.dimensions else 1)
+             for v in outputs}
+    dtype = [("time", np.float64)] + [(v.name, np.float64, (sizes[v.name],)) if sizes[v.name] > 1
+                                      else (v.name, np.float64) for v in outputs]
+    return np.array(rows, dtype=dtype)
+
+
+def deviations(got, ref, names, rows=slice(None)):
+    """Each column's largest deviation from the result in the rows `rows` over the column's
+    largest magnitude."""
     worst = {}
     for n in names:
         scale = np.max(np.abs(ref[n]))
-        worst[n] = np.max(np.abs(res[n] - ref[n])) / scale if scale > 0 else np.max(np.abs(res[n]))
-    print(version, "largest deviation / column peak:", max(worst.values()))
-    bad = {n: w for n, w in worst.items() if not w <= rtol}
-    assert not bad, bad
+        dev = np.max(np.abs(got[n][rows] - ref[n][rows]))
+        worst[n] = dev / scale if scale > 0 else dev
+    return worst
+
+
+def check_without_stop_time(fmu, got, ref, names, who):
+    """`got` (the rows after t = 0 of `ref` when `ref` is longer) as the manifest states for an
+    importer that passes no stop time; prints the largest deviation."""
+    bound, before, points = stated_without_stop_time(fmu)
+    assert before <= bound <= stated_tolerance(fmu)
+    ref = ref[len(ref) - len(got):]
+    for what, worst, stated in (("", deviations(got, ref, names), bound),
+                                (f" before the last {points} points",
+                                 deviations(got, ref, names, slice(0, -points)), before)):
+        name = max(worst, key=worst.get)
+        print(f"{who} without a stop time: largest deviation / column peak{what}", worst[name],
+              "in", name)
+        assert worst[name] <= stated, (name, worst[name])
+
+
+@pytest.mark.parametrize("version", ["fmi2", "fmi3"])
+def test_the_stated_reproduction_holds_with_and_without_a_stop_time(fmus, version):
+    """What the manifest states: fmpy's simulate_fmu (which passes the stop time) and fmpy's
+    low-level API passing it reproduce every column to the bit; without a stop time the result
+    holds to the bit up to the stated last points, and there within the stated bound."""
+    fmu = fmus[version]
+    _, ref = shipped_result(fmu)
+    names = [n for n in ref.dtype.names if n != "time"]
+    md = read_model_description(fmu)
+    de = md.defaultExperiment
+    res = simulate_fmu(fmu, fmi_type="CoSimulation", start_time=float(de.startTime),
+                       stop_time=float(de.stopTime), output_interval=float(de.stepSize),
+                       relative_tolerance=float(de.tolerance), output=names)
+    assert np.array_equal(res["time"], ref["time"])
+    with_stop = deviations(res, ref, names)
+    assert max(with_stop.values()) == 0, {n: w for n, w in with_stop.items() if w}
+    assert max(deviations(step_the_grid(fmu, version, True), ref, names).values()) == 0
+    check_without_stop_time(fmu, step_the_grid(fmu, version, False), ref, names, version)
+
+
+def test_libcosim_without_a_stop_time_reproduces_the_result_as_stated(fmu_path, md):
+    """libcosim 0.0.6 passes no stop time to fmi2SetupExperiment: every Real output after each of
+    its steps on the default experiment's grid as the manifest states."""
+    _, ref = shipped_result(fmu_path)
+    de = md.defaultExperiment
+    n = round(float(de.stopTime) / float(de.stepSize))
+    reals = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+    execution = CosimExecution.from_step_size(step_size=round(float(de.stepSize) * 1e9))
+    plate = execution.add_local_slave(CosimLocalSlave(fmu_path=fmu_path, instance_name="plate"))
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer)
+    refs = [v.valueReference for v in reals]
+    rows = []
+    for _ in range(n):
+        assert execution.step()
+        rows.append(tuple(observer.last_real_values(slave_index=plate, variable_references=refs)))
+    got = np.array(rows, dtype=[(v.name, np.float64) for v in reals])
+    check_without_stop_time(fmu_path, got, ref, [v.name for v in reals], "libcosim")
 
 
 def ssp_files():

@@ -139,11 +139,12 @@ fn write_all(
     )?;
     // What both FMUs carry besides the model description and the binaries.
     let mut shared: Vec<(String, Vec<u8>)> = docs
-        .files
         .into_iter()
         .map(|(name, bytes)| (format!("documentation/{name}"), bytes))
         .collect();
-    shared.extend(ecosystem::extra(docs.default_experiment_csv, &xml_text)?);
+    shared.extend(ecosystem::extra(&xml_text)?);
+    // The reference result: this very FMU run in its default experiment.
+    let recorded = ecosystem::result::run_default_experiment(tmp, &xml_text)?;
     let windows = binaries.iter().any(|b| b.extension == "dll");
     shared.extend(licenses::entries(windows)?);
     // The interactive page with the browser build, in the FMUs and beside its sources.
@@ -161,13 +162,13 @@ fn write_all(
     // documentation and extra/, and terminalsAndIcons/.
     let xml3_path = root().join("modelDescription/fmi3/modelDescription.xml");
     let xml3 = std::fs::read(&xml3_path).map_err(|e| format!("{}: {e}", xml3_path.display()))?;
-    let terminals_and_icons = ecosystem::fmi3_only(&String::from_utf8_lossy(&xml3))?;
+    let terminals_and_icons = ecosystem::fmi3_only(&String::from_utf8_lossy(&xml3), &recorded)?;
     let entries3: Vec<(String, Vec<u8>)> = std::iter::once(("modelDescription.xml".into(), xml3))
         .chain(files3)
         .chain(shared)
         .chain(terminals_and_icons)
         .collect();
-    entries.extend(ecosystem::fmi2_only()?);
+    entries.extend(ecosystem::fmi2_only(&recorded)?);
     write_archive(tmp, &entries)?;
     let out3 = fmi3_path(out);
     if let Some(dir) = out3.parent() {

@@ -48,11 +48,8 @@ pub fn figure_parameters(more: &[(&str, &str)]) -> Result<Parameters, String> {
 }
 
 /// Runs `hsp run` with its defaults (no `--set`) on the FMU in a child process: its summary, the
-/// figure files and the CSV's bytes.
-pub fn default_experiment(
-    fmu: &Path,
-    work: &Path,
-) -> Result<(String, Vec<PathBuf>, Vec<u8>), String> {
+/// figure files.
+pub fn default_experiment(fmu: &Path, work: &Path) -> Result<(String, Vec<PathBuf>), String> {
     let exe = std::env::current_exe().map_err(|e| format!("hsp's own path: {e}"))?;
     let csv = work.join("default_experiment.csv");
     let out = Command::new(&exe)
@@ -75,8 +72,7 @@ pub fn default_experiment(
         .collect::<Vec<_>>()
         .join("\n");
     let paths = plot::experiment(&csv, "Default experiment (hsp run)")?;
-    let bytes = std::fs::read(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
-    Ok((summary, paths, bytes))
+    Ok((summary, paths))
 }
 
 /// The Bode plot's files and its caption.

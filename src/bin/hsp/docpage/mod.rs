@@ -33,14 +33,6 @@ use crate::model_description::ModelDescription;
 /// A file of the documentation folder: its name inside `documentation/` and its bytes.
 pub type DocFile = (String, Vec<u8>);
 
-/// What [`documentation`] makes.
-pub struct Documentation {
-    /// Everything of `documentation/`: the page and its figures.
-    pub files: Vec<DocFile>,
-    /// The CSV of the default experiment run for the figure (`hsp run`'s, on this FMU).
-    pub default_experiment_csv: Vec<u8>,
-}
-
 /// The documentation of the packaged FMU `fmu` (without documentation: the default experiment is
 /// run on it), `xml` its model description, `platforms2` and `platforms3` the `binaries/` folders
 /// of the FMI 2.0 and the FMI 3.0 FMU (both carry this documentation).
@@ -50,7 +42,7 @@ pub fn documentation(
     platforms2: &[String],
     platforms3: &[String],
     web: bool,
-) -> Result<Documentation, String> {
+) -> Result<Vec<DocFile>, String> {
     let work = std::env::temp_dir().join(format!("hsp-doc-{}", std::process::id()));
     std::fs::create_dir_all(&work).map_err(|e| format!("{}: {e}", work.display()))?;
     let result = make(fmu, xml, [platforms2, platforms3], web, &work);
@@ -64,7 +56,7 @@ fn make(
     platforms: [&[String]; 2],
     web: bool,
     work: &Path,
-) -> Result<Documentation, String> {
+) -> Result<Vec<DocFile>, String> {
     let md = ModelDescription::parse(xml)?;
     let mut files: Vec<DocFile> = vec![
         ("sketch.svg".into(), figures::SKETCH.as_bytes().to_vec()),
@@ -73,7 +65,7 @@ fn make(
             figures::bond_graph_svg()?.into_bytes(),
         ),
     ];
-    let (summary, experiment, csv) = figures::default_experiment(fmu, work)?;
+    let (summary, experiment) = figures::default_experiment(fmu, work)?;
     let bode = figures::bode(work)?;
     for path in experiment.iter().chain(&bode.paths) {
         let name = path
@@ -86,10 +78,7 @@ fn make(
     }
     let page = page::page(&md, platforms, &summary, &bode.caption, web)?;
     files.insert(0, ("index.html".into(), page.into_bytes()));
-    Ok(Documentation {
-        files,
-        default_experiment_csv: csv,
-    })
+    Ok(files)
 }
 
 /// The figures of a packaged FMU's `documentation/` copied into `dir` (`hsp doc-figures`, which

@@ -48,12 +48,7 @@ const TERMINALS: &[Terminal] = &[
 /// The variable names of the FMI 3.0 model description `xml3`.
 fn variable_names(xml3: &str) -> Result<Vec<String>, String> {
     let doc = roxmltree::Document::parse(xml3).map_err(|e| format!("FMI 3.0 XML: {e}"))?;
-    let vars = doc
-        .root_element()
-        .children()
-        .find(|n| n.has_tag_name("ModelVariables"))
-        .ok_or("FMI 3.0 XML: no <ModelVariables>")?;
-    Ok(vars
+    Ok(super::fmi3_model_variables(&doc)?
         .children()
         .filter_map(|n| n.attribute("name"))
         .map(str::to_string)
