@@ -19,8 +19,9 @@ What changes from FMI 2.0 to 3.0:
   importer reaches it through fmi3GetInt64/fmi3SetInt64), and each <SimpleType> with an
   <Enumeration> of <TypeDefinitions> becomes an <EnumerationType> with the same items; an `independent` variable `time` is added with value
   reference 0 (FMI 3.0 requires one; 0 is free in the FMI 2.0 table).
-- The vendor annotation's <Positive> and <Magnitudes> rules become an <Annotation
-  type="hydraulic-slewing-plate"> after <ModelStructure>.
+- The vendor annotation's <Positive> and <Magnitudes> rules become the text of an <Annotation
+  type="hydraulic-slewing-plate"> after <ModelStructure>: `positive = <names>` and
+  `magnitudes = <smallest> <largest>`, a line each.
 - `<ModelStructure>` refers to value references, not indices: Output, ContinuousStateDerivative
   and InitialUnknown elements, with the dependencies of an array the union over its elements.
 - The instantiation token is the FMI 2.0 GUID: both are a hash of the same source.
@@ -250,20 +251,23 @@ def generate(text):
             out.append(f'    <{tag3} valueReference="{vr}"{dep}/>')
     out.append("  </ModelStructure>")
     # The rules min and max cannot express (strictly positive parameters, the magnitudes a
-    # parameter may have), as the FMI 2.0 file's vendor annotation states them; the switches
-    # need no rule here, they are Enumerations.
+    # parameter may have), as the FMI 2.0 file's vendor annotation states them, one `name =
+    # values` line each: an FMI 3.0 <Annotation> may hold elements, but importers that read it
+    # as text only (the Rust fmi crate 0.8) refuse a file whose annotation has any. The
+    # switches need no rule here: they are Enumerations.
     rules = root.find("VendorAnnotations/Tool[@name='hydraulic-slewing-plate']/Rules")
     if rules is None:
         raise SystemExit("the FMI 2.0 file has no <Rules> in its vendor annotation")
+    lines = []
+    for rule in rules:
+        if rule.tag == "Positive":
+            lines.append("positive = " + " ".join(rule.get("names").split()))
+        elif rule.tag == "Magnitudes":
+            lines.append(f"magnitudes = {rule.get('smallest')} {rule.get('largest')}")
     out.append("")
     out.append("  <Annotations>")
     out.append('    <Annotation type="hydraulic-slewing-plate">')
-    out.append("      <Rules>")
-    for rule in rules:
-        if rule.tag in ("Positive", "Magnitudes"):
-            attributes = {k: " ".join(v.split()) for k, v in rule.attrib.items()}
-            out.append(f"        <{rule.tag}{attrs(attributes.items())}/>")
-    out.append("      </Rules>")
+    out.extend(f"{esc(line)}" for line in lines)
     out.append("    </Annotation>")
     out.append("  </Annotations>")
     out.append("</fmiModelDescription>")

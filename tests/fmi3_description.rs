@@ -127,19 +127,20 @@ fn both_descriptions_state_the_rules_min_and_max_cannot() {
             n.has_tag_name("Annotation") && n.attribute("type") == Some("hydraulic-slewing-plate")
         })
         .expect("the FMI 3.0 description's annotation of the rules");
-    let positive: Vec<&str> = rules
-        .descendants()
-        .find(|n| n.has_tag_name("Positive"))
-        .and_then(|n| n.attribute("names"))
-        .expect("<Positive names=...>")
-        .split_whitespace()
-        .collect();
+    // The annotation's text: `positive = <names>` and `magnitudes = <smallest> <largest>`.
+    let text = rules.text().expect("the rules as text");
+    let rule = |name: &str| -> Vec<&str> {
+        text.lines()
+            .find_map(|l| l.trim().strip_prefix(name)?.trim().strip_prefix('='))
+            .unwrap_or_else(|| panic!("no rule '{name}' in {text}"))
+            .split_whitespace()
+            .collect()
+    };
     let table: Vec<&str> = POSITIVE.iter().map(|&i| VARIABLES[i].name).collect();
-    assert_eq!(positive, table);
-    let magnitudes = rules
-        .descendants()
-        .find(|n| n.has_tag_name("Magnitudes"))
-        .expect("<Magnitudes>");
-    let read = |k: &str| magnitudes.attribute(k).unwrap().parse::<f64>().unwrap();
-    assert_eq!(read("smallest")..=read("largest"), MAGNITUDES);
+    assert_eq!(rule("positive"), table);
+    let magnitudes: Vec<f64> = rule("magnitudes")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(magnitudes[0]..=magnitudes[1], MAGNITUDES);
 }
