@@ -361,6 +361,14 @@ pub unsafe fn set_values<M: FmuModel, T: Copy>(
     .into()
 }
 
+/// Whether a value function of a type the FMU has no variable of gets or sets
+/// ([`no_such_type`]): it is allowed where the getters, or the setters, are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    Get,
+    Set,
+}
+
 /// A getter or setter of a type the model has no variable of (`fmi3GetFloat32`, `fmi3SetInt8`,
 /// ...): no value reference can be right, and an empty call is a no-op.
 ///
@@ -370,6 +378,7 @@ pub unsafe fn no_such_type<M: FmuModel>(
     table: &Fmi3Table,
     c: Fmi3Instance,
     function: &'static str,
+    access: Access,
     type_name: &'static str,
     vrs: *const Fmi3ValueReference,
     n_vrs: usize,
@@ -377,10 +386,9 @@ pub unsafe fn no_such_type<M: FmuModel>(
     // A setter is allowed where the setters of the FMU's types are (Instantiated included), a
     // getter where the getters are: the answer then names the value reference and its type
     // (fuzz finding F3: a setter answered "illegal call sequence" in Instantiated).
-    let operation = if function.starts_with("fmi3Set") {
-        Operation::SetValues
-    } else {
-        Operation::GetValues
+    let operation = match access {
+        Access::Get => Operation::GetValues,
+        Access::Set => Operation::SetValues,
     };
     // SAFETY: as this function's contract.
     unsafe {

@@ -19,7 +19,9 @@ macro_rules! __fmi3_no_such_type {
         ) -> Fmi3Status {
             // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
             // the contract of the entry point it forwards to.
-            unsafe { x::no_such_type::<M>(table(), c, stringify!($get), $name, vr, nvr) }
+            unsafe {
+                x::no_such_type::<M>(table(), c, stringify!($get), x::Access::Get, $name, vr, nvr)
+            }
         }
         #[no_mangle]
         pub unsafe extern "C" fn $set(
@@ -31,7 +33,9 @@ macro_rules! __fmi3_no_such_type {
         ) -> Fmi3Status {
             // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
             // the contract of the entry point it forwards to.
-            unsafe { x::no_such_type::<M>(table(), c, stringify!($set), $name, vr, nvr) }
+            unsafe {
+                x::no_such_type::<M>(table(), c, stringify!($set), x::Access::Set, $name, vr, nvr)
+            }
         }
     };
 }
@@ -371,7 +375,7 @@ macro_rules! export_fmi3 {
                 // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
                 // the contract of the entry point it forwards to.
                 unsafe {
-                    x::no_such_type::<M>(table(), c, "fmi3SetString", "String", vr, nvr)
+                    x::no_such_type::<M>(table(), c, "fmi3SetString", x::Access::Set, "String", vr, nvr)
                 }
             }
             $crate::__fmi3_no_such_type!(fmi3GetFloat32, fmi3SetFloat32, f32, "Float32");
@@ -428,7 +432,7 @@ macro_rules! export_fmi3 {
                 // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
                 // the contract of the entry point it forwards to.
                 unsafe {
-                    x::no_such_type::<M>(table(), c, "fmi3GetBinary", "Binary", vr, nvr)
+                    x::no_such_type::<M>(table(), c, "fmi3GetBinary", x::Access::Get, "Binary", vr, nvr)
                 }
             }
             #[no_mangle]
@@ -443,7 +447,7 @@ macro_rules! export_fmi3 {
                 // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
                 // the contract of the entry point it forwards to.
                 unsafe {
-                    x::no_such_type::<M>(table(), c, "fmi3SetBinary", "Binary", vr, nvr)
+                    x::no_such_type::<M>(table(), c, "fmi3SetBinary", x::Access::Set, "Binary", vr, nvr)
                 }
             }
             #[no_mangle]
@@ -456,7 +460,7 @@ macro_rules! export_fmi3 {
                 // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
                 // the contract of the entry point it forwards to.
                 unsafe {
-                    x::no_such_type::<M>(table(), c, "fmi3GetClock", "Clock", vr, nvr)
+                    x::no_such_type::<M>(table(), c, "fmi3GetClock", x::Access::Get, "Clock", vr, nvr)
                 }
             }
             #[no_mangle]
@@ -469,7 +473,7 @@ macro_rules! export_fmi3 {
                 // SAFETY: the importer keeps the FMI 3.0 contract of this function, which is
                 // the contract of the entry point it forwards to.
                 unsafe {
-                    x::no_such_type::<M>(table(), c, "fmi3SetClock", "Clock", vr, nvr)
+                    x::no_such_type::<M>(table(), c, "fmi3SetClock", x::Access::Set, "Clock", vr, nvr)
                 }
             }
 

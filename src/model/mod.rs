@@ -177,6 +177,25 @@ impl HydraulicSlewingPlate {
     }
 
     /// Writes outputs and solver statistics for the integrator's current point.
+    /// A completed step whose result cannot be handed out: the integrator goes back to the
+    /// step's start (`t_start`, the state saved in `step_start`), the outputs are that state's,
+    /// and the failure says so.
+    fn back_to_step_start(
+        &mut self,
+        values: &mut Values,
+        t_start: f64,
+        message: String,
+    ) -> StepFailure {
+        if let Some(integrator) = &mut self.integrator {
+            integrator.reset(t_start, std::mem::take(&mut self.step_start));
+        }
+        self.write_outputs(values);
+        StepFailure {
+            last_successful_time: t_start,
+            message,
+        }
+    }
+
     /// In the real-time mode with the full servo valve: the first output outside its physical
     /// bound ([`realtime_guard::check`]); `None` otherwise (the adaptive methods' error control
     /// keeps them inside).
@@ -389,14 +408,7 @@ impl FmuModel for HydraulicSlewingPlate {
                 Short(t_end),
                 Self::held_inputs(values)
             );
-            if let Some(integrator) = &mut self.integrator {
-                integrator.reset(t_start, std::mem::take(&mut self.step_start));
-            }
-            self.write_outputs(values);
-            return Err(StepFailure {
-                last_successful_time: t_start,
-                message,
-            });
+            return Err(self.back_to_step_start(values, t_start, message));
         }
         if let Some(bad) = self.out_of_bounds(values) {
             // The real-time mode's fixed step has no error control: a step too long for what
@@ -408,14 +420,7 @@ impl FmuModel for HydraulicSlewingPlate {
                 Short(t_end),
                 Self::held_inputs(values)
             );
-            if let Some(integrator) = &mut self.integrator {
-                integrator.reset(t_start, std::mem::take(&mut self.step_start));
-            }
-            self.write_outputs(values);
-            return Err(StepFailure {
-                last_successful_time: t_start,
-                message,
-            });
+            return Err(self.back_to_step_start(values, t_start, message));
         }
         self.check_validity(values, t_end, log);
         self.check_oscillation(values, t_end, log);

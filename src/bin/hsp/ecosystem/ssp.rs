@@ -213,20 +213,18 @@ pub fn system_description(form: Form) -> Result<String, String> {
     s.push_str("    </ssd:Elements>\n");
     if exposed {
         s.push_str("    <ssd:Connections>\n");
-    }
-    for (name, kind) in CONNECTORS.iter().filter(|_| exposed) {
-        let (start, end) = if *kind == "input" {
-            (String::new(), " endElement=\"plate\"")
-        } else {
-            (" startElement=\"plate\"".to_string(), "")
-        };
-        writeln!(
-            s,
-            "      <ssd:Connection{start} startConnector=\"{name}\"{end} endConnector=\"{name}\"/>"
-        )
-        .unwrap();
-    }
-    if exposed {
+        for (name, kind) in CONNECTORS {
+            let (start, end) = if *kind == "input" {
+                ("", " endElement=\"plate\"")
+            } else {
+                (" startElement=\"plate\"", "")
+            };
+            writeln!(
+                s,
+                "      <ssd:Connection{start} startConnector=\"{name}\"{end} endConnector=\"{name}\"/>"
+            )
+            .unwrap();
+        }
         s.push_str("    </ssd:Connections>\n");
     }
     s.push_str("  </ssd:System>\n");
