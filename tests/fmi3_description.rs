@@ -117,7 +117,8 @@ fn both_descriptions_state_the_rules_min_and_max_cannot() {
     // F6 of the fuzz round: only the FMI 2.0 file stated that the <Positive> parameters refuse 0,
     // and neither the magnitudes. The FMI 3.0 file's annotation now holds the same rules as the
     // FMI 2.0 file's vendor annotation, which build.rs turns into the table the checks read.
-    use hydraulic_slewing_plate::model::variables::{MAGNITUDES, POSITIVE};
+    use hydraulic_slewing_plate::fragments::rules::RULES;
+    use hydraulic_slewing_plate::model::variables::MAGNITUDES;
     let text =
         std::fs::read_to_string(root().join("modelDescription/fmi3/modelDescription.xml")).unwrap();
     let doc = roxmltree::Document::parse(&text).unwrap();
@@ -136,8 +137,15 @@ fn both_descriptions_state_the_rules_min_and_max_cannot() {
             .split_whitespace()
             .collect()
     };
-    let table: Vec<&str> = POSITIVE.iter().map(|&i| VARIABLES[i].name).collect();
-    assert_eq!(rule("positive"), table);
+    // The table is sorted by name.
+    let table: Vec<&str> = RULES
+        .iter()
+        .filter(|(_, r)| r.positive)
+        .map(|(name, _)| *name)
+        .collect();
+    let mut stated = rule("positive");
+    stated.sort_unstable();
+    assert_eq!(stated, table);
     let magnitudes: Vec<f64> = rule("magnitudes")
         .iter()
         .map(|v| v.parse().unwrap())

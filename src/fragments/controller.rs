@@ -34,6 +34,7 @@
 //! so `y_POT` remains an output for the user's loop.
 
 use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId};
+use crate::fragments::rules;
 
 /// Potentiometer full-scale voltage assumed for the default `k_POT` \[V\].
 pub const POT_FULL_SCALE_VOLTS: f64 = 10.0;
@@ -130,31 +131,22 @@ impl ControllerParameters {
         }
     }
 
-    /// Checks the gains and the rail; the error names the FMU variable.
+    /// Every numeric value with the FMU variable it is (`controller.<name>`).
+    pub fn named(&self) -> [(&'static str, f64); 6] {
+        [
+            ("controller.A1", self.a1),
+            ("controller.A2", self.a2),
+            ("controller.k_pot", self.k_pot),
+            ("controller.e_max", self.e_max),
+            ("controller.k_pl", self.k_pl),
+            ("controller.f_pl", self.f_pl),
+        ]
+    }
+
+    /// Checks the gains, the rail and the filter against the model description's rules
+    /// ([`rules`]); the error names the FMU variable.
     pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("A1", self.a1),
-            ("A2", self.a2),
-            ("k_pot", self.k_pot),
-            ("k_pl", self.k_pl),
-        ] {
-            if !v.is_finite() {
-                return Err(format!("controller.{name}: must be finite, got {v}"));
-            }
-        }
-        if self.pressure_feedback() && !(self.f_pl.is_finite() && self.f_pl > 0.0) {
-            return Err(format!(
-                "controller.f_pl: the pressure filter's corner must be positive, got {} Hz",
-                self.f_pl
-            ));
-        }
-        if !(self.e_max.is_finite() && self.e_max > 0.0) {
-            return Err(format!(
-                "controller.e_max: the amplifier's output limit must be positive, got {} V",
-                self.e_max
-            ));
-        }
-        Ok(())
+        rules::check_all(&self.named())
     }
 }
 

@@ -24,6 +24,7 @@ pub mod loes;
 pub mod orifice;
 pub mod plate;
 pub mod reference;
+pub mod rules;
 pub mod servo_valve;
 pub mod torque_motor;
 pub mod torsion_bar;

@@ -25,6 +25,7 @@
 //! `<prefix>.move` (volts) -> sum with `r` `<prefix>.r` (the loop's reference).
 
 use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId};
+use crate::fragments::rules;
 
 /// The move (SI units).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -60,27 +61,19 @@ impl MoveParameters {
         self.t_start + self.duration
     }
 
-    /// Checks the values; the error names the FMU variable.
+    /// Every value with the FMU variable it is (`reference.<name>`).
+    pub fn named(&self) -> [(&'static str, f64); 3] {
+        [
+            ("reference.angle", self.angle),
+            ("reference.t_start", self.t_start),
+            ("reference.duration", self.duration),
+        ]
+    }
+
+    /// Checks the values against the model description's rules ([`rules`]); the error names the
+    /// FMU variable.
     pub fn validate(&self) -> Result<(), String> {
-        if !self.angle.is_finite() {
-            return Err(format!(
-                "reference.angle: must be finite, got {}",
-                self.angle
-            ));
-        }
-        if !(self.t_start >= 0.0 && self.t_start.is_finite()) {
-            return Err(format!(
-                "reference.t_start: must be a non-negative time, got {} s",
-                self.t_start
-            ));
-        }
-        if !(self.duration > 0.0 && self.duration.is_finite()) {
-            return Err(format!(
-                "reference.duration: must be positive, got {} s",
-                self.duration
-            ));
-        }
-        Ok(())
+        rules::check_all(&self.named())
     }
 
     /// `(theta_ref, d theta_ref / dt)` at time `t` since the start of the simulation \[rad,

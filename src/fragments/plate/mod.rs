@@ -34,6 +34,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::bond_graph::{BondGraph, BondId, ElementId, Law, NonlinearLaw, SignalId};
 
 use super::hub::HubPorts;
+use super::rules;
 
 /// Most beam functions per direction (`plate.N`, `plate.M`): 20 x 20 = 400 modes. The beam
 /// functions stay orthonormal to 1e-12 and the Ritz frequencies keep converging there
@@ -166,46 +167,34 @@ impl PlateParameters {
         v
     }
 
-    /// Checks the values a model can be built from.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
+    /// Every numeric value with the FMU variable it is (`plate.<name>`, `hub.I_H`).
+    pub fn named(&self) -> [(&'static str, f64); 17] {
+        [
+            ("plate.N", self.n as f64),
+            ("plate.M", self.m as f64),
             ("plate.E", self.e),
             ("plate.rho", self.rho),
             ("plate.a", self.a),
             ("plate.b", self.b),
             ("plate.h", self.h),
-        ] {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("{name}: must be positive, got {v}"));
-            }
-        }
-        if !(0.0..0.5).contains(&self.nu) {
-            return Err(format!("plate.nu: must be in [0, 0.5), got {}", self.nu));
-        }
-        if !(self.zeta >= 0.0 && self.zeta.is_finite()) {
-            return Err(format!(
-                "plate.zeta: must be non-negative, got {}",
-                self.zeta
-            ));
-        }
-        for (name, v) in [
+            ("plate.nu", self.nu),
+            ("plate.zeta", self.zeta),
+            ("hub.I_H", self.i_h),
+            ("plate.x1", self.x1),
+            ("plate.y1", self.y1),
+            ("plate.x2", self.x2),
+            ("plate.y2", self.y2),
             ("plate.Cd", self.cd),
             ("plate.rho_air", self.rho_air),
             ("plate.Ca", self.ca),
-        ] {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(format!("{name}: must be non-negative, got {v}"));
-            }
-        }
-        if !(self.i_h >= 0.0 && self.i_h.is_finite()) {
-            return Err(format!("hub.I_H: must be non-negative, got {}", self.i_h));
-        }
-        if self.n < 1 || self.m < 1 || self.n > MAX_FUNCTIONS || self.m > MAX_FUNCTIONS {
-            return Err(format!(
-                "plate.N and plate.M must be in 1..={MAX_FUNCTIONS}, got {} and {}",
-                self.n, self.m
-            ));
-        }
+        ]
+    }
+
+    /// Checks the values a model can be built from: each against the model description's rules
+    /// ([`rules`]), then the relation the XML cannot state, the excitation and measurement points
+    /// on the plate. The error names the FMU variable.
+    pub fn validate(&self) -> Result<(), String> {
+        rules::check_all(&self.named())?;
         for (k, x, y) in [(1, self.x1, self.y1), (2, self.x2, self.y2)] {
             if !(0.0..=self.a).contains(&x) || !(0.0..=self.b).contains(&y) {
                 return Err(format!(

@@ -9,6 +9,7 @@ pub const D_M: f64 = 1e-5;
 /// `G_est`.
 pub const LOES_D_M: f64 = 8.04e-5;
 use super::super::orifice::OrificeFluid;
+use crate::fragments::rules;
 
 /// How the power amplifier drives the torque motor's coil (`servo_valve.drive`).
 ///
@@ -227,66 +228,60 @@ impl ServoValveParameters {
         self.cd * self.w * ((self.p_supply - self.p_tank) / self.rho).sqrt()
     }
 
-    /// Checks that every constant is finite and positive (`p_tank` finite and below the supply);
-    /// the error names the FMU variable, e.g. `servo_valve.p_supply`.
+    /// Every constant with the FMU variable it is (`servo_valve.<name>`), in the order of the
+    /// model description.
+    pub fn named(&self) -> [(&'static str, f64); 35] {
+        [
+            ("servo_valve.p_supply", self.p_supply),
+            ("servo_valve.p_tank", self.p_tank),
+            ("servo_valve.rho", self.rho),
+            ("servo_valve.beta", self.beta),
+            ("servo_valve.Cd", self.cd),
+            ("servo_valve.dp_cr", self.dp_cr),
+            ("servo_valve.R_bob", self.r_bob),
+            ("servo_valve.L_bob", self.l_bob),
+            ("servo_valve.G_i", self.g_i),
+            ("servo_valve.K_i", self.k_i),
+            ("servo_valve.U_c", self.u_c),
+            ("servo_valve.k_phi", self.k_phi),
+            ("servo_valve.m_f", self.m_f),
+            ("servo_valve.b_f", self.b_f),
+            ("servo_valve.k_f", self.k_f),
+            ("servo_valve.k_w", self.k_w),
+            ("servo_valve.d_0", self.d_0),
+            ("servo_valve.d_n", self.d_n),
+            ("servo_valve.x_f0", self.x_f0),
+            ("servo_valve.V_H", self.v_h),
+            ("servo_valve.d_s", self.d_s),
+            ("servo_valve.m_v", self.m_v),
+            ("servo_valve.b_v", self.b_v),
+            ("servo_valve.k_v", self.k_v),
+            ("servo_valve.w", self.w),
+            ("servo_valve.c_r", self.c_r),
+            ("servo_valve.x_v_max", self.x_v_max),
+            ("servo_valve.V_1", self.v_1),
+            ("servo_valve.R_leak", self.r_leak),
+            ("servo_valve.D_m", self.d_m),
+            ("servo_valve.I_m", self.i_m),
+            ("servo_valve.b_m", self.b_m),
+            ("servo_valve.T_c", self.t_c),
+            ("servo_valve.T_s", self.t_s),
+            ("servo_valve.omega_s", self.omega_s),
+        ]
+    }
+
+    /// Checks every constant against the model description's rules ([`rules`]), then the
+    /// relations the XML cannot state: the tank below the supply, the breakaway friction at least
+    /// the running friction. The error names the FMU variable, e.g. `servo_valve.p_supply`.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.p_supply.is_finite() && self.p_supply > 0.0) {
-            return Err(format!(
-                "servo_valve.p_supply: the supply pressure must be positive, got {} Pa",
-                self.p_supply
-            ));
-        }
-        if !(self.p_tank.is_finite() && self.p_tank < self.p_supply) {
+        rules::check_all(&self.named())?;
+        if self.p_tank >= self.p_supply {
             return Err(format!(
                 "servo_valve.p_tank: the tank pressure must be below the supply pressure ({} Pa), got {} Pa",
                 self.p_supply, self.p_tank
             ));
         }
-        let positive = [
-            ("rho", self.rho),
-            ("beta", self.beta),
-            ("Cd", self.cd),
-            ("dp_cr", self.dp_cr),
-            ("R_bob", self.r_bob),
-            ("L_bob", self.l_bob),
-            ("G_i", self.g_i),
-            ("K_i", self.k_i),
-            ("U_c", self.u_c),
-            ("k_phi", self.k_phi),
-            ("m_f", self.m_f),
-            ("b_f", self.b_f),
-            ("k_f", self.k_f),
-            ("k_w", self.k_w),
-            ("d_0", self.d_0),
-            ("d_n", self.d_n),
-            ("x_f0", self.x_f0),
-            ("V_H", self.v_h),
-            ("d_s", self.d_s),
-            ("m_v", self.m_v),
-            ("b_v", self.b_v),
-            ("k_v", self.k_v),
-            ("w", self.w),
-            ("c_r", self.c_r),
-            ("x_v_max", self.x_v_max),
-            ("V_1", self.v_1),
-            ("R_leak", self.r_leak),
-            ("D_m", self.d_m),
-            ("I_m", self.i_m),
-            ("b_m", self.b_m),
-            ("omega_s", self.omega_s),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("servo_valve.{name}: must be positive, got {v}"));
-            }
-        }
-        if !(self.t_c.is_finite() && self.t_c >= 0.0) {
-            return Err(format!(
-                "servo_valve.T_c: the running friction torque must be non-negative, got {} N m",
-                self.t_c
-            ));
-        }
-        if !(self.t_s.is_finite() && self.t_s >= self.t_c) {
+        if self.t_s < self.t_c {
             return Err(format!(
                 "servo_valve.T_s: the breakaway friction torque must be at least the running \
                  torque servo_valve.T_c = {} N m, got {} N m",
