@@ -691,6 +691,7 @@ fn symbol(sym: &str) -> Vec<(f64, Dims)> {
             (9.80665, d([(m, 1), (s, -2), none, none])),
         ],
         "A" => vec![(1.0, d([(a, 1), none, none, none]))],
+        "C" => vec![(1.0, d([(a, 1), (s, 1), none, none]))],
         "rad" => vec![(1.0, d([(rad, 1), none, none, none]))],
         "deg" => vec![(
             std::f64::consts::PI / 180.0,

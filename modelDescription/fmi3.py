@@ -196,7 +196,7 @@ def generate(text):
         out.append("")
 
     out.append("  <ModelVariables>")
-    out.append(f'    <Float64 name="time" valueReference="{TIME_VR}" causality="independent" variability="continuous" description="Simulation time"/>')
+    out.append(f'    <Float64 name="time" valueReference="{TIME_VR}" causality="independent" variability="continuous" description="Simulation time" unit="s"/>')
     for name, members in groups:
         v = members[0]
         is_array = len(members) > 1

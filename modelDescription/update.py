@@ -75,7 +75,7 @@ def state_variables(structure):
         lines.append(
             f'    <ScalarVariable name="x.{state}" valueReference="{STATE_VR + k}" variability="continuous" initial="calculated"\n'
             f'      description="{description}">\n'
-            f"      <Real{nominal(structure, state)}/>\n"
+            f"      <Real{unit(structure, state, 0)}{nominal(structure, state)}/>\n"
             f"    </ScalarVariable>\n"
         )
     return lines
@@ -89,13 +89,21 @@ def nominal(structure, state):
     return "" if value is None else f' nominal="{float(value)!r}"'
 
 
+def unit(structure, state, which):
+    """The unit attribute of the state (which = 0) or of its derivative (which = 1), as the
+    fragment that owns the state stated it (bond_graph::units); none while model_structure.json
+    has no units for it."""
+    units = structure.get("units", {}).get(state)
+    return "" if units is None else f' unit="{units[which]}"'
+
+
 def derivative_variables(structure, position):
     lines = []
     for k, state in enumerate(structure["states"], start=1):
         lines.append(
             f'    <ScalarVariable name="der(x.{state})" valueReference="{DERIVATIVE_VR + k}" variability="continuous" initial="calculated"\n'
             f'      description="Time derivative of x.{state}">\n'
-            f'      <Real derivative="{position[f"x.{state}"]}"/>\n'
+            f'      <Real derivative="{position[f"x.{state}"]}"{unit(structure, state, 1)}/>\n'
             f"    </ScalarVariable>\n"
         )
     return lines

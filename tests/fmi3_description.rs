@@ -59,6 +59,7 @@ fn the_fmi3_description_declares_what_the_layer_serves() {
     let time = declared[0];
     assert_eq!(time.attribute("name"), Some("time"));
     assert_eq!(time.attribute("causality"), Some("independent"));
+    assert_eq!(time.attribute("unit"), Some("s"));
     assert_eq!(
         time.attribute("valueReference"),
         Some(TIME_VALUE_REFERENCE.to_string().as_str())

@@ -2,6 +2,8 @@
 //! start values are the fragments' documented defaults, every compiled input and output is an FMU
 //! variable, and `hsp linearize` gives eq. 1 of the paper.
 
+use std::collections::BTreeMap;
+
 use hydraulic_slewing_plate::fmu::{Causality, Experiment, Values};
 use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::LoesParameters;
@@ -216,4 +218,39 @@ fn bar_min_per_litre_is_six_billion_si() {
         .unwrap()
         .factor;
     assert!((factor * 6e9 - 1.0).abs() < 1e-15, "{factor}");
+}
+
+/// Issue 41, item 8: every continuous state and its derivative carry a unit (the fragment that
+/// owns the state states it, `bond_graph::units`), and the derivative's unit is the state's per
+/// second by the base units the XML gives both (an I element's momentum and its effort, a C
+/// element's displacement and its flow, an integrator and its input).
+#[test]
+fn every_state_and_derivative_has_a_unit_and_they_differ_by_a_second() {
+    let md = model_description();
+    let base = |unit: &str| -> BTreeMap<String, i32> {
+        let u = md
+            .units
+            .iter()
+            .find(|u| u.name == unit)
+            .unwrap_or_else(|| panic!("unit {unit} is not defined"));
+        u.base_unit
+            .iter()
+            .flatten()
+            .map(|(k, v)| (k.clone(), v.parse::<i32>().unwrap()))
+            .filter(|(_, v)| *v != 0)
+            .collect()
+    };
+    let mut checked = 0;
+    for d in md.variables.iter().filter(|v| v.derivative.is_some()) {
+        let x = &md.variables[d.derivative.as_ref().unwrap().parse::<usize>().unwrap() - 1];
+        let (Some(ux), Some(ud)) = (x.unit.as_deref(), d.unit.as_deref()) else {
+            panic!("{} or {} has no unit", x.name, d.name);
+        };
+        let mut per_second = base(ux);
+        *per_second.entry("s".into()).or_default() -= 1;
+        per_second.retain(|_, v| *v != 0);
+        assert_eq!(base(ud), per_second, "{} in {ux}, {} in {ud}", x.name, d.name);
+        checked += 1;
+    }
+    assert_eq!(checked, hydraulic_slewing_plate::model::variables::CONTINUOUS_STATES.len());
 }

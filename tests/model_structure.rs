@@ -81,6 +81,8 @@ fn structure() -> Value {
     let mut states: Vec<String> = Vec::new();
     let mut derivatives: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     let mut outputs: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    // Each state's [unit, derivative's unit]: the same in every configuration that has it.
+    let mut units: BTreeMap<String, [&str; 2]> = BTreeMap::new();
     for config in configurations() {
         let mut values = Values::from_start(&VARIABLES);
         for (name, value) in &config {
@@ -97,6 +99,12 @@ fn structure() -> Value {
             if !states.contains(s) {
                 states.push(s.clone());
             }
+        }
+        for (s, u) in c.state_names().iter().zip(system.state_units()) {
+            let u = u.unwrap_or_else(|| panic!("{s}: its fragment states no units ({config:?})"));
+            let pair = [u.state, u.derivative];
+            let known = units.entry(s.clone()).or_insert(pair);
+            assert_eq!(*known, pair, "{s}: units differ between configurations ({config:?})");
         }
         let (sn, un) = (c.state_names(), c.input_names());
         let n = c.n_states();
@@ -141,6 +149,7 @@ fn structure() -> Value {
     json!({
         "plate_modes": PLATE_MODES,
         "nominals": nominals,
+        "units": units,
         "states": states,
         "derivatives": derivatives,
         "outputs": outputs,

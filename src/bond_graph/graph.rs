@@ -3,6 +3,7 @@
 use nalgebra::DMatrix;
 
 use super::element::*;
+use super::units::{Domain, StateUnits};
 
 /// A bond graph under construction: elements, bonds, signal blocks and outputs.
 ///
@@ -21,6 +22,8 @@ pub struct BondGraph {
     /// Typical magnitudes of states, set by the fragment that owns them (see
     /// [`BondGraph::set_nominal`]), keyed by the state owner.
     nominals: Vec<(StateOwner, Vec<f64>)>,
+    /// The units of states, set by the fragment that owns them (see [`BondGraph::set_domains`]).
+    units: Vec<(StateOwner, Vec<StateUnits>)>,
 }
 
 /// An item that carries states: a storage element or an integrator.
@@ -41,7 +44,66 @@ impl BondGraph {
             outputs: Vec::new(),
             state_order: Vec::new(),
             nominals: Vec::new(),
+            units: Vec::new(),
         }
+    }
+
+    /// The number of states of the storage element `element` (one for an I or C, one per port
+    /// for a field), 0 for any other element.
+    fn states_of(&self, element: ElementId) -> usize {
+        match &self.elements[element.0].kind {
+            ElementKind::I(_) | ElementKind::C(_) => 1,
+            ElementKind::IField(m) | ElementKind::CField(m, _) => m.nrows(),
+            _ => 0,
+        }
+    }
+
+    /// States the energy domain of each port of the storage element `element` (one per state),
+    /// which gives its states' units (see [`super::units`]).
+    ///
+    /// # Panics
+    /// If `element` carries no state, or the number of domains differs from its number of
+    /// states (a programming error in the fragment).
+    pub fn set_domains(&mut self, element: ElementId, domains: &[Domain]) {
+        let states = self.states_of(element);
+        assert!(
+            states > 0 && states == domains.len(),
+            "set_domains: {} has {states} states, got {} domains",
+            self.elements[element.0].name,
+            domains.len()
+        );
+        let momentum = matches!(
+            self.elements[element.0].kind,
+            ElementKind::I(_) | ElementKind::IField(_)
+        );
+        let units = domains
+            .iter()
+            .map(|d| if momentum { d.momentum() } else { d.displacement() })
+            .collect();
+        let owner = StateOwner::Element(element);
+        self.units.retain(|(o, _)| *o != owner);
+        self.units.push((owner, units));
+    }
+
+    /// States the units of the integrator `signal`'s state and of its input, the derivative.
+    ///
+    /// # Panics
+    /// If `signal` is not an integrator.
+    pub fn set_integrator_units(&mut self, signal: SignalId, units: StateUnits) {
+        assert!(
+            matches!(self.signals[signal.0].kind, SignalKind::Integrator(_)),
+            "set_integrator_units: {} is not an integrator",
+            self.signals[signal.0].name
+        );
+        let owner = StateOwner::Integrator(signal);
+        self.units.retain(|(o, _)| *o != owner);
+        self.units.push((owner, vec![units]));
+    }
+
+    /// The stated units of every state, in the compiled model's state order (`None` where the
+    /// owner stated none).
+    pub fn state_units(&self) -> Vec<Option<StateUnits>> {
+        self.per_state(&self.units)
     }
 
     /// States a typical magnitude of each state of the storage element `element` (one value
@@ -54,11 +116,7 @@ impl BondGraph {
     /// If `element` carries no state, or the number of values differs from its number of states
     /// (a programming error in the fragment).
     pub fn set_nominal(&mut self, element: ElementId, nominal: &[f64]) {
-        let states = match &self.elements[element.0].kind {
-            ElementKind::I(_) | ElementKind::C(_) => 1,
-            ElementKind::IField(m) | ElementKind::CField(m, _) => m.nrows(),
-            _ => 0,
-        };
+        let states = self.states_of(element);
         assert!(
             states > 0 && states == nominal.len(),
             "set_nominal: {} has {states} states, got {} nominal values",
@@ -94,16 +152,19 @@ impl BondGraph {
     /// The stated nominal magnitude of every state, in the compiled model's state order
     /// (`None` where the owner stated none).
     pub fn state_nominals(&self) -> Vec<Option<f64>> {
+        self.per_state(&self.nominals)
+    }
+
+    /// One entry per state, in the compiled model's state order, from the values stated per
+    /// owner (`None` for the states of an owner that stated none).
+    fn per_state<T: Copy>(&self, stated: &[(StateOwner, Vec<T>)]) -> Vec<Option<T>> {
         let mut out = Vec::new();
         for owner in &self.state_order {
             let n = match owner {
-                StateOwner::Element(e) => match &self.elements[e.0].kind {
-                    ElementKind::IField(m) | ElementKind::CField(m, _) => m.nrows(),
-                    _ => 1,
-                },
+                StateOwner::Element(e) => self.states_of(*e),
                 StateOwner::Integrator(_) => 1,
             };
-            match self.nominals.iter().find(|(o, _)| o == owner) {
+            match stated.iter().find(|(o, _)| o == owner) {
                 Some((_, v)) => out.extend(v.iter().map(|x| Some(*x))),
                 None => out.extend(std::iter::repeat_n(None, n)),
             }

@@ -96,6 +96,7 @@
 mod element;
 mod error;
 mod graph;
+pub mod units;
 mod validate;
 // Compilation, in pipeline order: causality, lowering to equations, sorting, the flat plan, the
 // structure read off it.
@@ -125,4 +126,5 @@ pub use energy::PowerBalance;
 pub use error::BondGraphError;
 pub use forms::{NonaffineForms, PointForms};
 pub use graph::BondGraph;
+pub use units::{Domain, StateUnits};
 pub use linearization::Linearization;

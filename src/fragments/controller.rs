@@ -33,7 +33,7 @@
 //! output limit (turn `saturation` off to drive the coil without one). The potentiometer stays,
 //! so `y_POT` remains an output for the user's loop.
 
-use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId, StateUnits};
 use crate::fragments::rules;
 
 /// Potentiometer full-scale voltage assumed for the default `k_POT` \[V\].
@@ -248,6 +248,13 @@ pub fn add_pressure_feedback(
     let rate = g.add_signal_port(format!("{prefix}.p_f_rate"));
     let p_f = g.add_integrator(format!("{prefix}.p_f"), rate);
     g.set_integrator_nominal(p_f, 1e6);
+    g.set_integrator_units(
+        p_f,
+        StateUnits {
+            state: "Pa",
+            derivative: "Pa/s",
+        },
+    );
     let sum = g.add_sum(format!("{prefix}.p_f_error"), &[(w, p_load), (-w, p_f)]);
     g.connect_signal_port(rate, sum);
     Some(p_f)

@@ -51,7 +51,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, Law, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, Law, SignalId};
 
 use super::orifice::{fixed_orifice, variable_orifice, OrificeFluid};
 use super::servo_valve::limits::{spool_stop_damping, spool_stop_spring};
@@ -117,6 +117,8 @@ pub fn add_flapper_nozzle(
     let c_hb = g.add_c(format!("{prefix}.C_Hb"), limits::chamber(p.v_h, p.beta));
     // Compressed volume at the supply pressure.
     g.set_nominal(c_ha, &[p.v_h / p.beta * p.p_supply]);
+    g.set_domains(c_ha, &[Domain::Hydraulic]);
+    g.set_domains(c_hb, &[Domain::Hydraulic]);
     g.set_nominal(c_hb, &[p.v_h / p.beta * p.p_supply]);
     let ca_bond = g.bond(chamber_a, c_ha);
     let cb_bond = g.bond(chamber_b, c_hb);
@@ -153,6 +155,7 @@ pub fn add_flapper_nozzle(
     g.bond(spool, m_v);
     g.bond(spool, b_v);
     g.set_nominal(m_v, &[p.m_v * 0.1]); // 0.1 m/s
+    g.set_domains(m_v, &[Domain::Translation]);
     let x_v = g.add_signal_port(format!("{prefix}.x_v"));
     let stop = g.add_r_modulated(
         format!("{prefix}.spool_stop"),
@@ -193,6 +196,7 @@ pub fn add_spring_field(
         g.add_c_field_with_port_laws(format!("{prefix}.springs"), k, vec![None, Some(stop)]);
     // The flapper's null gap, the spool's stroke.
     g.set_nominal(field, &[p.x_f0, p.x_v_max]);
+    g.set_domains(field, &[Domain::Translation, Domain::Translation]);
     g.bond(flapper, field);
     g.bond(spool, field);
     let sf = g.add_field_state_sensor(format!("{prefix}.x_f_sensor"), field, 0);

@@ -7,7 +7,7 @@
 //! the hub and the plate modes; then [`connect_inertia`] is called by the plate fragment). The
 //! hub angle is the integral of its speed (integrator `<prefix>.theta`, a state).
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
 
 /// Handles into the hub fragment.
 #[derive(Clone, Debug)]
@@ -28,6 +28,7 @@ pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPort
     let omega = g.add_signal_port(format!("{prefix}.omega_hub"));
     let theta = g.add_integrator(format!("{prefix}.theta"), omega);
     g.set_integrator_nominal(theta, 1.0);
+    g.set_integrator_units(theta, Domain::Rotation.displacement());
     let junction = g.add_one(format!("{prefix}.omega"));
     let mut ports = HubPorts {
         junction,
@@ -38,6 +39,7 @@ pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPort
     if let Some(i) = inertia {
         let el = g.add_i(format!("{prefix}.I"), i);
         g.set_nominal(el, &[i]); // momentum at 1 rad/s
+        g.set_domains(el, &[Domain::Rotation]);
         let b = g.bond(junction, el);
         connect_inertia(g, &ports, b);
         ports.inertia_bond = Some(b);

@@ -32,7 +32,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
 
 use super::controller::{self, ControllerParameters};
 
@@ -203,6 +203,7 @@ pub fn add_loes(g: &mut BondGraph, prefix: &str, p: &LoesParameters) -> LoesPort
     // Signals first so that theta_a is the first state, as in eq. 1.
     let omega = g.add_signal_port(format!("{prefix}.omega"));
     let theta = g.add_integrator(format!("{prefix}.theta_a"), omega);
+    g.set_integrator_units(theta, Domain::Rotation.displacement());
     let valve_command = g.add_signal_port(format!("{prefix}.valve_command"));
     let flow_cmd = g.add_gain(format!("{prefix}.k_sv"), p.k_sv, valve_command);
 
@@ -212,6 +213,8 @@ pub fn add_loes(g: &mut BondGraph, prefix: &str, p: &LoesParameters) -> LoesPort
     let d_m = g.add_tf(format!("{prefix}.D_m"), p.d_m);
     let i_b = g.add_i(format!("{prefix}.I_b"), p.i_b);
     let c3 = g.add_c(format!("{prefix}.C3"), p.c3);
+    g.set_domains(i_b, &[Domain::Rotation]);
+    g.set_domains(c3, &[Domain::Hydraulic]);
     let r7 = g.add_r(format!("{prefix}.R7"), p.r7);
 
     let valve_bond = g.bond(valve, chamber);

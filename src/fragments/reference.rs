@@ -24,7 +24,7 @@
 //! Bond graph (signals only): constant 1 -> integrator `<prefix>.clock` -> function
 //! `<prefix>.move` (volts) -> sum with `r` `<prefix>.r` (the loop's reference).
 
-use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId, StateUnits};
 use crate::fragments::rules;
 
 /// The move (SI units).
@@ -119,6 +119,13 @@ pub fn add_reference(
     let one = g.add_constant(format!("{prefix}.rate"), 1.0);
     let clock = g.add_integrator(format!("{prefix}.clock"), one);
     g.set_integrator_nominal(clock, p.duration);
+    g.set_integrator_units(
+        clock,
+        StateUnits {
+            state: "s",
+            derivative: "1",
+        },
+    );
     let m = p.clone();
     let volts = g.add_function(
         format!("{prefix}.move"),

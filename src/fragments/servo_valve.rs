@@ -51,7 +51,7 @@ pub use g_est::{compare_with_g_est, g_est, log_frequencies, open_loop_linearizat
 pub use parameters::{CoilDrive, ServoValveParameters};
 pub use rest::rest_state;
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
 
 use super::controller::{self, ControllerParameters};
 use super::flapper_nozzle::{add_flapper_nozzle, add_spring_field};
@@ -111,6 +111,7 @@ pub fn add_servo_valve(
     let omega_port = g.add_signal_port(format!("{prefix}.omega_port"));
     let theta = g.add_integrator(format!("{prefix}.theta_a"), omega_port);
     g.set_integrator_nominal(theta, 1.0);
+    g.set_integrator_units(theta, Domain::Rotation.displacement());
 
     let supply_src = g.add_se(format!("{prefix}.supply"), p.p_supply);
     let tank_src = g.add_se(format!("{prefix}.tank"), p.p_tank);

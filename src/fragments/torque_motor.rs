@@ -33,7 +33,7 @@
 //! Sign conventions: a positive amplifier voltage drives a positive current, a positive force and
 //! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, NonlinearLaw, SignalId};
 
 use super::controller::AmplifierLimit;
 use super::servo_valve::{CoilDrive, ServoValveParameters};
@@ -78,6 +78,8 @@ pub fn add_torque_motor(
     // Flux at the nominal current; flapper momentum at 50 mm/s.
     g.set_nominal(l_bob, &[p.l_bob * NOMINAL_CURRENT]);
     g.set_nominal(m_f, &[p.m_f * 0.05]);
+    g.set_domains(l_bob, &[Domain::Electrical]);
+    g.set_domains(m_f, &[Domain::Translation]);
 
     g.bond(amp, coil);
     g.bond(coil, r_bob);

@@ -18,7 +18,7 @@
 //! state: twist \[rad\]) and R `<prefix>.c`; the 0-junction is then bonded to the hub (and, in
 //! the paper formulation, through TFs to the modes, which twist the bar with the root slope).
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
 
 /// Default torsion-bar stiffness \[N m/rad\].
 pub const DEFAULT_STIFFNESS: f64 = 2.5e3;
@@ -60,6 +60,7 @@ pub fn add_torsion_bar(
     let twist = g.add_one(format!("{prefix}.twist"));
     let spring = g.add_c(format!("{prefix}.k"), 1.0 / k);
     g.set_nominal(spring, &[1e-2]); // 0.01 rad, 25 N m
+    g.set_domains(spring, &[Domain::Rotation]);
     g.bond(motor, node);
     let torque_bond = g.bond(node, twist);
     g.bond(twist, spring);

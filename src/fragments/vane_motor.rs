@@ -30,7 +30,7 @@
 //! Sign conventions: `x_v > 0` fills chamber 1, `p_1 > p_2` turns the rotor positive; the metered
 //! flow `q_valve` is the net flow into chamber 1 (P->A minus A->T).
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, Law, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, Law, NonlinearLaw, SignalId};
 use crate::math::{exp, tanh};
 
 use super::flapper_nozzle::restriction;
@@ -80,6 +80,8 @@ pub fn add_vane_motor(
     let c_2 = g.add_c(format!("{prefix}.C_2"), limits::chamber(p.v_1, p.beta));
     g.set_nominal(c_1, &[p.v_1 / p.beta * p.p_supply]);
     g.set_nominal(c_2, &[p.v_1 / p.beta * p.p_supply]);
+    g.set_domains(c_1, &[Domain::Hydraulic]);
+    g.set_domains(c_2, &[Domain::Hydraulic]);
     let c1_bond = g.bond(chamber_1, c_1);
     let c2_bond = g.bond(chamber_2, c_2);
 
@@ -123,6 +125,7 @@ pub fn add_vane_motor(
     // peaks at 0.57 rad/s). 10 rad/s let an importer's BDF at rtol 1e-6 miss the rotor's speed
     // by 2e-4 of its range in that move (docs/model-exchange.md).
     g.set_nominal(i_m, &[p.i_m]);
+    g.set_domains(i_m, &[Domain::Rotation]);
 
     let p_1 = g.add_effort_sensor(format!("{prefix}.p_1"), c1_bond);
     let p_2 = g.add_effort_sensor(format!("{prefix}.p_2"), c2_bond);

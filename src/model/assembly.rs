@@ -13,7 +13,7 @@ mod tests;
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::CompiledModel;
+use crate::bond_graph::{CompiledModel, StateUnits};
 use crate::fmu::Values;
 use crate::fnv1a;
 use crate::fragments::servo_valve;
@@ -49,6 +49,8 @@ pub struct Assembled {
     state_slot: Vec<Option<usize>>,
     /// A typical magnitude of each state, scaling the absolute tolerance.
     nominal: Vec<f64>,
+    /// Each state's units and its derivative's, as its fragment stated them.
+    units: Vec<Option<StateUnits>>,
     /// The state at rest (all zero for the LOES; null pressures for the full servo valve).
     rest: Vec<f64>,
     /// The Jacobian and its stamp (a hash of its bits) when it is constant (the LOES with the
@@ -165,6 +167,7 @@ impl Assembled {
             output_index,
             state_slot,
             nominal,
+            units: graph.state_units(),
         })
     }
 
@@ -213,6 +216,12 @@ impl Assembled {
 
     pub fn nominal(&self) -> &[f64] {
         &self.nominal
+    }
+
+    /// Each state's units and its derivative's (`None` where its fragment stated none), in the
+    /// compiled model's state order.
+    pub fn state_units(&self) -> &[Option<StateUnits>] {
+        &self.units
     }
 
     pub fn inputs(&self) -> &[f64] {

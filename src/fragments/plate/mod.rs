@@ -31,7 +31,7 @@ pub mod paper;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::bond_graph::{BondGraph, BondId, ElementId, Law, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, NonlinearLaw, SignalId};
 
 use super::hub::HubPorts;
 use super::rules;
@@ -451,6 +451,7 @@ pub fn add_plate(
                 model.mass[(first + j, first + j)],
             );
             g.set_nominal(i, &[model.nominal.momentum * scale[j]]);
+            g.set_domains(i, &[Domain::Translation]);
             inertia_bonds.push(g.bond(coord[first + j], i));
         }
     } else {
@@ -460,6 +461,10 @@ pub fn add_plate(
             *m *= s;
         }
         g.set_nominal(field, &momenta);
+        // The hub's coordinate is an angle, the plate's a displacement [m].
+        let mut domains = vec![Domain::Translation; n];
+        domains[..first].fill(Domain::Rotation);
+        g.set_domains(field, &domains);
         for (k, &c) in coord.iter().enumerate() {
             let b = g.bond(c, field);
             if k == 0 {
@@ -482,6 +487,7 @@ pub fn add_plate(
         }
         let c = g.add_c(format!("{prefix}.C[{}]", j + 1), 1.0 / k);
         g.set_nominal(c, &[model.nominal.displacement * scale[j] * scale[j]]);
+        g.set_domains(c, &[Domain::Translation]);
         g.bond(coord[first + j], c);
         c_elems.push(c);
         if model.damping[j] > 0.0 {
