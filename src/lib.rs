@@ -20,6 +20,10 @@
 //! | [`fmi2`] | the FMI 2.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
 //! | [`fmi3`] | the FMI 3.0 C ABI (Co-Simulation, Model Exchange): C types, argument translation, symbols | the core |
 //! | [`web`] | the browser build: a simulation API for JavaScript, exported by the `.wasm` | the core |
+//!
+//! The offline analysis the tools and tests use (the stiff test set, the paper's printed values,
+//! frequency responses, the comparison with `G_est`, and [`web`] on the host) is behind the
+//! `analysis` feature, which the command-line tools enable and the FMU's binaries leave out.
 
 #![deny(unsafe_op_in_unsafe_fn)]
 
@@ -33,6 +37,7 @@ pub mod fragments;
 pub mod math;
 pub mod model;
 pub mod solver;
+#[cfg(any(target_family = "wasm", feature = "analysis"))]
 pub mod web;
 
 // The hash of the sources this library is built from (`SOURCE_HASH`, `SOURCE_MARKER`), written by

@@ -249,8 +249,17 @@ fn every_state_and_derivative_has_a_unit_and_they_differ_by_a_second() {
         let mut per_second = base(ux);
         *per_second.entry("s".into()).or_default() -= 1;
         per_second.retain(|_, v| *v != 0);
-        assert_eq!(base(ud), per_second, "{} in {ux}, {} in {ud}", x.name, d.name);
+        assert_eq!(
+            base(ud),
+            per_second,
+            "{} in {ux}, {} in {ud}",
+            x.name,
+            d.name
+        );
         checked += 1;
     }
-    assert_eq!(checked, hydraulic_slewing_plate::model::variables::CONTINUOUS_STATES.len());
+    assert_eq!(
+        checked,
+        hydraulic_slewing_plate::model::variables::CONTINUOUS_STATES.len()
+    );
 }

@@ -104,7 +104,10 @@ fn structure() -> Value {
             let u = u.unwrap_or_else(|| panic!("{s}: its fragment states no units ({config:?})"));
             let pair = [u.state, u.derivative];
             let known = units.entry(s.clone()).or_insert(pair);
-            assert_eq!(*known, pair, "{s}: units differ between configurations ({config:?})");
+            assert_eq!(
+                *known, pair,
+                "{s}: units differ between configurations ({config:?})"
+            );
         }
         let (sn, un) = (c.state_names(), c.input_names());
         let n = c.n_states();

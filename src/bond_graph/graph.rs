@@ -78,7 +78,13 @@ impl BondGraph {
         );
         let units = domains
             .iter()
-            .map(|d| if momentum { d.momentum() } else { d.displacement() })
+            .map(|d| {
+                if momentum {
+                    d.momentum()
+                } else {
+                    d.displacement()
+                }
+            })
             .collect();
         let owner = StateOwner::Element(element);
         self.units.retain(|(o, _)| *o != owner);

@@ -126,5 +126,5 @@ pub use energy::PowerBalance;
 pub use error::BondGraphError;
 pub use forms::{NonaffineForms, PointForms};
 pub use graph::BondGraph;
-pub use units::{Domain, StateUnits};
 pub use linearization::Linearization;
+pub use units::{Domain, StateUnits};

@@ -51,7 +51,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, Law, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, SignalId};
 
 use super::orifice::{fixed_orifice, variable_orifice, OrificeFluid};
 use super::servo_valve::limits::{spool_stop_damping, spool_stop_spring};

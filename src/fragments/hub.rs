@@ -7,7 +7,7 @@
 //! the hub and the plate modes; then [`connect_inertia`] is called by the plate fragment). The
 //! hub angle is the integral of its speed (integrator `<prefix>.theta`, a state).
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 
 /// Handles into the hub fragment.
 #[derive(Clone, Debug)]

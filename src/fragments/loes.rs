@@ -32,7 +32,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 
 use super::controller::{self, ControllerParameters};
 

@@ -42,16 +42,18 @@
 //! the band nothing in the band needs it. docs/model.md ("The full servo valve") has the table of
 //! every constant with its reason, the fit and the coupled eigenvalues.
 
+#[cfg(feature = "analysis")]
 pub mod g_est;
 pub mod limits;
 pub mod parameters;
 pub mod rest;
 
+#[cfg(feature = "analysis")]
 pub use g_est::{compare_with_g_est, g_est, log_frequencies, open_loop_linearization, GEstPoint};
 pub use parameters::{CoilDrive, ServoValveParameters};
 pub use rest::rest_state;
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 
 use super::controller::{self, ControllerParameters};
 use super::flapper_nozzle::{add_flapper_nozzle, add_spring_field};

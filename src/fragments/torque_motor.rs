@@ -33,7 +33,7 @@
 //! Sign conventions: a positive amplifier voltage drives a positive current, a positive force and
 //! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, NonlinearLaw, SignalId};
 
 use super::controller::AmplifierLimit;
 use super::servo_valve::{CoilDrive, ServoValveParameters};

@@ -18,7 +18,7 @@
 //! state: twist \[rad\]) and R `<prefix>.c`; the 0-junction is then bonded to the hub (and, in
 //! the paper formulation, through TFs to the modes, which twist the bar with the root slope).
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 
 /// Default torsion-bar stiffness \[N m/rad\].
 pub const DEFAULT_STIFFNESS: f64 = 2.5e3;

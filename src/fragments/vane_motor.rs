@@ -30,7 +30,7 @@
 //! Sign conventions: `x_v > 0` fills chamber 1, `p_1 > p_2` turns the rotor positive; the metered
 //! flow `q_valve` is the net flow into chamber 1 (P->A minus A->T).
 
-use crate::bond_graph::{BondGraph, Domain, BondId, ElementId, Law, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, NonlinearLaw, SignalId};
 use crate::math::{exp, tanh};
 
 use super::flapper_nozzle::restriction;

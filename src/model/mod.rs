@@ -18,9 +18,11 @@
 mod affine;
 pub mod assembly;
 pub mod compose;
+#[cfg(feature = "analysis")]
 pub mod frf;
 pub mod margin;
 pub mod oscillation;
+#[cfg(feature = "analysis")]
 pub mod paper;
 pub mod parameters;
 pub mod presets;

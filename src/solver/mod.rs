@@ -124,6 +124,7 @@ pub mod radau5;
 mod registry;
 pub mod rodas5p;
 mod step_map;
+#[cfg(any(test, feature = "analysis"))]
 pub mod testset;
 
 pub use integrator::Integrator;
