@@ -294,3 +294,41 @@ def test_fmi3_arrays(fmu_path, tool_output):
     for j in range(3):
         assert all(grid[i][j] < grid[i + 1][j] for i in range(3)), grid
     assert_quoted("fmi3_arrays.py", out)
+
+
+def test_importers_agree_as_docs_ecosystem_states(fmu_path):
+    """examples/importers.py: the default experiment in every importer, against fmpy's FMI 2.0
+    Co-Simulation run; docs/ecosystem.md quotes its output, which must be what it prints now."""
+    out = run("importers.py", "--fmu", fmu_path, "--fmu3", FMU3)
+    rows = {}
+    for line in out.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 10 and cells[1].startswith("FMI "):
+            before = [float(c.split()[0]) for c in cells[3:]]
+            last = [float(c.split()[1].strip("()")) for c in cells[3:]]
+            rows[tuple(cells[:3])] = (before, last)
+    header = next(line for line in out.splitlines() if line.startswith("| tool |"))
+    groups = [c.strip() for c in header.strip("|").split("|")][3:]
+    assert len(rows) == 7, rows
+    # One core: FMI 3.0 Co-Simulation is FMI 2.0's to the bit, and so is Model Exchange's run.
+    assert rows[("fmpy", "FMI 3.0", "CS")] == ([0.0] * 7, [0.0] * 7)
+    assert rows[("fmpy (CVode)", "FMI 3.0", "ME")] == rows[("fmpy (CVode)", "FMI 2.0", "ME")]
+    # libcosim and ecos pass no stop time: the same steps up to the last point (a tenth of the
+    # FMU's rtol bounds the rounding the seal friction amplifies, as in test_shipped_sets.py),
+    # and the last point from the step's dense output (the rtol).
+    for key in [("libcosim", "FMI 2.0", "CS"), ("ecos", "FMI 2.0", "CS"), ("ecos", "FMI 3.0", "CS")]:
+        before, last = rows[key]
+        assert max(before) <= 1e-7 and max(last) <= 1e-6, (key, before, last)
+    # Model Exchange at the FMU's rtol (1e-6) with its nominals: docs/model-exchange.md states
+    # 1.2e-4 of the range for the accelerometers and the rest below, the pilot stage (a
+    # thousandth of its own scale moves) at 2.3e-2 of its range.
+    before, _ = rows[("fmpy (CVode)", "FMI 2.0", "ME")]
+    for g, v in zip(groups, before):
+        assert v <= (5e-2 if g == "pilot stage" else 2e-4), (g, v)
+    # ecos names no element of an FMI 3.0 array: the script says so rather than compare NaN.
+    assert "ecos FMI 3.0 CS cannot read acc[1]" in out
+    # The docs quote this output.
+    text = (ROOT / "docs" / "ecosystem.md").read_text()
+    m = re.search(r"^## Importers\n.*?^```text\n(.*?)^```$", text, re.M | re.S)
+    assert m, "docs/ecosystem.md quotes no output of importers.py"
+    assert m.group(1) == out, f"docs/ecosystem.md quotes another output of importers.py: paste\n{out}"
