@@ -56,29 +56,42 @@ pub fn file_name(p: &Preset) -> String {
 
 /// A preset as an SSP 1.0 parameter set (`.ssv`).
 pub fn parameter_set(p: &Preset) -> Result<String, String> {
+    parameter_set_of(
+        p.name,
+        &format!("{}: {}", p.paper, p.description),
+        "hsp ssp from src/model/presets.rs; docs/ecosystem.md",
+        p.settings.iter().copied(),
+    )
+    .map_err(|e| format!("preset {}: {e}", p.name))
+}
+
+/// An SSP 1.0 parameter set (`.ssv`) named `name` of the `(NAME, VALUE)` settings, each typed
+/// as its FMU variable (module doc), with a comment saying it was written by `written_by`; an
+/// error names a setting that is no variable or whose value is not of its type.
+pub fn parameter_set_of<'a>(
+    name: &str,
+    description: &str,
+    written_by: &str,
+    settings: impl IntoIterator<Item = (&'a str, &'a str)>,
+) -> Result<String, String> {
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    s.push_str("<!-- Written by hsp ssp from src/model/presets.rs; docs/ecosystem.md -->\n");
+    writeln!(s, "<!-- Written by {written_by} -->").unwrap();
     writeln!(
         s,
         "<ssv:ParameterSet version=\"1.0\" name=\"{}\" description=\"{}\"\n    \
          xmlns:ssv=\"http://ssp-standard.org/SSP1/SystemStructureParameterValues\">",
-        escape(p.name),
-        escape(&format!("{}: {}", p.paper, p.description))
+        escape(name),
+        escape(description)
     )
     .unwrap();
     s.push_str("  <ssv:Parameters>\n");
-    for (name, value) in p.settings {
+    for (name, value) in settings {
         let var = VARIABLES
             .iter()
-            .find(|v| v.name == *name)
-            .ok_or_else(|| format!("preset {}: no variable {name}", p.name))?;
-        let bad = || {
-            format!(
-                "preset {}: {name} = {value} is not a {:?}",
-                p.name, var.kind
-            )
-        };
+            .find(|v| v.name == name)
+            .ok_or_else(|| format!("no variable {name}"))?;
+        let bad = || format!("{name} = {value} is not a {:?}", var.kind);
         let typed = match var.kind {
             Kind::Real { .. } => {
                 value.parse::<f64>().map_err(|_| bad())?;
