@@ -87,6 +87,7 @@ ssv = out / "fitted.ssv"
 fit = fit_three(1, "--out", str(ssv))
 print(f"seed 1: {len(TRUTH)} parameters from {fit['residuals']} residuals (r -> {', '.join(OUTPUTS)}, "
       f"{100 * a.noise:g} % noise): cost {fit['cost']:.4f}, {fit['iterations']} iterations, "
+      f"{fit['evaluations']} model evaluations, "
       f"{len(fit['warnings'])} warnings")
 print(f"{'parameter':<18} {'truth':>10} {'start':>10} {'fitted':>10}   {'95 % interval':<24} truth inside")
 for name, truth in TRUTH.items():

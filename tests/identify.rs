@@ -14,7 +14,8 @@ use std::process::Command;
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
-use hydraulic_slewing_plate::model::frf::{linearization_at_rest, response_at};
+use hydraulic_slewing_plate::model::assembly::Assembled;
+use hydraulic_slewing_plate::model::frf::response_at;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use serde_json::Value as Json;
@@ -66,7 +67,11 @@ fn synthetic(dir: &Path, sets: &[(&str, f64)], outputs: &[&str], seed: Option<u6
         set_by_name(&mut values, name, &v.to_string()).unwrap();
     }
     let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
-    let lin = linearization_at_rest(&p).unwrap();
+    // The linearisation of `hsp frf` and `hsp identify`: at rest, the vane motor sliding.
+    let system = Assembled::new(&p.sliding()).unwrap();
+    let lin = system
+        .compiled()
+        .linearize(&system.initial_state(), system.inputs());
     let input = lin.input_names.iter().position(|n| n == "r").unwrap();
     let mut noise = seed.map(Normal);
     outputs
@@ -339,5 +344,51 @@ fn intervals_cover_the_truth_in_17_to_20_of_20_noise_seeds() {
             "{name}: covered in {} of 20",
             covered[k]
         );
+    }
+}
+
+/// `--report DIR`: the page shows the fit's numbers as the JSON gives them, and a Bode plot of
+/// each response (measured, start, fitted). The fitted residual's RMS is the noise's, 1 % (the
+/// generating noise has E|n|^2 = 1e-4; 200 complex points, 400 real ones, make the RMS good to
+/// 1/sqrt(800) = 3.5 %: the bound is ±12 %, 3.4 of that), the start's far above it.
+#[test]
+fn the_report_page_shows_the_fit_and_each_response() {
+    let dir = folder("report");
+    let frfs = synthetic(
+        &dir,
+        &[("torsion_bar.k", 3200.0)],
+        &["y_pot", "acc_tip"],
+        Some(5),
+    );
+    let report = dir.join("report");
+    let (json, _) = identify(
+        &frfs,
+        &["torsion_bar.k"],
+        &["--report", report.to_str().unwrap()],
+    );
+    let page = std::fs::read_to_string(report.join("index.md")).unwrap();
+    let value = json["parameters"]["torsion_bar.k"]["value"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        page.contains(&format!("| `torsion_bar.k` | 2.500000e3 | {value:.6e} |")),
+        "{page}"
+    );
+    for (k, r) in json["responses"].as_array().unwrap().iter().enumerate() {
+        let (before, after) = (
+            r["rms_start"].as_f64().unwrap(),
+            r["rms_fitted"].as_f64().unwrap(),
+        );
+        assert!((0.0088..0.0112).contains(&after), "{r}");
+        assert!(before > 5.0 * after, "{r}");
+        assert!(
+            page.contains(&format!("| {before:.6e} | {after:.6e} |")),
+            "{page}"
+        );
+        let svg = std::fs::read_to_string(report.join(format!("frf_{}.svg", k + 1))).unwrap();
+        for legend in ["measured", "model at the start", "model fitted"] {
+            assert!(svg.contains(legend), "frf_{}.svg: no {legend}", k + 1);
+        }
+        assert!(page.contains(&format!("](frf_{}.svg)", k + 1)), "{page}");
     }
 }

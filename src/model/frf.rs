@@ -5,19 +5,6 @@ use nalgebra::{Complex, DMatrix, DVector};
 
 use crate::bond_graph::Linearization;
 
-use super::assembly::Assembled;
-use super::parameters::Parameters;
-
-/// The linearisation whose responses the paper's FRFs are: the assembled model of `p` at rest
-/// (zero inputs; the full servo valve at its null pressures), with the vane motor sliding
-/// ([`Parameters::sliding`]: its seal friction's regularised slope at rest left out).
-pub fn linearization_at_rest(p: &Parameters) -> Result<Linearization, String> {
-    let system = Assembled::new(&p.sliding())?;
-    Ok(system
-        .compiled()
-        .linearize(&system.initial_state(), system.inputs()))
-}
-
 /// A frequency response on a grid, with its peaks.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct FrequencyResponse {

@@ -61,11 +61,12 @@ mod web;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use hydraulic_slewing_plate::bond_graph::Linearization;
 use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::compose::{bond_graph, plate_modes};
-use hydraulic_slewing_plate::model::frf::{frequency_response, linearization_at_rest};
+use hydraulic_slewing_plate::model::frf::frequency_response;
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
@@ -254,6 +255,17 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
     },
+}
+
+/// The linearisation whose responses the paper's FRFs are (`hsp frf`, `hsp identify`): the
+/// assembled model of `p` at rest (zero inputs; the full servo valve at its null pressures),
+/// with the vane motor sliding ([`Parameters::sliding`]: its seal friction's regularised slope
+/// at rest left out).
+fn linearization_at_rest(p: &Parameters) -> Result<Linearization, String> {
+    let system = Assembled::new(&p.sliding())?;
+    Ok(system
+        .compiled()
+        .linearize(&system.initial_state(), system.inputs()))
 }
 
 /// The FMU's start values with the preset, then `--set`, applied.

@@ -6,15 +6,19 @@
 //! - [`residuals`]: the weighted residuals and their sensitivities;
 //! - [`optimiser`]: the Levenberg–Marquardt solver;
 //! - [`intervals`]: the intervals, correlations and identifiability warnings;
-//! - [`report`]: the JSON, the text table and the `.ssv`.
+//! - [`report`]: the JSON, the text table and the `.ssv`;
+//! - [`page`]: the markdown page with its Bode plots (`--report DIR`).
 //!
-//! Time series (`--series`), the markdown report (`--report`) and multi-start are a later step.
+//! Time series (`--series`) and multi-start are a later step.
 
 mod data;
 mod intervals;
 mod optimiser;
+mod page;
 mod report;
 mod residuals;
+
+use std::path::Path;
 
 use clap::Args;
 use nalgebra::{DMatrix, DVector};
@@ -36,6 +40,10 @@ pub struct IdentifyArgs {
     /// Write the starting configuration with the fitted values as an SSP 1.0 parameter set
     #[arg(long, value_name = "FILE.ssv")]
     out: Option<String>,
+    /// Write a markdown page of the fit, DIR/index.md, with a Bode plot per measured response
+    /// (measured, model at the start, fitted) and the residuals before and after
+    #[arg(long, value_name = "DIR")]
+    report: Option<String>,
     /// Print JSON: {"parameters": {NAME: {"value", "start", "ci95": [lo, hi] or null}}, "cost",
     /// "iterations", "correlations" (rows in the order of "fitted"), "fitted", "warnings", ...}
     #[arg(long)]
@@ -83,6 +91,8 @@ pub struct Fit {
     pub iterations: usize,
     pub stop: Stop,
     pub statistics: intervals::Statistics,
+    /// Per measured response, the RMS weighted relative error at the start and fitted.
+    pub rms: Vec<(f64, f64)>,
 }
 
 impl Fit {
@@ -130,6 +140,12 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
             ),
         );
     }
+    let start: Vec<f64> = problem.fitted.iter().map(|f| f.start).collect();
+    let rms = problem
+        .rms(&start)?
+        .into_iter()
+        .zip(problem.rms(&problem.p_of_z(&z))?)
+        .collect();
     Ok(Fit {
         problem,
         z,
@@ -137,7 +153,20 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         iterations: out.iterations,
         stop: out.stop,
         statistics,
+        rms,
     })
+}
+
+/// The starting configuration in words, for the report page.
+fn starting(model: &crate::ModelArgs) -> String {
+    let mut s = match &model.preset {
+        Some(p) => format!("the FMU's start values with the preset {p}"),
+        None => "the FMU's start values".to_string(),
+    };
+    if !model.set.is_empty() {
+        s.push_str(&format!(", then --set {}", model.set.join(", ")));
+    }
+    s
 }
 
 pub fn main(args: &IdentifyArgs) -> Result<(), String> {
@@ -154,6 +183,14 @@ pub fn main(args: &IdentifyArgs) -> Result<(), String> {
             .map_err(|e| format!("{file}: {e}"))?;
         if !args.json {
             println!("wrote {file}");
+        }
+    }
+    if let Some(dir) = &args.report {
+        let written = page::write(&fit, &starting(&args.model), Path::new(dir))?;
+        if !args.json {
+            for p in written {
+                println!("wrote {}", p.display());
+            }
         }
     }
     if args.json {

@@ -11,11 +11,13 @@ use super::Fit;
 use crate::ecosystem::ssp::parameter_set_of;
 
 /// `{"parameters": {NAME: {"value", "start", "ci95": [lo, hi] or null}}, "cost", "iterations",
-/// "correlations", "fitted", "warnings", "residuals", "variance", "evaluations", "stop"}`: the
+/// "correlations", "fitted", "warnings", "residuals", "variance", "evaluations", "stop",
+/// "sensitivities", "responses"}`: the
 /// correlations' rows and columns in the order of `fitted` (the `--fit` order), `null` for a
 /// parameter the data do not see; `cost` is the sum of the squared weighted residuals, of which
 /// there are `residuals`; `variance` is the residual variance `s^2`; `evaluations` counts the
-/// model's linearisations; `sensitivities` says how they were computed.
+/// model's linearisations; `sensitivities` says how they were computed; `responses` gives, per
+/// `--frf` in order, the RMS of the weighted relative error `|e_k|` at the start and fitted.
 pub fn json(fit: &Fit) -> serde_json::Value {
     let values = fit.values();
     let mut parameters = serde_json::Map::new();
@@ -41,6 +43,14 @@ pub fn json(fit: &Fit) -> serde_json::Value {
         "evaluations": fit.problem.evaluations.get(),
         "stop": format!("{:?}", fit.stop).to_lowercase(),
         "sensitivities": "central differences of the exact linearisation",
+        "responses": fit.problem.frfs.iter().zip(&fit.rms).map(|(d, (before, after))| json!({
+            "input": d.input,
+            "output": d.output,
+            "file": d.file,
+            "points": d.f_hz.len(),
+            "rms_start": before,
+            "rms_fitted": after,
+        })).collect::<Vec<_>>(),
     })
 }
 

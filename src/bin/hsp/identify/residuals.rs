@@ -1,7 +1,7 @@
 //! The weighted residuals of a fit and their sensitivities.
 //!
 //! At each measured point `k` of a response `H_d` the residual is the weighted relative error of
-//! the model's response `H_m` (the linearisation at rest, [`linearization_at_rest`], exact: dual
+//! the model's response `H_m` (the linearisation at rest, [`crate::linearization_at_rest`], exact: dual
 //! numbers through the compiled bond graph),
 //!
 //! ```text
@@ -22,7 +22,7 @@ use std::collections::HashMap;
 
 use hydraulic_slewing_plate::bond_graph::Linearization;
 use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
-use hydraulic_slewing_plate::model::frf::{linearization_at_rest, output_of, state_response_at};
+use hydraulic_slewing_plate::model::frf::{output_of, state_response_at};
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
 use nalgebra::{Complex, DMatrix, DVector};
 
@@ -134,12 +134,32 @@ impl Problem {
         let mut r = Vec::with_capacity(self.len());
         for (d, m) in self.frfs.iter().zip(&model) {
             for ((model, data), w) in m.iter().zip(&d.h).zip(&d.weight) {
-                let e = (model - data) * (w / data.norm());
+                let e = error(*model, *data, *w);
                 r.push(e.re);
                 r.push(e.im);
             }
         }
         Ok(DVector::from_vec(r))
+    }
+
+    /// Per measured response, the RMS over its points of the weighted relative error `|e_k|`
+    /// (module doc) of the model at `p`.
+    pub fn rms(&self, p: &[f64]) -> Result<Vec<f64>, String> {
+        let model = self.responses(p)?;
+        Ok(self
+            .frfs
+            .iter()
+            .zip(&model)
+            .map(|(d, m)| {
+                let sum: f64 = m
+                    .iter()
+                    .zip(&d.h)
+                    .zip(&d.weight)
+                    .map(|((model, data), w)| error(*model, *data, *w).norm_sqr())
+                    .sum();
+                (sum / d.h.len() as f64).sqrt()
+            })
+            .collect())
     }
 
     /// The fitted parameters' values at the coordinates `z`.
@@ -174,7 +194,13 @@ impl Problem {
     }
 }
 
+/// The weighted relative error `e_k = w_k (H_model - H_measured) / |H_measured|` of one point
+/// (module doc).
+fn error(model: Complex<f64>, data: Complex<f64>, w: f64) -> Complex<f64> {
+    (model - data) * (w / data.norm())
+}
+
 /// The linearisation at rest of the configuration `values`.
 fn linearization(values: &Values) -> Result<Linearization, String> {
-    linearization_at_rest(&Parameters::from_values(values, &Experiment::default())?)
+    crate::linearization_at_rest(&Parameters::from_values(values, &Experiment::default())?)
 }
