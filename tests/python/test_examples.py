@@ -300,8 +300,9 @@ def test_fmi3_arrays(fmu_path, tool_output):
 def test_identify_synthetic_recovers_the_truth(fmu_path, tmp_path):
     """`hsp identify` on synthetic responses with 1 % noise (docs/identify.md): each 95 %
     interval holds the truth in 17 to 20 of 20 noise seeds (the binomial 95 % range), the
-    written .ssv is valid SSP 1.0 and sets the fitted values in the FMU, and a product of two
-    gains is reported as undetermined; docs/identify.md quotes what the script prints."""
+    written .ssv is valid SSP 1.0 and sets the fitted values in the FMU (fmpy, and `hsp run
+    --ssv`), and a product of two gains is reported as undetermined; docs/identify.md quotes what
+    the script prints."""
     out = run("identify_synthetic.py", "--out", tmp_path, "--fmu", fmu_path)
     counts = re.findall(r"^  (\S+)\s+(\d+) of 20", out, re.M)
     assert len(counts) == 3 and all(17 <= int(c) <= 20 for _, c in counts), counts
@@ -309,3 +310,17 @@ def test_identify_synthetic_recovers_the_truth(fmu_path, tmp_path):
     assert "intervals controller.A1 None, controller.A2 None" in out
     assert "cannot separate controller.A1, controller.A2" in out and "undetermined" in out
     assert_quoted("identify_synthetic.py", out, ROOT / "docs" / "identify.md")
+    # `hsp run --ssv` applies the written set: the run is that with the fitted values as --set,
+    # to the bit, and not the defaults' run.
+    ssv = tmp_path / "fitted.ssv"
+    fitted = re.findall(r'name="(servo_valve.beta|plate.zeta|torsion_bar.k)"><ssv:Real value="([^"]+)"',
+                        ssv.read_text())
+    assert len(fitted) == 3, fitted
+    runs = {}
+    for name, args in [("ssv", ["--ssv", ssv]), ("set", [a for n, v in fitted for a in ("--set", f"{n}={v}")]),
+                       ("default", [])]:
+        csv_path = tmp_path / f"run_{name}.csv"
+        hsp("run", "--no-build", "--fmu", fmu_path, "--stop", "1", "--no-plot", "--csv", csv_path, *args)
+        runs[name] = csv_path.read_text()
+    assert runs["ssv"] == runs["set"]
+    assert runs["ssv"] != runs["default"]
