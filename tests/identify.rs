@@ -282,6 +282,15 @@ fn a_parameter_the_outputs_do_not_see_is_reported() {
     assert_eq!(ci95(&json, "plate.sigma_y"), None, "{json:#}");
     let (lo, hi) = ci95(&json, "torsion_bar.k").unwrap();
     assert!(lo <= 3200.0 && 3200.0 <= hi, "[{lo}, {hi}]");
+    // Alone, it is reported the same way, and left at its start.
+    let (json, _) = identify(&frfs, &["plate.sigma_y"], &[]);
+    assert!(
+        warnings(&json)[0].contains("do not see plate.sigma_y"),
+        "{json:#}"
+    );
+    assert_eq!(ci95(&json, "plate.sigma_y"), None, "{json:#}");
+    let p = &json["parameters"]["plate.sigma_y"];
+    assert_eq!(p["value"], p["start"], "{json:#}");
 }
 
 /// Bad input is refused with an error naming the culprit.

@@ -27,7 +27,7 @@ impl Frf {
     /// Parses `INPUT:OUTPUT:FILE.csv` and reads the file: a header naming `f_Hz`, `re`, `im`
     /// and optionally `weight`, in any order, then one row per frequency. Every number must be
     /// finite, every frequency positive, every weight non-negative and every measured response
-    /// nonzero (the residual is relative to it); an error names the file, the line and the
+    /// nonzero (the residual is relative to it); an error names the file, the data row and the
     /// value.
     pub fn read(spec: &str) -> Result<Frf, String> {
         let mut parts = spec.splitn(3, ':');
@@ -55,24 +55,24 @@ impl Frf {
         }
         let mut h = Vec::with_capacity(f_hz.len());
         for k in 0..f_hz.len() {
-            let line = k + 2;
+            let row = k + 1;
             let z = Complex::new(re[k], im[k]);
             if !(f_hz[k].is_finite() && f_hz[k] > 0.0) {
                 return Err(format!(
-                    "{file}: line {line}: f_Hz = {} is not a positive frequency",
+                    "{file}: data row {row}: f_Hz = {} is not a positive frequency",
                     f_hz[k]
                 ));
             }
             if !(z.re.is_finite() && z.im.is_finite()) || z.norm() == 0.0 {
                 return Err(format!(
-                    "{file}: line {line}: the response {} + {} j is not finite and nonzero (the \
+                    "{file}: data row {row}: the response {} + {} j is not finite and nonzero (the \
                      residual is relative to it)",
                     z.re, z.im
                 ));
             }
             if !(weight[k].is_finite() && weight[k] >= 0.0) {
                 return Err(format!(
-                    "{file}: line {line}: weight {} is not a finite non-negative number",
+                    "{file}: data row {row}: weight {} is not a finite non-negative number",
                     weight[k]
                 ));
             }
@@ -183,8 +183,12 @@ impl Fitted {
         }
     }
 
-    /// The value of `z`.
+    /// The value of `z`: the start value itself, bit for bit, at the start's `z` (`exp(ln p)`
+    /// may differ from `p` in its last bit; a parameter the fit leaves alone stays as given).
     pub fn p_of(&self, z: f64) -> f64 {
+        if z == self.z_of(self.start) {
+            return self.start;
+        }
         match self.scale {
             Scale::Log => z.exp(),
             Scale::Linear(s) => z * s,

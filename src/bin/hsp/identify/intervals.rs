@@ -89,6 +89,17 @@ pub fn statistics(
         })
         .collect();
     let m = seen.len();
+    if m == 0 {
+        // Nothing the data see: no interval, no correlation but each parameter's own.
+        return Ok(Statistics {
+            variance,
+            ci95: vec![None; k],
+            correlations: (0..k)
+                .map(|i| (0..k).map(|j| (i == j).then_some(1.0)).collect())
+                .collect(),
+            warnings,
+        });
+    }
     let g = DMatrix::from_fn(m, m, |a, b| {
         let (i, j) = (seen[a], seen[b]);
         jac.column(i).dot(&jac.column(j)) / (norms[i] * norms[j])
@@ -108,14 +119,13 @@ pub fn statistics(
             .iter()
             .map(|&a| fitted[seen[a]].name.as_str())
             .collect();
+        // An eigenvector's sign is arbitrary: the first member's change is made positive.
+        let sign = members.first().map_or(1.0, |&a| dz[a].signum());
         let change: Vec<String> = members
             .iter()
             .map(|&a| {
-                format!(
-                    "{:+.3} in {}",
-                    dz[a] / biggest,
-                    coordinate(&fitted[seen[a]])
-                )
+                let c = sign * dz[a] / biggest;
+                format!("{c:+.3} in {}", coordinate(&fitted[seen[a]]))
             })
             .collect();
         let singular = lambda < UNDETERMINED;
@@ -124,16 +134,17 @@ pub fn statistics(
                 undetermined[seen[a]] = true;
             }
         }
+        // An eigenvalue below UNDETERMINED is at the sensitivities' round-off: not printed.
+        let size = if singular {
+            format!("below {UNDETERMINED:e}: undetermined, no interval")
+        } else {
+            format!("{lambda:.1e}; rule: below {WEAK}")
+        };
         warnings.push(format!(
             "the data cannot separate {}: the change ({}) leaves the fit all but unchanged \
-             (eigenvalue {lambda:.1e} of the scaled information matrix; rule: below {WEAK}{})",
+             (eigenvalue of the scaled information matrix {size})",
             names.join(", "),
             change.join(", "),
-            if singular {
-                format!("; below {UNDETERMINED:e}: undetermined, no interval")
-            } else {
-                String::new()
-            }
         ));
     }
     // C = s^2 D^-1 G^-1 D^-1, G's eigenvalues floored at UNDETERMINED.
@@ -239,5 +250,10 @@ mod tests {
             .contains("cannot separate controller.A1, controller.A2")
             && w.contains("undetermined")));
         assert_eq!(st.correlations[3][0], None);
+        // Only the unseen one: no interval, a warning, no eigenvalue problem of size 0.
+        let st = statistics(&f[3..], &z[3..], &jac.columns(3, 1).into_owned(), 1.0).unwrap();
+        assert_eq!(st.ci95, vec![None]);
+        assert_eq!(st.correlations, vec![vec![Some(1.0)]]);
+        assert_eq!(st.warnings.len(), 1, "{:?}", st.warnings);
     }
 }

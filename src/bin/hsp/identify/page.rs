@@ -23,7 +23,7 @@ pub fn write(fit: &Fit, starting: &str, dir: &Path) -> Result<Vec<PathBuf>, Stri
     let (before, after) = (problem.responses(&start)?, problem.responses(&values)?);
     let mut written = Vec::new();
     let mut s = format!(
-        "# hsp identify: {} parameters from {} measured responses\n\n\
+        "# hsp identify: {} fitted from {} measured responses\n\n\
          Starting configuration: {}. Cost (sum of the squared weighted residuals) {} after {} \
          iterations (stop: {:?}), {} residuals, residual variance {}. Sensitivities: central \
          differences of the exact linearisation (docs/identify.md).\n\n\

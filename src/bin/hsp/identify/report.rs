@@ -58,8 +58,8 @@ pub fn json(fit: &Fit) -> serde_json::Value {
 pub fn text(fit: &Fit) -> String {
     let values = fit.values();
     let mut s = format!(
-        "hsp identify: {} parameters from {} residuals, cost {:.6e} after {} iterations ({} \
-         model evaluations)\n{:<28} {:>14} {:>14} {:>30}\n",
+        "hsp identify: {} fitted, {} residuals, cost {:.6e} after {} iterations ({} model \
+         evaluations)\n{:<28} {:>14} {:>14} {:>30}\n",
         values.len(),
         fit.problem.len(),
         fit.cost,
