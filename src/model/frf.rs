@@ -29,6 +29,18 @@ pub fn response_at(
     output: usize,
     f_hz: f64,
 ) -> Result<Complex<f64>, String> {
+    let x = state_response_at(lin, input, f_hz)?;
+    Ok(output_of(lin, &x, input, output))
+}
+
+/// The states' response to `input` at `f_hz`, `X = (j 2 pi f I - A)^-1 B e_input`, from which
+/// [`output_of`] gives every output's (one LU per input and frequency, whatever the outputs).
+/// An error as [`response_at`]'s where the response is unbounded.
+pub fn state_response_at(
+    lin: &Linearization,
+    input: usize,
+    f_hz: f64,
+) -> Result<DVector<Complex<f64>>, String> {
     let n = lin.a.nrows();
     let s = Complex::new(0.0, 2.0 * std::f64::consts::PI * f_hz);
     let m = DMatrix::from_fn(n, n, |i, j| {
@@ -40,17 +52,27 @@ pub fn response_at(
         }
     });
     let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
-    let x = m.lu().solve(&b).ok_or_else(|| {
+    m.lu().solve(&b).ok_or_else(|| {
         format!(
             "the response is unbounded at {f_hz} Hz: j 2 pi f I - A is singular there (an \
              undamped mode, or a free integrator at 0 Hz)"
         )
-    })?;
+    })
+}
+
+/// `H = C_output X + D_(output, input)`: the response of `output` from the states' response `x`
+/// to `input` ([`state_response_at`]).
+pub fn output_of(
+    lin: &Linearization,
+    x: &DVector<Complex<f64>>,
+    input: usize,
+    output: usize,
+) -> Complex<f64> {
     let mut y = Complex::new(lin.d[(output, input)], 0.0);
-    for i in 0..n {
+    for i in 0..x.len() {
         y += x[i] * lin.c[(output, i)];
     }
-    Ok(y)
+    y
 }
 
 /// The response from `input` to `output` (names) on `points` log-spaced frequencies from

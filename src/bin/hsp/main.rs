@@ -8,6 +8,9 @@
 //! - `hsp run [--preset NAME]`: builds the FMU if needed, loads it through its C ABI, runs the
 //!   default experiment (a slewing manoeuvre of the complete system: a step in the reference `r`),
 //!   prints a summary and writes the results as CSV.
+//! - `hsp identify --frf INPUT:OUTPUT:FILE.csv --fit NAME[:LOW:HIGH] [--out FILE.ssv] [--json]`:
+//!   fits parameters to measured frequency responses, with confidence intervals
+//!   (docs/identify.md).
 //! - `hsp fastest-move [hsp run arguments]`: the fastest minimum-jerk move whose peak `w_tip/a`
 //!   stays within 0.1, bisected over `reference.duration`, and its torque budget.
 //! - `hsp presets [--json]`: the named parameter sets (the paper's configurations).
@@ -37,6 +40,7 @@ mod docpage;
 mod docs;
 mod ecosystem;
 mod fastest;
+mod identify;
 mod info;
 mod licenses;
 mod loader;
@@ -57,6 +61,7 @@ mod web;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use hydraulic_slewing_plate::bond_graph::Linearization;
 use hydraulic_slewing_plate::eigen;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
@@ -89,9 +94,12 @@ struct ModelArgs {
 }
 
 impl ModelArgs {
+    /// The FMU's values: the start values, the preset, then `--set`.
+    fn values(&self) -> Result<Values, String> {
+        values_with(self.preset.as_deref(), &self.set)
+    }
     fn parameters(&self) -> Result<Parameters, String> {
-        let values = values_with(self.preset.as_deref(), &self.set)?;
-        Parameters::from_values(&values, &Experiment::default())
+        Parameters::from_values(&self.values()?, &Experiment::default())
     }
     /// The model to linearise: the vane motor sliding ([`Parameters::sliding`]).
     fn assembled(&self) -> Result<Assembled, String> {
@@ -133,6 +141,10 @@ enum Command {
     },
     /// Run the default experiment (a slewing manoeuvre) through the FMU's C ABI and summarise it
     Run(run::RunArgs),
+    /// Fit parameters to measured frequency responses, with 95 % confidence intervals and a
+    /// warning naming what the data cannot determine; write the fitted configuration as an SSP
+    /// parameter set (docs/identify.md)
+    Identify(identify::IdentifyArgs),
     /// The torque budget: the fastest minimum-jerk move (bisected to 1 ms over
     /// reference.duration) whose peak |w_tip|/a stays within the validity monitor's limit, with
     /// its peak bar torque, load pressure, hub overshoot and the motor's margin
@@ -245,6 +257,17 @@ enum Command {
     },
 }
 
+/// The linearisation whose responses the paper's FRFs are (`hsp frf`, `hsp identify`): the
+/// assembled model of `p` at rest (zero inputs; the full servo valve at its null pressures),
+/// with the vane motor sliding ([`Parameters::sliding`]: its seal friction's regularised slope
+/// at rest left out).
+fn linearization_at_rest(p: &Parameters) -> Result<Linearization, String> {
+    let system = Assembled::new(&p.sliding())?;
+    Ok(system
+        .compiled()
+        .linearize(&system.initial_state(), system.inputs()))
+}
+
 /// The FMU's start values with the preset, then `--set`, applied.
 fn values_with(preset: Option<&str>, sets: &[String]) -> Result<Values, String> {
     let mut values = Values::from_start(&VARIABLES);
@@ -346,9 +369,7 @@ fn is_plate_signal(output: &str) -> bool {
 }
 
 fn frf(a: &FrfArgs, model: &ModelArgs) -> Result<String, String> {
-    let system = model.assembled()?;
-    let x = system.initial_state();
-    let lin = system.compiled().linearize(&x, system.inputs());
+    let lin = linearization_at_rest(&model.parameters()?)?;
     let h = frequency_response(&lin, a.input, a.output, a.from, a.to, a.points)?;
     let mut written = Vec::new();
     if let Some(file) = a.plot {
@@ -407,6 +428,7 @@ fn main() -> ExitCode {
             }
         }),
         Command::Run(args) => run::run(&args),
+        Command::Identify(args) => identify::main(&args),
         Command::FastestMove(args) => fastest::main(&args),
         Command::Web { out } => web::page_files()
             .and_then(|files| web::write(&files, &package::root().join(out)))

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use clap::Args;
+use nalgebra::Complex;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -526,6 +527,18 @@ pub struct BodeCurve {
     pub phase_deg: Vec<f64>,
     /// Drawn dashed (a reference drawn over a model curve stays visible).
     pub dashed: bool,
+}
+
+impl BodeCurve {
+    /// The curve of the complex response `h`.
+    pub fn of_complex(name: &str, h: &[Complex<f64>], dashed: bool) -> BodeCurve {
+        BodeCurve {
+            name: name.into(),
+            magnitude: h.iter().map(|z| z.norm()).collect(),
+            phase_deg: h.iter().map(|z| z.arg().to_degrees()).collect(),
+            dashed,
+        }
+    }
 }
 
 /// Several frequency responses on one Bode plot.

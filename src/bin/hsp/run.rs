@@ -56,6 +56,10 @@ pub struct RunArgs {
     /// Relative tolerance passed to fmi2SetupExperiment (default: the FMU's solver.rtol)
     #[arg(long)]
     tolerance: Option<f64>,
+    /// Apply an SSP 1.0 parameter set (`hsp ssp`'s, `hsp identify --out`'s) after the preset,
+    /// before --set
+    #[arg(long, value_name = "FILE.ssv")]
+    ssv: Option<String>,
     /// Set a parameter, NAME=VALUE (repeatable)
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
@@ -129,7 +133,8 @@ const RECORDED_SERVO_VALVE: &[&str] = &[
     "servo_valve.p_2",
 ];
 
-/// The settings of a run in order: the preset's, then the user's `--set`, then `extra`.
+/// The settings of a run in order: the preset's, the parameter set's (`--ssv`), the step
+/// profile's, then the user's `--set`, then `extra`.
 fn settings(args: &RunArgs, extra: &[String]) -> Result<Vec<String>, String> {
     let preset = presets::preset(&args.preset)?;
     let mut all: Vec<String> = preset
@@ -137,6 +142,12 @@ fn settings(args: &RunArgs, extra: &[String]) -> Result<Vec<String>, String> {
         .iter()
         .map(|(n, v)| format!("{n}={v}"))
         .collect();
+    if let Some(file) = &args.ssv {
+        let text = std::fs::read_to_string(file).map_err(|e| format!("--ssv {file}: {e}"))?;
+        let set = super::ecosystem::ssp::read_parameter_set(&text)
+            .map_err(|e| format!("--ssv {file}: {e}"))?;
+        all.extend(set.iter().map(|(n, v)| format!("{n}={v}")));
+    }
     if args.profile == Profile::Step {
         all.push("reference.angle=0".into());
     }

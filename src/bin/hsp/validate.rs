@@ -418,12 +418,7 @@ fn hydraulics(figures: &mut Vec<(String, String)>) -> Result<Section, String> {
         test: "– (the direct path above is asserted)",
     });
     // Figures: closed loop (as Fig. 4) and the direct path.
-    let curve = |name: &str, h: &[Complex<f64>], dashed: bool| plot::BodeCurve {
-        name: name.into(),
-        magnitude: h.iter().map(|z| z.norm()).collect(),
-        phase_deg: h.iter().map(|z| z.arg().to_degrees()).collect(),
-        dashed,
-    };
+    let curve = plot::BodeCurve::of_complex;
     let from_frf = |name: &str, h: &FrequencyResponse| plot::BodeCurve {
         name: name.into(),
         magnitude: h.magnitude.clone(),

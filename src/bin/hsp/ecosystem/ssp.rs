@@ -56,29 +56,42 @@ pub fn file_name(p: &Preset) -> String {
 
 /// A preset as an SSP 1.0 parameter set (`.ssv`).
 pub fn parameter_set(p: &Preset) -> Result<String, String> {
+    parameter_set_of(
+        p.name,
+        &format!("{}: {}", p.paper, p.description),
+        "hsp ssp from src/model/presets.rs; docs/ecosystem.md",
+        p.settings.iter().copied(),
+    )
+    .map_err(|e| format!("preset {}: {e}", p.name))
+}
+
+/// An SSP 1.0 parameter set (`.ssv`) named `name` of the `(NAME, VALUE)` settings, each typed
+/// as its FMU variable (module doc), with a comment saying it was written by `written_by`; an
+/// error names a setting that is no variable or whose value is not of its type.
+pub fn parameter_set_of<'a>(
+    name: &str,
+    description: &str,
+    written_by: &str,
+    settings: impl IntoIterator<Item = (&'a str, &'a str)>,
+) -> Result<String, String> {
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    s.push_str("<!-- Written by hsp ssp from src/model/presets.rs; docs/ecosystem.md -->\n");
+    writeln!(s, "<!-- Written by {written_by} -->").unwrap();
     writeln!(
         s,
         "<ssv:ParameterSet version=\"1.0\" name=\"{}\" description=\"{}\"\n    \
-         xmlns:ssv=\"http://ssp-standard.org/SSP1/SystemStructureParameterValues\">",
-        escape(p.name),
-        escape(&format!("{}: {}", p.paper, p.description))
+         xmlns:ssv=\"{SSV_NS}\">",
+        escape(name),
+        escape(description)
     )
     .unwrap();
     s.push_str("  <ssv:Parameters>\n");
-    for (name, value) in p.settings {
+    for (name, value) in settings {
         let var = VARIABLES
             .iter()
-            .find(|v| v.name == *name)
-            .ok_or_else(|| format!("preset {}: no variable {name}", p.name))?;
-        let bad = || {
-            format!(
-                "preset {}: {name} = {value} is not a {:?}",
-                p.name, var.kind
-            )
-        };
+            .find(|v| v.name == name)
+            .ok_or_else(|| format!("no variable {name}"))?;
+        let bad = || format!("{name} = {value} is not a {:?}", var.kind);
         let typed = match var.kind {
             Kind::Real { .. } => {
                 value.parse::<f64>().map_err(|_| bad())?;
@@ -116,6 +129,48 @@ pub fn parameter_set(p: &Preset) -> Result<String, String> {
     s.push_str("  </ssv:Parameters>\n</ssv:ParameterSet>\n");
     Ok(s)
 }
+
+/// The `(NAME, VALUE)` settings of an SSP 1.0 parameter set (`.ssv`) in its order, each value as
+/// its typed element (`ssv:Real`, `ssv:Integer`, `ssv:Boolean`, `ssv:String`) gives it: what
+/// [`parameter_set_of`] writes, for `hsp run --ssv`. An error names a parameter without a typed
+/// value; whether the names and values fit the FMU is for its set calls to say.
+pub fn read_parameter_set(text: &str) -> Result<Vec<(String, String)>, String> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| e.to_string())?;
+    let root = doc.root_element();
+    if !root.has_tag_name((SSV_NS, "ParameterSet")) {
+        return Err(format!(
+            "not an SSP parameter set: the root is <{}>, not <ssv:ParameterSet> of {SSV_NS}",
+            root.tag_name().name()
+        ));
+    }
+    let parameters = root
+        .children()
+        .filter(|n| n.has_tag_name((SSV_NS, "Parameters")));
+    let mut settings = Vec::new();
+    for p in parameters
+        .flat_map(|n| n.children())
+        .filter(|n| n.is_element())
+    {
+        let name = p
+            .attribute("name")
+            .ok_or("an <ssv:Parameter> without a name")?;
+        let value = p
+            .children()
+            .find(|n| {
+                n.is_element()
+                    && ["Real", "Integer", "Boolean", "String"]
+                        .iter()
+                        .any(|t| n.has_tag_name((SSV_NS, *t)))
+            })
+            .and_then(|n| n.attribute("value"))
+            .ok_or_else(|| format!("parameter {name}: no typed value"))?;
+        settings.push((name.to_string(), value.to_string()));
+    }
+    Ok(settings)
+}
+
+/// The namespace of SSP 1.0 parameter sets.
+const SSV_NS: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
 
 /// The two forms of the example system: SSP's own, whose system exposes the component's
 /// connectors (fmpy's SSP runner needs every input connected), and the one libcosim 0.0.6 and
@@ -285,4 +340,25 @@ pub fn archive(fmu: Vec<u8>, form: Form) -> Result<Vec<Entry>, String> {
             parameter_set(p)?.into_bytes(),
         ),
     ])
+}
+
+#[cfg(test)]
+mod parameter_set_tests {
+    use super::*;
+
+    /// Every preset's parameter set reads back as the preset's settings, in order.
+    #[test]
+    fn a_written_parameter_set_reads_back_as_its_settings() {
+        for p in PRESETS {
+            let read = read_parameter_set(&parameter_set(p).unwrap()).unwrap();
+            let want: Vec<(String, String)> = p
+                .settings
+                .iter()
+                .map(|(n, v)| (n.to_string(), v.to_string()))
+                .collect();
+            assert_eq!(read, want, "{}", p.name);
+        }
+        let e = read_parameter_set("<a/>").unwrap_err();
+        assert!(e.contains("not an SSP parameter set"), "{e}");
+    }
 }

@@ -1,0 +1,202 @@
+//! `hsp identify`: fits chosen parameters of the FMU to measured frequency responses, with 95 %
+//! confidence intervals and a warning naming what the data cannot determine, and writes the
+//! fitted configuration as an SSP parameter set (docs/identify.md). Split by job:
+//! - [`data`]: the measured responses (`--frf`) and the fitted parameters (`--fit`), with their
+//!   coordinates;
+//! - [`residuals`]: the weighted residuals and their sensitivities;
+//! - [`optimiser`]: the Levenberg–Marquardt solver;
+//! - [`intervals`]: the intervals, correlations and identifiability warnings;
+//! - [`report`]: the JSON, the text table and the `.ssv`;
+//! - [`page`]: the markdown page with its Bode plots (`--report DIR`).
+//!
+//! Time series (`--series`) and multi-start are a later step.
+
+mod data;
+mod intervals;
+mod optimiser;
+mod page;
+mod report;
+mod residuals;
+
+use std::path::Path;
+
+use clap::Args;
+use nalgebra::{DMatrix, DVector};
+
+use data::{Fitted, Frf};
+use optimiser::{levenberg_marquardt, LeastSquares, Stop, Tolerances};
+use residuals::Problem;
+
+#[derive(Args)]
+pub struct IdentifyArgs {
+    /// A measured frequency response, INPUT:OUTPUT:FILE.csv (repeatable): a CSV with a header
+    /// and the columns f_Hz,re,im (the complex response of OUTPUT to INPUT in SI units) and
+    /// optionally weight
+    #[arg(long = "frf", value_name = "INPUT:OUTPUT:FILE.csv", required = true)]
+    frf: Vec<String>,
+    /// A parameter to fit, NAME or NAME:LOW:HIGH (repeatable); log-scaled where positive
+    #[arg(long = "fit", value_name = "NAME[:LOW:HIGH]", required = true)]
+    fit: Vec<String>,
+    /// Write the starting configuration with the fitted values as an SSP 1.0 parameter set
+    #[arg(long, value_name = "FILE.ssv")]
+    out: Option<String>,
+    /// Write a markdown page of the fit, DIR/index.md, with a Bode plot per measured response
+    /// (measured, model at the start, fitted) and the residuals before and after
+    #[arg(long, value_name = "DIR")]
+    report: Option<String>,
+    /// Print JSON: {"parameters": {NAME: {"value", "start", "ci95": [lo, hi] or null}}, "cost",
+    /// "iterations", "correlations" (rows in the order of "fitted"), "fitted", "warnings", ...}
+    #[arg(long)]
+    json: bool,
+    /// The most Levenberg–Marquardt iterations
+    #[arg(long, default_value_t = 200)]
+    max_iterations: usize,
+    /// The starting configuration: the FMU's start values, --preset, then --set
+    #[command(flatten)]
+    model: crate::ModelArgs,
+}
+
+/// The problem in the optimiser's unconstrained coordinates `t` (`data::Fitted::z_of_t`).
+struct Unconstrained<'a>(&'a Problem);
+
+impl Unconstrained<'_> {
+    fn z(&self, t: &[f64]) -> Vec<f64> {
+        self.0
+            .fitted
+            .iter()
+            .zip(t)
+            .map(|(f, &t)| f.z_of_t(t))
+            .collect()
+    }
+}
+
+impl LeastSquares for Unconstrained<'_> {
+    fn residuals(&self, t: &[f64]) -> Result<DVector<f64>, String> {
+        self.0.residuals_z(&self.z(t))
+    }
+    fn jacobian(&self, t: &[f64]) -> Result<DMatrix<f64>, String> {
+        let mut jac = self.0.jacobian_z(&self.z(t))?;
+        for (j, f) in self.0.fitted.iter().enumerate() {
+            jac.column_mut(j).scale_mut(f.dz_dt(t[j]));
+        }
+        Ok(jac)
+    }
+}
+
+/// The fit: the problem, the optimiser's outcome at `z`, the statistics.
+pub struct Fit {
+    pub problem: Problem,
+    pub z: Vec<f64>,
+    pub cost: f64,
+    pub iterations: usize,
+    pub stop: Stop,
+    pub statistics: intervals::Statistics,
+    /// Per measured response, the RMS weighted relative error at the start and fitted.
+    pub rms: Vec<(f64, f64)>,
+}
+
+impl Fit {
+    /// The fitted values.
+    pub fn values(&self) -> Vec<f64> {
+        self.problem.p_of_z(&self.z)
+    }
+}
+
+/// Reads the data and fits.
+fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
+    let base = args.model.values()?;
+    let frfs = args
+        .frf
+        .iter()
+        .map(|s| Frf::read(s))
+        .collect::<Result<_, _>>()?;
+    let fitted = args
+        .fit
+        .iter()
+        .map(|s| Fitted::parse(s, &base))
+        .collect::<Result<_, _>>()?;
+    let problem = Problem::new(base, frfs, fitted)?;
+    let t0: Vec<f64> = problem
+        .fitted
+        .iter()
+        .map(|f| f.t_of_z(f.z_of(f.start)))
+        .collect();
+    let tolerances = Tolerances {
+        iterations: args.max_iterations,
+        ..Tolerances::default()
+    };
+    let unconstrained = Unconstrained(&problem);
+    let out = levenberg_marquardt(&unconstrained, &t0, tolerances)?;
+    let z = unconstrained.z(&out.t);
+    let jac = problem.jacobian_z(&z)?;
+    let mut statistics = intervals::statistics(&problem.fitted, &z, &jac, out.cost)?;
+    if out.stop == Stop::Iterations {
+        statistics.warnings.insert(
+            0,
+            format!(
+                "not converged in {} iterations (--max-iterations): the values and intervals \
+                 are those of the last point",
+                out.iterations
+            ),
+        );
+    }
+    let start: Vec<f64> = problem.fitted.iter().map(|f| f.start).collect();
+    let rms = problem
+        .rms(&start)?
+        .into_iter()
+        .zip(problem.rms(&problem.p_of_z(&z))?)
+        .collect();
+    Ok(Fit {
+        problem,
+        z,
+        cost: out.cost,
+        iterations: out.iterations,
+        stop: out.stop,
+        statistics,
+        rms,
+    })
+}
+
+/// The starting configuration in words, for the report page.
+fn starting(model: &crate::ModelArgs) -> String {
+    let mut s = match &model.preset {
+        Some(p) => format!("the FMU's start values with the preset {p}"),
+        None => "the FMU's start values".to_string(),
+    };
+    if !model.set.is_empty() {
+        s.push_str(&format!(", then --set {}", model.set.join(", ")));
+    }
+    s
+}
+
+pub fn main(args: &IdentifyArgs) -> Result<(), String> {
+    let fit = fit(args)?;
+    if args.json {
+        // The text table ends with them; the JSON holds them, and a reader of the terminal sees
+        // them here.
+        for w in &fit.statistics.warnings {
+            eprintln!("hsp: warning: {w}");
+        }
+    }
+    if let Some(file) = &args.out {
+        std::fs::write(file, report::parameter_set(&fit, file)?)
+            .map_err(|e| format!("{file}: {e}"))?;
+        if !args.json {
+            println!("wrote {file}");
+        }
+    }
+    if let Some(dir) = &args.report {
+        let written = page::write(&fit, &starting(&args.model), Path::new(dir))?;
+        if !args.json {
+            for p in written {
+                println!("wrote {}", p.display());
+            }
+        }
+    }
+    if args.json {
+        println!("{}", report::json(&fit));
+    } else {
+        print!("{}", report::text(&fit));
+    }
+    Ok(())
+}

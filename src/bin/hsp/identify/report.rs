@@ -1,0 +1,120 @@
+//! What `hsp identify` writes: the JSON (`--json`), the text table, and the fitted
+//! configuration as an SSP 1.0 parameter set (`--out FILE.ssv`, by the writer of `hsp ssp`).
+
+use std::fmt::Write as _;
+
+use hydraulic_slewing_plate::fmu::{Causality, Value, Variability};
+use hydraulic_slewing_plate::model::variables::VARIABLES;
+use serde_json::json;
+
+use super::Fit;
+use crate::ecosystem::ssp::parameter_set_of;
+
+/// `{"parameters": {NAME: {"value", "start", "ci95": [lo, hi] or null}}, "cost", "iterations",
+/// "correlations", "fitted", "warnings", "residuals", "variance", "evaluations", "stop",
+/// "sensitivities", "responses"}`: the
+/// correlations' rows and columns in the order of `fitted` (the `--fit` order), `null` for a
+/// parameter the data do not see; `cost` is the sum of the squared weighted residuals, of which
+/// there are `residuals`; `variance` is the residual variance `s^2`; `evaluations` counts the
+/// model's linearisations; `sensitivities` says how they were computed; `responses` gives, per
+/// `--frf` in order, the RMS of the weighted relative error `|e_k|` at the start and fitted.
+pub fn json(fit: &Fit) -> serde_json::Value {
+    let values = fit.values();
+    let mut parameters = serde_json::Map::new();
+    for (j, f) in fit.problem.fitted.iter().enumerate() {
+        parameters.insert(
+            f.name.clone(),
+            json!({
+                "value": values[j],
+                "start": f.start,
+                "ci95": fit.statistics.ci95[j].map(|(lo, hi)| [lo, hi]),
+            }),
+        );
+    }
+    json!({
+        "parameters": parameters,
+        "cost": fit.cost,
+        "iterations": fit.iterations,
+        "correlations": fit.statistics.correlations,
+        "fitted": fit.problem.fitted.iter().map(|f| &f.name).collect::<Vec<_>>(),
+        "warnings": fit.statistics.warnings,
+        "residuals": fit.problem.len(),
+        "variance": fit.statistics.variance,
+        "evaluations": fit.problem.evaluations.get(),
+        "stop": format!("{:?}", fit.stop).to_lowercase(),
+        "sensitivities": "central differences of the exact linearisation",
+        "responses": fit.problem.frfs.iter().zip(&fit.rms).map(|(d, (before, after))| json!({
+            "input": d.input,
+            "output": d.output,
+            "file": d.file,
+            "points": d.f_hz.len(),
+            "rms_start": before,
+            "rms_fitted": after,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The table of the fit and its warnings.
+pub fn text(fit: &Fit) -> String {
+    let values = fit.values();
+    let mut s = format!(
+        "hsp identify: {} fitted, {} residuals, cost {:.6e} after {} iterations ({} model \
+         evaluations)\n{:<28} {:>14} {:>14} {:>30}\n",
+        values.len(),
+        fit.problem.len(),
+        fit.cost,
+        fit.iterations,
+        fit.problem.evaluations.get(),
+        "parameter",
+        "start",
+        "fitted",
+        "95 % interval"
+    );
+    for (j, f) in fit.problem.fitted.iter().enumerate() {
+        let ci = fit.statistics.ci95[j].map_or("none".to_string(), |(lo, hi)| {
+            format!("[{lo:.6e}, {hi:.6e}]")
+        });
+        writeln!(
+            s,
+            "{:<28} {:>14.6e} {:>14.6e} {ci:>30}",
+            f.name, f.start, values[j]
+        )
+        .unwrap();
+    }
+    for w in &fit.statistics.warnings {
+        writeln!(s, "warning: {w}").unwrap();
+    }
+    s
+}
+
+/// Every parameter of the FMU in the fitted configuration (the starting one with the fitted
+/// values) as an SSP 1.0 parameter set named after `file`'s stem.
+pub fn parameter_set(fit: &Fit, file: &str) -> Result<String, String> {
+    let values = fit.problem.values_at(&fit.values())?;
+    let settings: Vec<(&str, String)> = VARIABLES
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| {
+            v.causality == Causality::Parameter && v.variability != Variability::Constant
+        })
+        .map(|(i, v)| {
+            let text = match values.get(i) {
+                Value::Real(x) => format!("{x:?}"),
+                Value::Integer(n) => n.to_string(),
+                Value::Boolean(b) => b.to_string(),
+                Value::String(t) => t.clone(),
+            };
+            (v.name, text)
+        })
+        .collect();
+    let name = std::path::Path::new(file)
+        .file_stem()
+        .map_or("identified".into(), |s| s.to_string_lossy().into_owned());
+    let fitted: Vec<&str> = fit.problem.fitted.iter().map(|f| f.name.as_str()).collect();
+    parameter_set_of(
+        &name,
+        &format!("fitted by hsp identify: {}", fitted.join(", ")),
+        "hsp identify; docs/identify.md",
+        settings.iter().map(|(n, v)| (*n, v.as_str())),
+    )
+}

@@ -1,0 +1,206 @@
+//! The weighted residuals of a fit and their sensitivities.
+//!
+//! At each measured point `k` of a response `H_d` the residual is the weighted relative error of
+//! the model's response `H_m` (the linearisation at rest, [`crate::linearization_at_rest`], exact: dual
+//! numbers through the compiled bond graph),
+//!
+//! ```text
+//! e_k = w_k (H_m(j 2 pi f_k) - H_d,k) / |H_d,k|,
+//! ```
+//!
+//! split into its real and imaginary parts, so that a 1 % error counts the same on a resonance
+//! peak and in an anti-resonance, and the responses of outputs in different units weigh alike.
+//!
+//! **Sensitivities, a first step:** the derivatives of the residuals with respect to the fitted
+//! parameters (in their coordinates `z`, [`super::data::Scale`]) are central finite differences
+//! of the model's linearised response, step [`STEP`] in `z`, not exact. The parameters reach the
+//! compiled plan as `f64` constants folded in by the fragments (`src/fragments/`), so dual
+//! numbers through the parameter path need the fragments and `Parameters` to be generic in the
+//! scalar type; that is left for a later step (docs/identify.md).
+
+use std::collections::HashMap;
+
+use hydraulic_slewing_plate::bond_graph::Linearization;
+use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
+use hydraulic_slewing_plate::model::frf::{output_of, state_response_at};
+use hydraulic_slewing_plate::model::parameters::{check, Parameters};
+use nalgebra::{Complex, DMatrix, DVector};
+
+use super::data::{Fitted, Frf};
+
+/// The central-difference step in `z` (a relative step of 1e-4 for a log-scaled parameter):
+/// truncation error of order `STEP^2` = 1e-8 of the sensitivity, round-off of order 1e-16 /
+/// `STEP` of the response's own accuracy.
+pub const STEP: f64 = 1e-4;
+
+/// A fit's data and parameters on its starting configuration.
+pub struct Problem {
+    /// The starting configuration (preset and `--set`).
+    pub base: Values,
+    pub frfs: Vec<Frf>,
+    pub fitted: Vec<Fitted>,
+    /// Per response: the index of its input and its output in the linearisation.
+    ports: Vec<(usize, usize)>,
+    /// Model evaluations so far (one linearisation and its responses each).
+    pub evaluations: std::cell::Cell<usize>,
+}
+
+impl Problem {
+    /// Checks every response's input and output against the model of the starting
+    /// configuration; an error names the file and lists the model's inputs or outputs.
+    pub fn new(base: Values, frfs: Vec<Frf>, fitted: Vec<Fitted>) -> Result<Problem, String> {
+        if fitted.is_empty() {
+            return Err("nothing to fit: give at least one --fit NAME".into());
+        }
+        if frfs.is_empty() {
+            return Err("no data: give at least one --frf INPUT:OUTPUT:FILE.csv".into());
+        }
+        for (i, a) in fitted.iter().enumerate() {
+            if fitted[..i].iter().any(|b| b.index == a.index) {
+                return Err(format!("--fit {}: given twice", a.name));
+            }
+        }
+        let lin = linearization(&base)?;
+        let ports = frfs
+            .iter()
+            .map(|d| {
+                let i = lin.input_names.iter().position(|n| *n == d.input);
+                let o = lin.output_names.iter().position(|n| *n == d.output);
+                match (i, o) {
+                    (Some(i), Some(o)) => Ok((i, o)),
+                    (None, _) => Err(format!(
+                        "--frf {}: '{}' is not an input of the model ({:?})",
+                        d.file, d.input, lin.input_names
+                    )),
+                    (_, None) => Err(format!(
+                        "--frf {}: '{}' is not an output of the model ({:?})",
+                        d.file, d.output, lin.output_names
+                    )),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Problem {
+            base,
+            frfs,
+            fitted,
+            ports,
+            evaluations: std::cell::Cell::new(0),
+        })
+    }
+
+    /// The number of (real) residuals.
+    pub fn len(&self) -> usize {
+        2 * self.frfs.iter().map(|d| d.f_hz.len()).sum::<usize>()
+    }
+
+    /// The starting configuration with the fitted parameters at `p`; an error names a value the
+    /// model refuses (a positive parameter gone non-positive, say).
+    pub fn values_at(&self, p: &[f64]) -> Result<Values, String> {
+        let mut values = self.base.clone();
+        for (f, &v) in self.fitted.iter().zip(p) {
+            let value = Value::Real(v);
+            check(f.index, &value)?;
+            values.set(f.index, value);
+        }
+        Ok(values)
+    }
+
+    /// The model's responses at `p`, one vector per measured response.
+    pub fn responses(&self, p: &[f64]) -> Result<Vec<Vec<Complex<f64>>>, String> {
+        self.evaluations.set(self.evaluations.get() + 1);
+        let lin = linearization(&self.values_at(p)?)?;
+        // One solve per input and frequency, shared by the outputs measured there.
+        let mut states: HashMap<(usize, u64), DVector<Complex<f64>>> = HashMap::new();
+        let mut out = Vec::with_capacity(self.frfs.len());
+        for (d, &(i, o)) in self.frfs.iter().zip(&self.ports) {
+            let mut h = Vec::with_capacity(d.f_hz.len());
+            for &f in &d.f_hz {
+                let x = match states.entry((i, f.to_bits())) {
+                    std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                    std::collections::hash_map::Entry::Vacant(e) => {
+                        e.insert(state_response_at(&lin, i, f)?)
+                    }
+                };
+                h.push(output_of(&lin, x, i, o));
+            }
+            out.push(h);
+        }
+        Ok(out)
+    }
+
+    /// The weighted residuals at the parameters `p` (module doc).
+    pub fn residuals(&self, p: &[f64]) -> Result<DVector<f64>, String> {
+        let model = self.responses(p)?;
+        let mut r = Vec::with_capacity(self.len());
+        for (d, m) in self.frfs.iter().zip(&model) {
+            for ((model, data), w) in m.iter().zip(&d.h).zip(&d.weight) {
+                let e = error(*model, *data, *w);
+                r.push(e.re);
+                r.push(e.im);
+            }
+        }
+        Ok(DVector::from_vec(r))
+    }
+
+    /// Per measured response, the RMS over its points of the weighted relative error `|e_k|`
+    /// (module doc) of the model at `p`.
+    pub fn rms(&self, p: &[f64]) -> Result<Vec<f64>, String> {
+        let model = self.responses(p)?;
+        Ok(self
+            .frfs
+            .iter()
+            .zip(&model)
+            .map(|(d, m)| {
+                let sum: f64 = m
+                    .iter()
+                    .zip(&d.h)
+                    .zip(&d.weight)
+                    .map(|((model, data), w)| error(*model, *data, *w).norm_sqr())
+                    .sum();
+                (sum / d.h.len() as f64).sqrt()
+            })
+            .collect())
+    }
+
+    /// The fitted parameters' values at the coordinates `z`.
+    pub fn p_of_z(&self, z: &[f64]) -> Vec<f64> {
+        self.fitted.iter().zip(z).map(|(f, &z)| f.p_of(z)).collect()
+    }
+
+    /// The residuals at the coordinates `z`.
+    pub fn residuals_z(&self, z: &[f64]) -> Result<DVector<f64>, String> {
+        self.residuals(&self.p_of_z(z))
+    }
+
+    /// `d residuals / d z` at `z` by central differences (module doc), a column per parameter.
+    pub fn jacobian_z(&self, z: &[f64]) -> Result<DMatrix<f64>, String> {
+        let mut jac = DMatrix::zeros(self.len(), z.len());
+        for j in 0..z.len() {
+            let at = |dz: f64| {
+                let mut zz = z.to_vec();
+                zz[j] += dz;
+                self.residuals_z(&zz).map_err(|e| {
+                    format!(
+                        "the sensitivity to {} at {}: {e}",
+                        self.fitted[j].name,
+                        self.fitted[j].p_of(zz[j])
+                    )
+                })
+            };
+            let column = (at(STEP)? - at(-STEP)?) / (2.0 * STEP);
+            jac.set_column(j, &column);
+        }
+        Ok(jac)
+    }
+}
+
+/// The weighted relative error `e_k = w_k (H_model - H_measured) / |H_measured|` of one point
+/// (module doc).
+fn error(model: Complex<f64>, data: Complex<f64>, w: f64) -> Complex<f64> {
+    (model - data) * (w / data.norm())
+}
+
+/// The linearisation at rest of the configuration `values`.
+fn linearization(values: &Values) -> Result<Linearization, String> {
+    crate::linearization_at_rest(&Parameters::from_values(values, &Experiment::default())?)
+}

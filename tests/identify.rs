@@ -1,0 +1,403 @@
+//! `hsp identify` (docs/identify.md) on synthetic frequency responses of the complete system:
+//! responses from `r` to `y_pot` and to `acc_tip` of the linearised model with known parameters
+//! away from the defaults, each point multiplied by `1 + n` with `n` complex Gaussian noise of
+//! 1 % RMS (`0.01 (a + j b) / sqrt 2`, `a`, `b` standard normal), written as the command's CSV,
+//! fitted by the command from the defaults. The truths are the generating values, independent of
+//! the fit.
+
+#[path = "common/fmu.rs"]
+mod fmu;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use fmu::Fmu;
+use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
+use hydraulic_slewing_plate::fmu::{Experiment, Values};
+use hydraulic_slewing_plate::model::assembly::Assembled;
+use hydraulic_slewing_plate::model::frf::response_at;
+use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::variables::VARIABLES;
+use serde_json::Value as Json;
+
+/// The generating values of the three-parameter case, away from the defaults (1.4e9 Pa, 0.02,
+/// 2500 N m/rad).
+const TRUTH: [(&str, f64); 3] = [
+    ("servo_valve.beta", 1.0e9),
+    ("plate.zeta", 0.03),
+    ("torsion_bar.k", 3200.0),
+];
+
+/// Points per response, log-spaced over 0.5 to 120 Hz (the band of the paper's Fig. 9b).
+const POINTS: usize = 200;
+
+/// Standard normal numbers from a seed: splitmix64 and the Box–Muller transform.
+struct Normal(u64);
+
+impl Normal {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn next(&mut self) -> f64 {
+        let (u, v) = (1.0 - self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+/// A fresh folder for one test's files.
+fn folder(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("identify")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The responses from `r` to each of `outputs` of the model with `sets` applied to the FMU's
+/// start values, with 1 % complex noise from `seed` (none for `None`), written as
+/// `dir/OUTPUT.csv`; the `--frf` arguments for them.
+fn synthetic(dir: &Path, sets: &[(&str, f64)], outputs: &[&str], seed: Option<u64>) -> Vec<String> {
+    let mut values = Values::from_start(&VARIABLES);
+    for (name, v) in sets {
+        set_by_name(&mut values, name, &v.to_string()).unwrap();
+    }
+    let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+    // The linearisation of `hsp frf` and `hsp identify`: at rest, the vane motor sliding.
+    let system = Assembled::new(&p.sliding()).unwrap();
+    let lin = system
+        .compiled()
+        .linearize(&system.initial_state(), system.inputs());
+    let input = lin.input_names.iter().position(|n| n == "r").unwrap();
+    let mut noise = seed.map(Normal);
+    outputs
+        .iter()
+        .map(|output| {
+            let o = lin.output_names.iter().position(|n| n == output).unwrap();
+            let mut csv = String::from("f_Hz,re,im\n");
+            for k in 0..POINTS {
+                let f = 0.5 * (120.0f64 / 0.5).powf(k as f64 / (POINTS - 1) as f64);
+                let mut h = response_at(&lin, input, o, f).unwrap();
+                if let Some(n) = noise.as_mut() {
+                    let (a, b) = (n.next(), n.next());
+                    h *= nalgebra::Complex::new(
+                        1.0 + 0.01 * a / 2f64.sqrt(),
+                        0.01 * b / 2f64.sqrt(),
+                    );
+                }
+                csv.push_str(&format!("{f:?},{:?},{:?}\n", h.re, h.im));
+            }
+            let file = dir.join(format!("{output}.csv"));
+            std::fs::write(&file, csv).unwrap();
+            format!("r:{output}:{}", file.display())
+        })
+        .collect()
+}
+
+/// `hsp identify --json` with `frfs`, `--fit` for each of `fit` and `extra` arguments: its JSON
+/// and its standard error; panics, with the error, when the command fails.
+fn identify(frfs: &[String], fit: &[&str], extra: &[&str]) -> (Json, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hsp"));
+    cmd.args(["identify", "--json"]);
+    for f in frfs {
+        cmd.args(["--frf", f]);
+    }
+    for f in fit {
+        cmd.args(["--fit", f]);
+    }
+    let out = cmd.args(extra).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "hsp identify failed: {stderr}");
+    (serde_json::from_slice(&out.stdout).unwrap(), stderr)
+}
+
+/// The 95 % interval of `name`, or `None` when the command gives none.
+fn ci95(json: &Json, name: &str) -> Option<(f64, f64)> {
+    let ci = &json["parameters"][name]["ci95"];
+    ci.as_array()
+        .map(|a| (a[0].as_f64().unwrap(), a[1].as_f64().unwrap()))
+}
+
+fn warnings(json: &Json) -> Vec<String> {
+    json["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect()
+}
+
+/// The three-parameter fit from the defaults: each truth inside its interval, each interval
+/// narrower than ±5 % (the data determine them), no warning.
+fn fit_three(dir: &Path, seed: u64, out: Option<&Path>) -> Json {
+    let frfs = synthetic(dir, &TRUTH, &["y_pot", "acc_tip"], Some(seed));
+    let fit: Vec<&str> = TRUTH.iter().map(|(n, _)| *n).collect();
+    let out_arg = out.map(|p| p.display().to_string());
+    let extra: Vec<&str> = match &out_arg {
+        Some(p) => vec!["--out", p],
+        None => vec![],
+    };
+    identify(&frfs, &fit, &extra).0
+}
+
+#[test]
+fn synthetic_frfs_give_back_the_parameters_within_their_intervals() {
+    let dir = folder("three");
+    let json = fit_three(&dir, 1, None);
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    for (name, truth) in TRUTH {
+        let (lo, hi) = ci95(&json, name).unwrap_or_else(|| panic!("{name}: no interval"));
+        assert!(
+            lo <= truth && truth <= hi,
+            "{name}: {truth} not in [{lo}, {hi}]: {json:#}"
+        );
+        assert!(hi / lo < 1.1, "{name}: [{lo}, {hi}] is wide: {json:#}");
+        let start = json["parameters"][name]["start"].as_f64().unwrap();
+        assert!(
+            start < lo || start > hi,
+            "{name}: the start {start} is inside [{lo}, {hi}]"
+        );
+    }
+}
+
+/// Exact data (no noise): the fit reaches the generating values to the sensitivities' accuracy,
+/// an independent check of the optimiser and the residuals' definition.
+#[test]
+fn exact_frfs_give_back_the_generating_values() {
+    let dir = folder("exact");
+    let frfs = synthetic(&dir, &TRUTH, &["y_pot", "acc_tip"], None);
+    let fit: Vec<&str> = TRUTH.iter().map(|(n, _)| *n).collect();
+    let (json, _) = identify(&frfs, &fit, &[]);
+    for (name, truth) in TRUTH {
+        let v = json["parameters"][name]["value"].as_f64().unwrap();
+        assert!(
+            (v / truth - 1.0).abs() < 1e-6,
+            "{name}: {v} against {truth}: {json:#}"
+        );
+    }
+    assert!(json["cost"].as_f64().unwrap() < 1e-12, "{json:#}");
+}
+
+/// The written parameter set, applied value by value through the FMU's FMI 2.0 set calls (as an
+/// SSP tool applies it), sets every parameter; after initialisation the FMU reads back each
+/// fitted parameter as the fit's value, bit for bit.
+#[test]
+fn the_written_ssv_applied_through_the_fmu_gives_the_fitted_parameters_back() {
+    let dir = folder("ssv");
+    let ssv = dir.join("fitted.ssv");
+    let json = fit_three(&dir, 2, Some(&ssv));
+    let text = std::fs::read_to_string(&ssv).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let fmu = Fmu::new();
+    let mut reals = Vec::new();
+    let mut count = 0;
+    for p in doc.descendants().filter(|n| n.has_tag_name("Parameter")) {
+        let name = p.attribute("name").unwrap();
+        let typed = p.children().find(|c| c.is_element()).unwrap();
+        let value = typed.attribute("value").unwrap();
+        let status = match typed.tag_name().name() {
+            "Real" => {
+                let v: f64 = value.parse().unwrap();
+                reals.push((name.to_string(), v));
+                fmu.set_real(name, v)
+            }
+            "Integer" => fmu.set_integer(name, value.parse().unwrap()),
+            "Boolean" => fmu.set_boolean(name, value.parse().unwrap()),
+            other => panic!("{name}: unexpected type {other}"),
+        };
+        assert_eq!(status, Fmi2Status::Ok, "{name} = {value}: {}", fmu.last());
+        count += 1;
+    }
+    let parameters = VARIABLES
+        .iter()
+        .filter(|v| v.causality == hydraulic_slewing_plate::fmu::Causality::Parameter)
+        .count();
+    assert_eq!(
+        count, parameters,
+        "the set holds every parameter of the FMU"
+    );
+    assert_eq!(fmu.init(0.0), Fmi2Status::Ok, "{}", fmu.last());
+    for (name, _) in TRUTH {
+        let fitted = json["parameters"][name]["value"].as_f64().unwrap();
+        let (_, in_set) = reals.iter().find(|(n, _)| n == name).unwrap();
+        assert_eq!(in_set.to_bits(), fitted.to_bits(), "{name} in the .ssv");
+        let (status, read) = fmu.get_real(name);
+        assert_eq!(status, Fmi2Status::Ok);
+        assert_eq!(
+            read.to_bits(),
+            fitted.to_bits(),
+            "{name} read back from the FMU"
+        );
+    }
+}
+
+/// With the load-pressure feedback off the loop gain is `A1 A2`: data from r determine the
+/// product, not the factors. The command says so and gives neither an interval.
+#[test]
+fn a_product_of_two_gains_is_reported_as_undetermined() {
+    let dir = folder("product");
+    let sets = [("controller.k_pl", 0.0), ("controller.A1", 2.5)];
+    let frfs = synthetic(&dir, &sets, &["y_pot", "acc_tip"], Some(3));
+    let (json, stderr) = identify(
+        &frfs,
+        &["controller.A1", "controller.A2"],
+        &["--set", "controller.k_pl=0"],
+    );
+    let w = warnings(&json);
+    assert!(
+        w.iter().any(
+            |w| w.contains("cannot separate controller.A1, controller.A2")
+                && w.contains("undetermined")
+        ),
+        "{json:#}"
+    );
+    assert!(stderr.contains("cannot separate"), "{stderr}");
+    for name in ["controller.A1", "controller.A2"] {
+        assert_eq!(ci95(&json, name), None, "{name}: {json:#}");
+    }
+    let corr = json["correlations"][0][1].as_f64().unwrap();
+    assert!(
+        corr < -0.99,
+        "ln A1 and ln A2 trade off: correlation {corr}"
+    );
+}
+
+/// The plate's yield strength enters only the stress monitor, not the responses from r: the
+/// command says the data do not see it, and still fits the bar's stiffness with an interval that
+/// holds the truth.
+#[test]
+fn a_parameter_the_outputs_do_not_see_is_reported() {
+    let dir = folder("unseen");
+    let frfs = synthetic(&dir, &[("torsion_bar.k", 3200.0)], &["y_pot"], Some(4));
+    let (json, _) = identify(&frfs, &["torsion_bar.k", "plate.sigma_y"], &[]);
+    let w = warnings(&json);
+    assert!(
+        w.iter().any(|w| w.contains("do not see plate.sigma_y")),
+        "{json:#}"
+    );
+    assert_eq!(ci95(&json, "plate.sigma_y"), None, "{json:#}");
+    let (lo, hi) = ci95(&json, "torsion_bar.k").unwrap();
+    assert!(lo <= 3200.0 && 3200.0 <= hi, "[{lo}, {hi}]");
+    // Alone, it is reported the same way, and left at its start.
+    let (json, _) = identify(&frfs, &["plate.sigma_y"], &[]);
+    assert!(
+        warnings(&json)[0].contains("do not see plate.sigma_y"),
+        "{json:#}"
+    );
+    assert_eq!(ci95(&json, "plate.sigma_y"), None, "{json:#}");
+    let p = &json["parameters"]["plate.sigma_y"];
+    assert_eq!(p["value"], p["start"], "{json:#}");
+}
+
+/// Bad input is refused with an error naming the culprit.
+#[test]
+fn bad_input_is_refused_naming_the_culprit() {
+    let dir = folder("bad");
+    let frfs = synthetic(&dir, &[], &["y_pot"], None);
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
+            .arg("identify")
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let file = frfs[0].trim_start_matches("r:y_pot:");
+    let e = run(&[
+        "--frf",
+        &format!("r:nothing:{file}"),
+        "--fit",
+        "torsion_bar.k",
+    ]);
+    assert!(e.contains("'nothing' is not an output"), "{e}");
+    let e = run(&["--frf", &frfs[0], "--fit", "torsion_bar.kk"]);
+    assert!(e.contains("'torsion_bar.kk' is not a variable"), "{e}");
+    let broken = dir.join("broken.csv");
+    std::fs::write(&broken, "f_Hz,re\n1,2\n").unwrap();
+    let e = run(&[
+        "--frf",
+        &format!("r:y_pot:{}", broken.display()),
+        "--fit",
+        "torsion_bar.k",
+    ]);
+    assert!(e.contains("no column 'im'"), "{e}");
+}
+
+/// Over 20 noise seeds the 95 % intervals of the three-parameter fit hold the truth in 17 to 20
+/// of them, for each parameter (the binomial 95 % range of a correct 95 % interval; 16 or fewer
+/// has a probability of 1.6 %).
+#[test]
+fn intervals_cover_the_truth_in_17_to_20_of_20_noise_seeds() {
+    let dir = folder("coverage");
+    let mut covered = [0; TRUTH.len()];
+    for seed in 100..120 {
+        let json = fit_three(&dir, seed, None);
+        for (k, (name, truth)) in TRUTH.iter().enumerate() {
+            let (lo, hi) = ci95(&json, name).unwrap();
+            covered[k] += usize::from(lo <= *truth && *truth <= hi);
+        }
+    }
+    eprintln!(
+        "covered in 20 seeds: {:?} of {:?}",
+        covered,
+        TRUTH.map(|t| t.0)
+    );
+    for (k, (name, _)) in TRUTH.iter().enumerate() {
+        assert!(
+            (17..=20).contains(&covered[k]),
+            "{name}: covered in {} of 20",
+            covered[k]
+        );
+    }
+}
+
+/// `--report DIR`: the page shows the fit's numbers as the JSON gives them, and a Bode plot of
+/// each response (measured, start, fitted). The fitted residual's RMS is the noise's, 1 % (the
+/// generating noise has E|n|^2 = 1e-4; 200 complex points, 400 real ones, make the RMS good to
+/// 1/sqrt(800) = 3.5 %: the bound is ±12 %, 3.4 of that), the start's far above it.
+#[test]
+fn the_report_page_shows_the_fit_and_each_response() {
+    let dir = folder("report");
+    let frfs = synthetic(
+        &dir,
+        &[("torsion_bar.k", 3200.0)],
+        &["y_pot", "acc_tip"],
+        Some(5),
+    );
+    let report = dir.join("report");
+    let (json, _) = identify(
+        &frfs,
+        &["torsion_bar.k"],
+        &["--report", report.to_str().unwrap()],
+    );
+    let page = std::fs::read_to_string(report.join("index.md")).unwrap();
+    let value = json["parameters"]["torsion_bar.k"]["value"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        page.contains(&format!("| `torsion_bar.k` | 2.500000e3 | {value:.6e} |")),
+        "{page}"
+    );
+    for (k, r) in json["responses"].as_array().unwrap().iter().enumerate() {
+        let (before, after) = (
+            r["rms_start"].as_f64().unwrap(),
+            r["rms_fitted"].as_f64().unwrap(),
+        );
+        assert!((0.0088..0.0112).contains(&after), "{r}");
+        assert!(before > 5.0 * after, "{r}");
+        assert!(
+            page.contains(&format!("| {before:.6e} | {after:.6e} |")),
+            "{page}"
+        );
+        let svg = std::fs::read_to_string(report.join(format!("frf_{}.svg", k + 1))).unwrap();
+        for legend in ["measured", "model at the start", "model fitted"] {
+            assert!(svg.contains(legend), "frf_{}.svg: no {legend}", k + 1);
+        }
+        assert!(page.contains(&format!("](frf_{}.svg)", k + 1)), "{page}");
+    }
+}
