@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use hydraulic_slewing_plate::fmu::{Causality, Kind, Value, Values};
-use hydraulic_slewing_plate::model::variables::{POSITIVE, VARIABLES};
+use hydraulic_slewing_plate::fragments::rules;
+use hydraulic_slewing_plate::model::variables::VARIABLES;
 use nalgebra::Complex;
 
 use crate::plot::Table;
@@ -152,7 +153,7 @@ impl Fitted {
                      between LOW and HIGH"
                 ));
             }
-            if POSITIVE.contains(&index) && lo <= 0.0 {
+            if rules::rule(name).is_some_and(|r| r.positive) && lo <= 0.0 {
                 return Err(format!(
                     "--fit '{spec}': {name} is positive; LOW must be > 0"
                 ));
