@@ -59,41 +59,28 @@ fn portable_only() -> bool {
 /// [`lu_in_place`]'s loops.
 #[inline(always)]
 fn lu_in_place_loops<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+    let a = &mut a[..k * k];
     let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
     let tiny = floor * amax;
     for j in 0..k {
-        let mut p = j;
-        let mut pmax = a[j + j * k].norm1();
-        for r in j + 1..k {
-            let v = a[r + j * k].norm1();
-            if v > pmax {
-                p = r;
-                pmax = v;
-            }
-        }
-        piv[j] = p;
-        if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+        if !pivot(a, k, j, tiny, piv) {
             return false;
         }
-        if p != j {
-            for c in 0..k {
-                a.swap(j + c * k, p + c * k);
-            }
+        // Column j after the pivot, and the columns after j (the elimination below reads only
+        // rows and columns after j: the pivot is free to go).
+        let (left, right) = a.split_at_mut((j + 1) * k);
+        let column = &mut left[j * k..];
+        let d = column[j];
+        for v in &mut column[j + 1..] {
+            *v = *v / d;
         }
-        let d = a[j + j * k];
-        for r in j + 1..k {
-            a[r + j * k] = a[r + j * k] / d;
-        }
-        // The elimination below reads only rows and columns after j: the pivot is free to go.
-        a[j + j * k] = T::ONE / d;
-        for c in j + 1..k {
-            let f = a[j + c * k];
+        column[j] = T::ONE / d;
+        let l = &column[j + 1..];
+        for col in right.chunks_exact_mut(k) {
+            let f = col[j];
             if f != T::ZERO {
-                let (left, right) = a.split_at_mut(c * k);
-                let lcol = &left[j * k..j * k + k];
-                let col = &mut right[..k];
-                for r in j + 1..k {
-                    col[r] = col[r] - lcol[r] * f;
+                for (v, &lr) in col[j + 1..].iter_mut().zip(l) {
+                    *v = *v - lr * f;
                 }
             }
         }
@@ -165,6 +152,33 @@ pub(super) fn solve_2x2<T: Scalar>(
     (x0 * inv_u00, x1)
 }
 
+/// Step j's partial pivoting in the column-major k × k `a`: the row of column j's largest entry
+/// at or below the diagonal, recorded in `piv[j]` and swapped into row j; false if that entry
+/// is zero, not finite, or not above `tiny`.
+#[inline(always)]
+fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, tiny: f64, piv: &mut [usize]) -> bool {
+    let column = &a[j * k..j * k + k];
+    let mut p = j;
+    let mut pmax = column[j].norm1();
+    for (r, v) in column.iter().enumerate().skip(j + 1) {
+        let v = v.norm1();
+        if v > pmax {
+            p = r;
+            pmax = v;
+        }
+    }
+    piv[j] = p;
+    if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+        return false;
+    }
+    if p != j {
+        for c in 0..k {
+            a.swap(j + c * k, p + c * k);
+        }
+    }
+    true
+}
+
 /// [`lu_solve`] for any k (inlined, so that a constant k unrolls the loops).
 #[inline(always)]
 pub(super) fn lu_solve_loops<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
@@ -207,6 +221,94 @@ mod tests {
     thread_local! {
         /// The kernels take the portable loops even where AVX2 is available.
         pub(super) static PORTABLE_ONLY: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// [`lu_in_place`]'s elimination as it was written with index loops (its pivoting is the
+    /// same [`pivot`]), the reference for the bits of the iterator loops; and the solve with the
+    /// index loops of [`lu_solve_loops`].
+    fn lu_indexed(a: &mut [f64], k: usize, piv: &mut [usize], floor: f64) -> bool {
+        let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let tiny = floor * amax;
+        for j in 0..k {
+            if !pivot(a, k, j, tiny, piv) {
+                return false;
+            }
+            let d = a[j + j * k];
+            for r in j + 1..k {
+                a[r + j * k] /= d;
+            }
+            a[j + j * k] = 1.0 / d;
+            for c in j + 1..k {
+                let f = a[j + c * k];
+                if f != 0.0 {
+                    for r in j + 1..k {
+                        a[r + c * k] -= a[r + j * k] * f;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    fn solve_indexed(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
+        for j in 0..k {
+            if piv[j] != j {
+                x.swap(j, piv[j]);
+            }
+        }
+        for j in 0..k {
+            let v = x[j];
+            if v != 0.0 {
+                for r in j + 1..k {
+                    x[r] -= a[r + j * k] * v;
+                }
+            }
+        }
+        for j in (0..k).rev() {
+            let v = x[j] * a[j + j * k];
+            x[j] = v;
+            if v != 0.0 {
+                for r in 0..j {
+                    x[r] -= a[r + j * k] * v;
+                }
+            }
+        }
+    }
+
+    /// The iterator loops of the factorisation (portable and AVX2) give the bits of the index
+    /// loops they replaced, and so do the solves, on random matrices of 0 to 60 states with zeros.
+    #[test]
+    fn the_loops_have_the_index_loops_bits() {
+        let mut rng = Rng(0x2f7b_91c3_0a6d_5e41);
+        for k in [0, 1, 2, 3, 5, 8, 9, 17, 46, 60] {
+            for trial in 0..4 {
+                let a: Vec<f64> = (0..k * k)
+                    .map(|i| {
+                        if (i + trial) % 6 == 2 {
+                            0.0
+                        } else {
+                            rng.next()
+                        }
+                    })
+                    .collect();
+                let rhs: Vec<f64> = (0..k)
+                    .map(|i| if i % 4 == 1 { 0.0 } else { rng.next() })
+                    .collect();
+                let (mut lu, mut reference) = (a.clone(), a.clone());
+                let (mut piv, mut piv_ref) = (vec![0; k], vec![0; k]);
+                let ok = lu_in_place(&mut lu, k, &mut piv, 1e-10);
+                assert_eq!(ok, lu_indexed(&mut reference, k, &mut piv_ref, 1e-10));
+                assert_eq!(
+                    format!("{lu:?} {piv:?}"),
+                    format!("{reference:?} {piv_ref:?}"),
+                    "k = {k}"
+                );
+                let (mut x, mut x_ref) = (rhs.clone(), rhs.clone());
+                lu_solve(&lu, k, &piv, &mut x);
+                solve_indexed(&reference, k, &piv_ref, &mut x_ref);
+                assert_eq!(format!("{x:?}"), format!("{x_ref:?}"), "k = {k}");
+            }
+        }
     }
 
     /// The factorisation and the solve of a large block compiled for AVX2 give the portable
