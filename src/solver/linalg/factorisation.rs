@@ -71,27 +71,45 @@ impl<T: Scalar> Factorisation<T> {
         self.piv.resize(n, 0);
         resize(&mut self.schur, m * m);
         self.schur_piv.resize(m, 0);
+        // The blocks' LUs first, at the offsets the solves read them from: a block with a small
+        // pivot fails the factorisation before any of the couplings' work is done (a model whose
+        // structured elimination fails then pays only its small blocks before the dense LU).
+        for at in p.linked.iter().chain(&p.free) {
+            let (s, k) = (at.start, at.size);
+            let idx = &p.perm[s..s + k];
+            let a = &mut self.lu[at.lu..at.lu + k * k];
+            if idx.iter().enumerate().all(|(i, &v)| i == v) {
+                // A block of the first k states in natural order (`Partition::dense`'s one
+                // block): no indirection.
+                for (cj, column) in a.chunks_exact_mut(k).enumerate() {
+                    for (r, v) in column.iter_mut().enumerate() {
+                        *v = entry(r, cj);
+                    }
+                }
+            } else {
+                for cj in 0..k {
+                    for r in 0..k {
+                        a[r + cj * k] = entry(idx[r], idx[cj]);
+                    }
+                }
+            }
+            if !lu_in_place(a, k, &mut self.piv[s..s + k], floor) {
+                return false;
+            }
+        }
         let border = &p.perm[nb..];
         for q in 0..m {
             for r in 0..m {
                 self.schur[r + q * m] = entry(border[r], border[q]);
             }
         }
-        // The blocks at the offsets the solves read them from (the Schur complement takes the
-        // linked blocks' updates in block order; the free ones have none).
-        for at in p.linked.iter().chain(&p.free) {
+        // The couplings: the Schur complement takes the linked blocks' updates in block order
+        // (the free ones have none).
+        for at in &p.linked {
             let (s, k) = (at.start, at.size);
             let links = &p.links[at.links_from..at.links_to];
             let idx = &p.perm[s..s + k];
-            let a = &mut self.lu[at.lu..at.lu + k * k];
-            for cj in 0..k {
-                for r in 0..k {
-                    a[r + cj * k] = entry(idx[r], idx[cj]);
-                }
-            }
-            if !lu_in_place(a, k, &mut self.piv[s..s + k], floor) {
-                return false;
-            }
+            let a = &self.lu[at.lu..at.lu + k * k];
             let l = links.len();
             let x = &mut self.x[at.x..at.x + k * l];
             let c = &mut self.c[at.x..at.x + k * l];

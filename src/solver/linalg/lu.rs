@@ -1,7 +1,19 @@
 //! The dense LU of one block (or of the border's Schur complement): LU with partial pivoting in
 //! place, and its solves, written out for the small block sizes.
+//!
+//! A large block (the dense partition's one block, above all: a model whose structured
+//! elimination does not apply factorises the whole iteration matrix at every step) is factorised
+//! and solved, on x86-64 processors with AVX2 (detected at run time), by the same loops compiled
+//! for 4-wide vectors. Their multiplications and subtractions stay separate, never fused, and
+//! each entry is updated by the same operations in the same order, so the bits are those of the
+//! portable loops on every processor (`avx2_kernels_have_the_portable_bits`).
 
 use super::scalar::Scalar;
+
+/// Blocks of fewer states than this are factorised and solved by the portable loops: the vector
+/// versions pay off only for long columns (and the small sizes' solves are unrolled instead).
+#[cfg(target_arch = "x86_64")]
+const VECTOR_FROM: usize = 9;
 
 /// LU with partial pivoting of the column-major k × k matrix `a` in place (unit lower L below
 /// the diagonal, U above it, and the reciprocals of U's diagonal on the diagonal), interchanges
@@ -13,41 +25,62 @@ use super::scalar::Scalar;
 /// Jacobian): a solve then multiplies where it would divide, and a division (a complex one
 /// above all) costs several multiplications' latency on the solve's critical path.
 pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if k >= VECTOR_FROM && !portable_only() && std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe { lu_in_place_avx2(a, k, piv, floor) };
+        }
+    }
+    lu_in_place_loops(a, k, piv, floor)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn lu_in_place_avx2<T: Scalar>(
+    a: &mut [T],
+    k: usize,
+    piv: &mut [usize],
+    floor: f64,
+) -> bool {
+    lu_in_place_loops(a, k, piv, floor)
+}
+
+/// Whether the tests asked for the portable loops only (always false outside the tests).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn portable_only() -> bool {
+    #[cfg(test)]
+    return tests::PORTABLE_ONLY.with(|p| p.get());
+    #[cfg(not(test))]
+    false
+}
+
+/// [`lu_in_place`]'s loops.
+#[inline(always)]
+fn lu_in_place_loops<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+    let a = &mut a[..k * k];
     let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
     let tiny = floor * amax;
     for j in 0..k {
-        let mut p = j;
-        let mut pmax = a[j + j * k].norm1();
-        for r in j + 1..k {
-            let v = a[r + j * k].norm1();
-            if v > pmax {
-                p = r;
-                pmax = v;
-            }
-        }
-        piv[j] = p;
-        if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+        if !pivot(a, k, j, tiny, piv) {
             return false;
         }
-        if p != j {
-            for c in 0..k {
-                a.swap(j + c * k, p + c * k);
-            }
+        // Column j after the pivot, and the columns after j (the elimination below reads only
+        // rows and columns after j: the pivot is free to go).
+        let (left, right) = a.split_at_mut((j + 1) * k);
+        let column = &mut left[j * k..];
+        let d = column[j];
+        for v in &mut column[j + 1..] {
+            *v = *v / d;
         }
-        let d = a[j + j * k];
-        for r in j + 1..k {
-            a[r + j * k] = a[r + j * k] / d;
-        }
-        // The elimination below reads only rows and columns after j: the pivot is free to go.
-        a[j + j * k] = T::ONE / d;
-        for c in j + 1..k {
-            let f = a[j + c * k];
+        column[j] = T::ONE / d;
+        let l = &column[j + 1..];
+        for col in right.chunks_exact_mut(k) {
+            let f = col[j];
             if f != T::ZERO {
-                let (left, right) = a.split_at_mut(c * k);
-                let lcol = &left[j * k..j * k + k];
-                let col = &mut right[..k];
-                for r in j + 1..k {
-                    col[r] = col[r] - lcol[r] * f;
+                for (v, &lr) in col[j + 1..].iter_mut().zip(l) {
+                    *v = *v - lr * f;
                 }
             }
         }
@@ -72,8 +105,28 @@ pub(super) fn lu_solve<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T])
         (6, ..) => lu_solve_loops(a, 6, piv, x),
         (7, ..) => lu_solve_loops(a, 7, piv, x),
         (8, ..) => lu_solve_loops(a, 8, piv, x),
-        _ => lu_solve_loops(a, k, piv, x),
+        _ => lu_solve_large(a, k, piv, x),
     }
+}
+
+/// [`lu_solve`] for a block of more than eight states: the loops, compiled for AVX2 where the
+/// processor has it (see the module documentation).
+fn lu_solve_large<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if k >= VECTOR_FROM && !portable_only() && std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            unsafe { lu_solve_avx2(a, k, piv, x) };
+            return;
+        }
+    }
+    lu_solve_loops(a, k, piv, x);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn lu_solve_avx2<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
+    lu_solve_loops(a, k, piv, x);
 }
 
 /// [`lu_solve`] for k = 2, from the factors `[inv_u00, l10, u01, inv_u11]` (column-major), the
@@ -97,6 +150,33 @@ pub(super) fn solve_2x2<T: Scalar>(
         x0 = x0 - u01 * x1;
     }
     (x0 * inv_u00, x1)
+}
+
+/// Step j's partial pivoting in the column-major k × k `a`: the row of column j's largest entry
+/// at or below the diagonal, recorded in `piv[j]` and swapped into row j; false if that entry
+/// is zero, not finite, or not above `tiny`.
+#[inline(always)]
+fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, tiny: f64, piv: &mut [usize]) -> bool {
+    let column = &a[j * k..j * k + k];
+    let mut p = j;
+    let mut pmax = column[j].norm1();
+    for (r, v) in column.iter().enumerate().skip(j + 1) {
+        let v = v.norm1();
+        if v > pmax {
+            p = r;
+            pmax = v;
+        }
+    }
+    piv[j] = p;
+    if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+        return false;
+    }
+    if p != j {
+        for c in 0..k {
+            a.swap(j + c * k, p + c * k);
+        }
+    }
+    true
 }
 
 /// [`lu_solve`] for any k (inlined, so that a constant k unrolls the loops).
@@ -131,10 +211,144 @@ pub(super) fn lu_solve_loops<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mu
 
 #[cfg(test)]
 mod tests {
+    use std::cell::Cell;
+
     use nalgebra::Complex;
 
     use super::super::testing::Rng;
     use super::*;
+
+    thread_local! {
+        /// The kernels take the portable loops even where AVX2 is available.
+        pub(super) static PORTABLE_ONLY: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// [`lu_in_place`]'s elimination as it was written with index loops (its pivoting is the
+    /// same [`pivot`]), the reference for the bits of the iterator loops; and the solve with the
+    /// index loops of [`lu_solve_loops`].
+    fn lu_indexed(a: &mut [f64], k: usize, piv: &mut [usize], floor: f64) -> bool {
+        let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let tiny = floor * amax;
+        for j in 0..k {
+            if !pivot(a, k, j, tiny, piv) {
+                return false;
+            }
+            let d = a[j + j * k];
+            for r in j + 1..k {
+                a[r + j * k] /= d;
+            }
+            a[j + j * k] = 1.0 / d;
+            for c in j + 1..k {
+                let f = a[j + c * k];
+                if f != 0.0 {
+                    for r in j + 1..k {
+                        a[r + c * k] -= a[r + j * k] * f;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    fn solve_indexed(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
+        for j in 0..k {
+            if piv[j] != j {
+                x.swap(j, piv[j]);
+            }
+        }
+        for j in 0..k {
+            let v = x[j];
+            if v != 0.0 {
+                for r in j + 1..k {
+                    x[r] -= a[r + j * k] * v;
+                }
+            }
+        }
+        for j in (0..k).rev() {
+            let v = x[j] * a[j + j * k];
+            x[j] = v;
+            if v != 0.0 {
+                for r in 0..j {
+                    x[r] -= a[r + j * k] * v;
+                }
+            }
+        }
+    }
+
+    /// The iterator loops of the factorisation (portable and AVX2) give the bits of the index
+    /// loops they replaced, and so do the solves, on random matrices of 0 to 60 states with zeros.
+    #[test]
+    fn the_loops_have_the_index_loops_bits() {
+        let mut rng = Rng(0x2f7b_91c3_0a6d_5e41);
+        for k in [0, 1, 2, 3, 5, 8, 9, 17, 46, 60] {
+            for trial in 0..4 {
+                let a: Vec<f64> = (0..k * k)
+                    .map(|i| {
+                        if (i + trial) % 6 == 2 {
+                            0.0
+                        } else {
+                            rng.next()
+                        }
+                    })
+                    .collect();
+                let rhs: Vec<f64> = (0..k)
+                    .map(|i| if i % 4 == 1 { 0.0 } else { rng.next() })
+                    .collect();
+                let (mut lu, mut reference) = (a.clone(), a.clone());
+                let (mut piv, mut piv_ref) = (vec![0; k], vec![0; k]);
+                let ok = lu_in_place(&mut lu, k, &mut piv, 1e-10);
+                assert_eq!(ok, lu_indexed(&mut reference, k, &mut piv_ref, 1e-10));
+                assert_eq!(
+                    format!("{lu:?} {piv:?}"),
+                    format!("{reference:?} {piv_ref:?}"),
+                    "k = {k}"
+                );
+                let (mut x, mut x_ref) = (rhs.clone(), rhs.clone());
+                lu_solve(&lu, k, &piv, &mut x);
+                solve_indexed(&reference, k, &piv_ref, &mut x_ref);
+                assert_eq!(format!("{x:?}"), format!("{x_ref:?}"), "k = {k}");
+            }
+        }
+    }
+
+    /// The factorisation and the solve of a large block compiled for AVX2 give the portable
+    /// loops' bits: random real and complex matrices of 9 to 60 states (with zeros, which the
+    /// loops skip, and row interchanges), factorised and solved both ways, compared bit for bit.
+    /// (On a processor without AVX2 both ways are the portable loops.)
+    #[test]
+    fn avx2_kernels_have_the_portable_bits() {
+        fn both<T: Scalar + std::fmt::Debug>(a: &[T], k: usize, rhs: &[T]) -> [String; 2] {
+            [false, true].map(|portable| {
+                PORTABLE_ONLY.with(|p| p.set(portable));
+                let mut lu = a.to_vec();
+                let mut piv = vec![0; k];
+                let ok = lu_in_place(&mut lu, k, &mut piv, 1e-10);
+                let mut x = rhs.to_vec();
+                lu_solve(&lu, k, &piv, &mut x);
+                PORTABLE_ONLY.with(|p| p.set(false));
+                format!("{ok} {lu:?} {piv:?} {x:?}")
+            })
+        }
+        let mut rng = Rng(0x5851_f42d_4c95_7f2d);
+        for k in [9, 13, 17, 31, 46, 60] {
+            let a: Vec<f64> = (0..k * k)
+                .map(|i| if i % 7 == 3 { 0.0 } else { rng.next() })
+                .collect();
+            let rhs: Vec<f64> = (0..k)
+                .map(|i| if i % 5 == 0 { 0.0 } else { rng.next() })
+                .collect();
+            let [vector, portable] = both(&a, k, &rhs);
+            assert_eq!(vector, portable, "real, k = {k}");
+            let ac: Vec<Complex<f64>> = a
+                .iter()
+                .enumerate()
+                .map(|(i, &x)| Complex::new(x, a[(i * 5) % (k * k)]))
+                .collect();
+            let rc: Vec<Complex<f64>> = rhs.iter().map(|&v| Complex::new(v, 0.5 - v)).collect();
+            let [vector, portable] = both(&ac, k, &rc);
+            assert_eq!(vector, portable, "complex, k = {k}");
+        }
+    }
 
     /// The written-out solves for blocks of one and two states, and the unrolled ones of three
     /// to eight, give the loops' bits, with and without a row interchange, for real and complex
