@@ -180,6 +180,22 @@ function fromQuery() {
   return problems;
 }
 
+// The controls as the address (the names fromQuery reads), written back into the browser's
+// address bar, so that a copied link opens the page with these settings and runs them.
+function address() {
+  const q = new URLSearchParams();
+  q.set("preset", $("preset").value);
+  q.set("command", radio("command"));
+  for (const id of NUMBERS) q.set(id, $(id).value);
+  q.set("speed", radio("speed"));
+  return "?" + q.toString();
+}
+
+function writeAddress() {
+  history.replaceState(null, "", address());
+  $("link").value = location.href;
+}
+
 // The controls that follow the run's state: the slider only with its command, Pause only while
 // a run goes on (and "Resume" only while it is paused).
 function syncControls() {
@@ -188,6 +204,9 @@ function syncControls() {
   const live = !!run && !run.done && !page.error;
   $("pause").disabled = !live;
   $("pause").textContent = live && run.pausedAt ? "Resume" : "Pause";
+  const results = !!run && run.samples.t.length > 0;
+  $("download-csv").disabled = !results;
+  $("download-json").disabled = !results;
 }
 
 // ---------------------------------------------------------------- the run
@@ -208,13 +227,16 @@ class Series {
   }
 
   last() {
-    const at = (this.length - 1) % Series.BLOCK;
-    return this.blocks[this.blocks.length - 1][at];
+    return this.at(this.length - 1);
+  }
+
+  at(i) {
+    return this.blocks[Math.floor(i / Series.BLOCK)][i % Series.BLOCK];
   }
 
   array() {
     const out = new Array(this.length);
-    for (let i = 0; i < this.length; i++) out[i] = this.blocks[Math.floor(i / Series.BLOCK)][i % Series.BLOCK];
+    for (let i = 0; i < this.length; i++) out[i] = this.at(i);
     return out;
   }
 }
@@ -284,6 +306,8 @@ function newRun(asked) {
     stop: asked.stop,
     steps,
     command: asked.command,
+    tStart: asked.tStart,
+    address: location.href,
     speed: radio("speed"),
     fullValve,
     samples: { t: new Series() },
@@ -364,6 +388,7 @@ function onWorkerMessage(e) {
   if (m.type === "started") {
     run.started = performance.now();
     run.kPot = m.kPot;
+    run.rStep = m.rStep;
     run.monitors = m.monitors;
     run.plate = m.plate;
     receive(run, m.batch);
@@ -416,6 +441,7 @@ function start() {
     return;
   }
   page.error = null;
+  writeAddress();
   const previous = page.run && page.run.samples.t.length ? page.run : page.run && page.run.previous;
   page.run = newRun(asked);
   page.run.previous = previous; // on screen until the new one draws
@@ -699,6 +725,66 @@ page.recorded = (run = page.run) => {
   return { samples, inputs: run.inputs.array() };
 };
 
+// ---------------------------------------------------------------- taking results away
+
+// The run's recorded points as CSV: a header of the names with their units, then one row per
+// communication point: the time, the input r set before the step that ended there (empty at
+// t = 0), and the recorded outputs (SI units, every digit a double needs).
+function csv(run) {
+  const unit = (name) => page.model.variable(name).unit || "1";
+  const header = ["time [s]", `r [${unit("r")}]`, ...RECORDED.map((n) => `${n} [${unit(n)}]`)];
+  const columns = RECORDED.map((n) => run.samples[n]);
+  const t = run.samples.t;
+  const rows = [header.join(",")];
+  for (let i = 0; i < t.length; i++) {
+    const row = [t.at(i), i > 0 ? run.inputs.at(i - 1) : ""];
+    for (const c of columns) row.push(c.at(i));
+    rows.push(row.join(","));
+  }
+  return rows.join("\n") + "\n";
+}
+
+// The run's settings as JSON: the preset and the FMU's variables set over it (what `hsp run
+// --preset P --set NAME=VALUE` takes), the stop time and communication step, how r was driven,
+// and the page's address that runs it again.
+function settingsJson(run) {
+  const input = {
+    move: "r = 0: the command generator's move (reference.*) drives the loop",
+    step: `r steps from 0 to ${run.rStep} V at t = ${run.tStart} s`,
+    slider: "r moved by hand: see the CSV's r column",
+  }[run.command];
+  return JSON.stringify({
+    model: "HydraulicSlewingPlate", preset: run.request.preset, settings: run.request.settings,
+    stop_time: run.stop, step_size: STEP, command: run.command, input_r: input,
+    address: run.address, run: run.id, failed: run.failed,
+  }, null, 2) + "\n";
+}
+
+function download(name, type, text) {
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(new Blob([text], { type }));
+  a.download = name;
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+}
+
+// Puts the address in the clipboard where the browser lets the page (not always from the disk),
+// and shows it selected beside the button either way.
+async function copyLink() {
+  const link = $("link");
+  link.value = location.href;
+  link.select();
+  page.copied = link.value;
+  try {
+    await navigator.clipboard.writeText(link.value);
+    $("link-note").textContent = "Copied: the link opens the page with these settings and runs them.";
+  } catch (e) {
+    $("link-note").textContent = "Selected: copy it with Ctrl+C (the browser keeps the clipboard from this page).";
+  }
+}
+
 // ---------------------------------------------------------------- wiring
 
 // The slider's r, moved while a slider run goes on, is handed to the run; otherwise a move of
@@ -757,12 +843,22 @@ function wire() {
         run.speed = radio("speed");
         page.worker.postMessage({ type: "speed", speed: run.speed });
       }
+      if (!page.error) writeAddress();
     });
   }
   $("r").addEventListener("input", slide);
   $("run").addEventListener("click", start);
   $("pause").addEventListener("click", pause);
   $("reset").addEventListener("click", reset);
+  $("download-csv").addEventListener("click", () => {
+    const run = page.run;
+    download(`hsp-run-${run.id}-${run.request.preset}.csv`, "text/csv", csv(run));
+  });
+  $("download-json").addEventListener("click", () => {
+    const run = page.run;
+    download(`hsp-run-${run.id}-${run.request.preset}.json`, "application/json", settingsJson(run));
+  });
+  $("copy-link").addEventListener("click", copyLink);
 }
 
 // The worker has loaded the module: the controls are filled (from the address) and the first run

@@ -338,3 +338,54 @@ def test_an_unknown_preset_in_the_address_is_refused(probe, page_dir):
     assert state["status_class"] == "error"
     # The list shows a preset, not a blank.
     assert probe.find_element(By.ID, "preset").get_attribute("value") == "complete"
+
+
+# ---------------------------------------------------------------- taking results away (issue 42)
+
+def test_the_address_carries_the_settings_and_reproduces_the_run(probe, page_dir):
+    open_page(probe, page_dir, "?speed=fast&preset=loes-motor")
+    wait_for_run(probe)
+    change(probe, "A1", "3")
+    first = wait_for_run(probe)
+    link = probe.current_url
+    assert "preset=loes-motor" in link and "A1=3" in link and "speed=fast" in link, link
+    # The link's own box and the copy button show the same address.
+    probe.find_element(By.ID, "copy-link").click()
+    WebDriverWait(probe, 5).until(lambda d: d.execute_script("return hspPage.copied"))
+    assert probe.find_element(By.ID, "link").get_attribute("value") == link
+    assert probe.find_element(By.ID, "link-note").text
+    # Opened again, the link runs the same settings to the same doubles.
+    probe.get("about:blank")
+    again = open_page(probe, page_dir, link[link.index("?"):])
+    again = wait_for_run(probe)
+    assert again["request"] == first["request"], (again["request"], first["request"])
+    assert again["samples"] == first["samples"] and again["inputs"] == first["inputs"]
+
+
+def test_results_download_as_csv_and_settings_as_json(probe, page_dir, tmp_path):
+    probe.execute_cdp_cmd("Browser.setDownloadBehavior",
+                          {"behavior": "allow", "downloadPath": str(tmp_path)})
+    open_page(probe, page_dir, "?speed=fast&command=step&angle=10&stop=2")
+    run = wait_for_run(probe)
+    probe.find_element(By.ID, "download-csv").click()
+    probe.find_element(By.ID, "download-json").click()
+    WebDriverWait(probe, 20).until(lambda d: len(
+        [f for f in tmp_path.iterdir() if f.suffix in (".csv", ".json")]) == 2)
+    csv_file = next(tmp_path.glob("*.csv"))
+    json_file = next(tmp_path.glob("*.json"))
+    lines = csv_file.read_text().splitlines()
+    header = lines[0].split(",")
+    assert header[:3] == ["time [s]", "r [V]", "controller.reference [V]"], header
+    assert "theta_hub [rad]" in header and "p_load [Pa]" in header, header
+    rows = [line.split(",") for line in lines[1:]]
+    assert len(rows) == len(run["samples"]["t"]) == 2001
+    # Every value is the page's double, to the last bit.
+    assert [float(r[0]) for r in rows] == run["samples"]["t"]
+    assert rows[0][1] == "" and [float(r[1]) for r in rows[1:]] == run["inputs"]
+    for k, name in enumerate(header[2:]):
+        assert [float(r[2 + k]) for r in rows] == run["samples"][name.split(" ")[0]], name
+    settings = json.loads(json_file.read_text())
+    assert settings["preset"] == "complete" and settings["settings"] == run["request"]["settings"]
+    assert settings["stop_time"] == 2 and settings["step_size"] == 1e-3
+    assert settings["command"] == "step" and "r steps from 0 to" in settings["input_r"]
+    assert settings["address"] == probe.current_url
