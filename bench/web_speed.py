@@ -17,17 +17,19 @@ stepping only. Native: the same run (the same settings, r before every step, the
 read after every step) through the same API (`bench-web-native`), in the same session.
 
 Pause: the page opened from the disk with ?speed=fast&stop=600 (the longest run the page takes),
-paused by a click once the run's simulated time passes 500 s (500 001 points recorded and
-drawn), dispatched as the browser's own mouse input (DevTools' Input.dispatchMouseEvent: no
-script runs in the page first). The latency is from the click's time stamp (the moment
-the bench sent it, given to the browser with the input) to the moment the simulation has stopped: for a page that steps on its
-own thread, the end of its click handler (it stops stepping there); for a page that steps in a
-worker, the worker's answer that it has stopped (hspPage.timing.pauseActed). Beside it: how long
-the dispatch of the press and release took to come back, and the longest task of the page's
-thread between the first result and the click (Chromium's long-task entries, 50 ms and more; 0:
-none).
+paused by a click at a random moment (0 to 1 s, seeded) after the run's simulated time is seen
+past 400 s (400 001 points recorded and drawn), sent as the browser's own mouse input
+(DevTools' Input.dispatchMouseEvent: no script of Selenium's runs in the page first). The
+latency is from the click's time stamp (the moment the bench sent it, handed to the browser with
+the input) to the moment the simulation has stopped: for a page that steps on its own thread,
+the end of its click handler (it stops stepping there); for a page that steps in a worker, the
+worker's answer that it has stopped (hspPage.timing.pauseActed). Beside it: how long the
+dispatch of the press and release took to come back, and the longest task of the page's thread
+between the first result and the click (Chromium's long-task entries, 50 ms and more; 0: none).
 With --before REV, the page's sources of commit REV (with this build's module) are measured in
-the same rounds, interleaved, for the figures before and after.
+the same rounds, interleaved, for the figures before and after: its speed from the disk, its
+Pause in the same 600 s run, and in a 3000 s run paused after t = 2500 s (which this page
+refuses: its stop time is at most 600 s).
 """
 
 import argparse
@@ -35,6 +37,7 @@ import datetime
 import json
 import os
 import pathlib
+import random
 import statistics
 import subprocess
 import sys
@@ -55,7 +58,11 @@ PAGE = ROOT / "docs" / "web"
 FMU = ROOT / "fmu" / "HydraulicSlewingPlate.fmu"
 DOC = ROOT / "docs" / "web.md"
 SOURCES = ["index.html", "page.js", "page.css", "hsp.js", "worker.js"]  # src/bin/hsp/web.rs
-PAUSE_STOP, PAUSE_AT = 600, 500  # the run's stop time and when it is paused [s]
+PRESETS = ["complete", "complete-hub-locked", "servo-valve-motor", "loes-motor", "paper-eq16",
+           "paper-fig9b", "paper-fig10"]
+PAUSE_STOP, PAUSE_AT = 600, 400  # the run's stop time and when it is paused [s]
+# A longer run for the page before (this page refuses stop times beyond 600 s).
+LONG_STOP, LONG_AT = 3000, 2500
 
 # Installed before the page's own scripts: the long tasks of the page's thread, and the Pause
 # click's time stamp and the end of the page's handling of it.
@@ -82,7 +89,7 @@ def page_round(url, tmp):
         script = """
             const p = hspPage, r = p.run;
             return {loaded: p.timing.loaded, first: p.timing.firstResult, wall: r.wallMs,
-                    step: r.stepMs, simulated: r.samples.t[r.samples.t.length - 1]};"""
+                    step: r.stepMs, simulated: r.time};"""
         timing = driver.execute_script(script)
         # The same run again in the same page (the Run button): the module's code is compiled
         # by then, as when a user tunes a control after the first run.
@@ -96,8 +103,11 @@ def page_round(url, tmp):
         driver.quit()
 
 
-def pause_round(url, tmp):
-    """The Pause latency of one long run (see the header): {latency_ms, click_ms, longest_ms}."""
+def pause_round(url, tmp, delay, stop=PAUSE_STOP, at=PAUSE_AT):
+    """The Pause latency of one long run (see the header): {latency_ms, click_ms, longest_ms}.
+    The click is sent `delay` seconds after the run is seen past `at` (a script that reads the
+    page's state runs between two of its tasks: a click sent right after it would always find
+    the page's thread free)."""
     driver = chrome(tmp)
     try:
         driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": INSTRUMENT})
@@ -108,8 +118,9 @@ def pause_round(url, tmp):
         x, y = driver.execute_script("""
             const r = document.getElementById('pause').getBoundingClientRect();
             return [r.x + r.width / 2, r.y + r.height / 2];""")
-        WebDriverWait(driver, 300, poll_frequency=0.2).until(
-            lambda d: d.execute_script(now) >= PAUSE_AT)
+        WebDriverWait(driver, 900, poll_frequency=0.5).until(
+            lambda d: d.execute_script(now) >= at)
+        time.sleep(delay)
         # The click as the browser's input (no script of Selenium's runs in the page first).
         t0 = time.perf_counter()
         sent = time.time()  # the events' time stamp (the page's clock is the machine's)
@@ -120,14 +131,19 @@ def pause_round(url, tmp):
         click_ms = 1000 * (time.perf_counter() - t0)
         acted = ("const p = hspPage; return p.timing.pauseActed !== undefined ? p.timing.pauseActed "
                  ": __bench.handled")
-        WebDriverWait(driver, 60).until(lambda d: d.execute_script(acted))
+        try:
+            WebDriverWait(driver, 60).until(lambda d: d.execute_script(acted))
+        except Exception as e:
+            state = driver.execute_script(
+                "return [document.getElementById('status').textContent, __bench, hspPage.run.time]")
+            raise RuntimeError(f"{url}: the Pause click did not act: {state}") from e
         stopped = driver.execute_script(acted)
         clicked, tasks, first = driver.execute_script(
             "return [__bench.clicked, __bench.tasks, hspPage.timing.firstResult]")
         # It has stopped: the simulated time stays.
         t_paused = driver.execute_script(now)
         time.sleep(0.5)
-        assert driver.execute_script(now) == t_paused < PAUSE_STOP, "the run did not pause"
+        assert driver.execute_script(now) == t_paused < stop, "the run did not pause"
         longest = max([d for start, d in tasks if first < start < clicked], default=0)
         return {"latency_ms": stopped - clicked, "click_ms": click_ms, "longest_ms": longest}
     finally:
@@ -182,11 +198,18 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = pathlib.Path(tmp)
+        before = None
+        if args.before:
+            rev = subprocess.run(["git", "rev-parse", "--short", args.before], cwd=ROOT,
+                                 capture_output=True, text=True, check=True).stdout.strip()
+            before = (f"before (commit {rev})", old_page(args.before, tmp / "before"))
         if "speed" in parts:
             server = serve(PAGE)
             query = "index.html?speed=fast&stop=10"
             sources = {"file": (PAGE / "index.html").as_uri() + query[len("index.html"):],
                        "http": f"http://127.0.0.1:{server.server_port}/{query}"}
+            if before:
+                sources["before"] = (before[1] / "index.html").as_uri() + query[len("index.html"):]
             results = {k: [] for k in sources}
             native_walls = []
             last_run = None
@@ -194,7 +217,8 @@ def main():
                 for kind, url in sources.items():
                     run, timing, version = page_round(url, tmp / f"{kind}{i}")
                     results[kind].append(timing)
-                    last_run = run
+                    if kind == "file":
+                        last_run = run
                 # The native run of the same job, in the same round.
                 job = {"request": last_run["request"], "inputs": last_run["inputs"],
                        "names": RECORDED, "rounds": 1, "step": 1e-3}
@@ -226,8 +250,10 @@ def main():
                     ratio = [m / n for m, n in zip(model_factor, native_factor)]
                     first = (median_range([r["first"] for r in rs], "{:.0f}"),
                              median_range([r["loaded"] for r in rs], "{:.0f}"))
+                    source = {"file": "disk (file://)", "http": "HTTP (127.0.0.1)",
+                              "before": f"disk (file://), {before[0] if before else ''}"}[kind]
                     block.append(
-                        f"| {'disk (file://)' if kind == 'file' else 'HTTP (127.0.0.1)'} | {run_kind} "
+                        f"| {source} | {run_kind} "
                         f"| {first[0] if wall == 'wall' else ''} | {first[1] if wall == 'wall' else ''} "
                         f"| {median_range(page_factor, '{:.0f}')} "
                         f"| {median_range(model_factor, '{:.0f}')} "
@@ -236,17 +262,20 @@ def main():
             copy_block("web-speed", "\n".join(block) + "\n", "bench/web.md")
 
         if "pause" in parts:
-            pages = {"this page": PAGE}
-            if args.before:
-                rev = subprocess.run(["git", "rev-parse", "--short", args.before], cwd=ROOT,
-                                     capture_output=True, text=True, check=True).stdout.strip()
-                pages = {f"before (commit {rev})": old_page(args.before, tmp / "before"), **pages}
-            pause = {k: [] for k in pages}
+            cases = {f"this page, {PAUSE_STOP} s run": (PAGE, PAUSE_STOP, PAUSE_AT)}
+            if before:
+                cases = {f"{before[0]}, {PAUSE_STOP} s run": (before[1], PAUSE_STOP, PAUSE_AT),
+                         **cases,
+                         f"{before[0]}, {LONG_STOP} s run, clicked at t ≥ {LONG_AT} s":
+                             (before[1], LONG_STOP, LONG_AT)}
+            pause = {k: [] for k in cases}
+            rng = random.Random(42)  # the delays of the clicks after the threshold, 0 to 1 s
             loads_pause = [os.getloadavg()[0]]
             for i in range(args.pause_rounds):
-                for kind, directory in pages.items():
-                    url = (directory / "index.html").as_uri() + f"?speed=fast&stop={PAUSE_STOP}"
-                    pause[kind].append(pause_round(url, tmp / f"pause{i}{len(pause[kind])}{kind[:4]}"))
+                for n, (kind, (directory, stop, at)) in enumerate(cases.items()):
+                    url = (directory / "index.html").as_uri() + f"?speed=fast&stop={stop}"
+                    delay = rng.uniform(0, 1)
+                    pause[kind].append(pause_round(url, tmp / f"pause{i}-{n}", delay, stop, at))
                     loads_pause.append(os.getloadavg()[0])
                     print(f"pause round {i + 1}, {kind}: {pause[kind][-1]}", flush=True)
             block = [
@@ -262,8 +291,9 @@ def main():
                 block.append(f"| {kind} | {median_range([r['latency_ms'] for r in rs], '{:.0f}')} "
                              f"| {median_range([r['click_ms'] for r in rs], '{:.0f}')} "
                              f"| {median_range([r['longest_ms'] for r in rs], '{:.0f}')} |")
-            lines += [f"Pause in a {PAUSE_STOP} s run as fast as possible, clicked at t ≥ {PAUSE_AT} s "
-                      f"({args.pause_rounds} rounds, each in a fresh browser):", "",
+            lines += [f"Pause in a run as fast as possible, clicked at t ≥ {PAUSE_AT} s of a "
+                      f"{PAUSE_STOP} s run unless said ({args.pause_rounds} rounds, each in a fresh "
+                      "browser):", "",
                       "<!-- hsp timing: web-pause -->", *block, "<!-- /hsp timing: web-pause -->", ""]
             copy_block("web-pause", "\n".join(block) + "\n", "bench/web.md")
 

@@ -199,14 +199,16 @@ function writeAddress() {
 // The controls that follow the run's state: the slider only with its command, Pause only while
 // a run goes on (and "Resume" only while it is paused).
 function syncControls() {
-  $("r").disabled = radio("command") !== "slider";
   const run = page.run;
   const live = !!run && !run.done && !page.error;
-  $("pause").disabled = !live;
-  $("pause").textContent = live && run.pausedAt ? "Resume" : "Pause";
   const results = !!run && run.samples.t.length > 0;
-  $("download-csv").disabled = !results;
-  $("download-json").disabled = !results;
+  // Written only when they change (a write makes the browser lay the page out again).
+  const set = (id, key, value) => { if ($(id)[key] !== value) $(id)[key] = value; };
+  set("r", "disabled", radio("command") !== "slider");
+  set("pause", "disabled", !live);
+  set("pause", "textContent", live && run.pausedAt ? "Resume" : "Pause");
+  set("download-csv", "disabled", !results);
+  set("download-json", "disabled", !results);
 }
 
 // ---------------------------------------------------------------- the run
@@ -412,7 +414,8 @@ function frame() {
   if (!run || !page.dirty) return;
   page.dirty = false;
   draw(run);
-  page.drawn = performance.now();
+  // The first points are drawn as soon as they come; the redraws after them at most every DRAW_MS.
+  if (run.samples.t.length > 1) page.drawn = performance.now();
 }
 
 function requestFrame() {
