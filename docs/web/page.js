@@ -513,7 +513,7 @@ function plot({ canvas, traces }, xmax) {
     let started = false;
     for (let c = 0; c <= tr.columns; c++) {
       if (!tr.count[c]) continue;
-      const x = L + c, { first, min, max, last } = { first: tr.first[c], min: tr.min[c], max: tr.max[c], last: tr.last[c] };
+      const x = L + c, first = tr.first[c], min = tr.min[c], max = tr.max[c], last = tr.last[c];
       if (!started) { ctx.moveTo(x, py(first)); started = true; }
       for (const v of first <= last ? [first, min, max, last] : [first, max, min, last]) ctx.lineTo(x, py(v));
     }
