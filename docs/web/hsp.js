@@ -11,9 +11,13 @@
 //   sim.deflection(11, 5);                           // the plate's deflection on a grid [m]
 //   sim.messages();  sim.reset();  sim.free();
 //
+// HSP.script is this script's own text, to run it in a Web Worker made from a Blob (a page opened
+// from the disk cannot start a worker from a file); HSP.moduleBytes() fetches the module's bytes
+// to hand to it (see docs/web/worker.js).
+//
 // Every call that fails throws an Error whose message is the FMU's own (it names the culprit);
 // a failed step keeps the last good state.
-(function (global) {
+(function hspScript(global) {
   "use strict";
 
   const encoder = new TextEncoder();
@@ -239,19 +243,25 @@
     }
   }
 
+  // The module's bytes: `source` as in load().
+  async function moduleBytes(source) {
+    if (source !== undefined && typeof source !== "string") return source;
+    const url = source ?? (scriptUrl ? new URL("hsp.wasm", scriptUrl).href : "hsp.wasm");
+    return wasmBytes(url);
+  }
+
   // Loads the model: `source` is the .wasm's URL (default: hsp.wasm beside this script) or its
   // bytes (an ArrayBuffer or Uint8Array).
   async function load(source) {
-    let bytes = source;
-    if (source === undefined || typeof source === "string") {
-      const url = source ?? (scriptUrl ? new URL("hsp.wasm", scriptUrl).href : "hsp.wasm");
-      bytes = await wasmBytes(url);
-    }
+    const bytes = await moduleBytes(source);
     const { instance } = await WebAssembly.instantiate(bytes, {});
     return new Model(instance);
   }
 
-  const HSP = { load, Model, Simulation };
+  // This script's text, run as it is here (defining the global HSP).
+  const script = `(${hspScript})(globalThis);\n`;
+
+  const HSP = { load, moduleBytes, script, Model, Simulation };
   if (typeof module !== "undefined" && module.exports) module.exports = HSP;
   else global.HSP = HSP;
 })(typeof globalThis !== "undefined" ? globalThis : this);

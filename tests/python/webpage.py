@@ -44,12 +44,19 @@ def wait_for_run(driver, timeout=120):
     state."""
     WebDriverWait(driver, timeout).until(lambda d: d.execute_script(
         "const p = window.hspPage; return !!p && (!!p.error || !!(p.run && p.run.shown));"))
+    return page_state(driver)
+
+
+def page_state(driver):
+    """The page's run as the page keeps it (its recorded points as plain arrays), its error and
+    its status."""
     return driver.execute_script("""
-        const p = window.hspPage, r = p.run;
-        return {error: p.error, failed: r && r.failed, request: r && r.request, samples: r && r.samples,
-                inputs: r && r.inputs,
+        const p = window.hspPage, r = p.run, rec = p.recorded ? p.recorded() : {};
+        return {error: p.error, failed: r && r.failed, request: r && r.request,
+                samples: rec.samples || null, inputs: rec.inputs || null,
                 messages: r && r.messages, status: document.getElementById('status').textContent,
-                id: r && r.id};""")
+                status_class: document.getElementById('status').className, id: r && r.id,
+                runs: p.runs};""")
 
 
 @functools.lru_cache(maxsize=None)

@@ -18,7 +18,7 @@ pub const TARGET: &str = "wasm32-unknown-unknown";
 pub const PAGE_DIR: &str = "docs/web";
 
 /// The page's sources (in [`PAGE_DIR`]).
-const SOURCES: [&str; 4] = ["index.html", "page.js", "page.css", "hsp.js"];
+const SOURCES: [&str; 5] = ["index.html", "page.js", "page.css", "hsp.js", "worker.js"];
 
 /// What is missing when the browser build cannot be made, what that means (`consequence`), and
 /// how to add it.
