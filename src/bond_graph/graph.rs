@@ -33,6 +33,13 @@ pub(crate) enum StateOwner {
     Integrator(SignalId),
 }
 
+/// Records what `owner` states about its states (nominals, units), replacing what it stated
+/// before.
+fn restate<T>(stated: &mut Vec<(StateOwner, Vec<T>)>, owner: StateOwner, values: Vec<T>) {
+    stated.retain(|(o, _)| *o != owner);
+    stated.push((owner, values));
+}
+
 impl BondGraph {
     /// An empty graph.
     pub fn new(name: impl Into<String>) -> Self {
@@ -86,9 +93,7 @@ impl BondGraph {
                 }
             })
             .collect();
-        let owner = StateOwner::Element(element);
-        self.units.retain(|(o, _)| *o != owner);
-        self.units.push((owner, units));
+        restate(&mut self.units, StateOwner::Element(element), units);
     }
 
     /// States the units of the integrator `signal`'s state and of its input, the derivative.
@@ -101,9 +106,7 @@ impl BondGraph {
             "set_integrator_units: {} is not an integrator",
             self.signals[signal.0].name
         );
-        let owner = StateOwner::Integrator(signal);
-        self.units.retain(|(o, _)| *o != owner);
-        self.units.push((owner, vec![units]));
+        restate(&mut self.units, StateOwner::Integrator(signal), vec![units]);
     }
 
     /// The stated units of every state, in the compiled model's state order (`None` where the
@@ -151,8 +154,7 @@ impl BondGraph {
             values.iter().all(|v| v.is_finite() && *v > 0.0),
             "nominal values must be finite and positive, got {values:?}"
         );
-        self.nominals.retain(|(o, _)| *o != owner);
-        self.nominals.push((owner, values));
+        restate(&mut self.nominals, owner, values);
     }
 
     /// The stated nominal magnitude of every state, in the compiled model's state order

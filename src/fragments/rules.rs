@@ -25,35 +25,42 @@ pub fn rule(name: &str) -> Option<&'static Rule> {
         .map(|i| &RULES[i].1)
 }
 
-/// Checks `value` of the parameter `name` against its rule; the error names the parameter, the
-/// rule and the value.
+impl Rule {
+    /// Checks `value` of the parameter `name` against this rule; the error names the
+    /// parameter, the rule and the value.
+    pub fn check(&self, name: &str, value: f64) -> Result<(), String> {
+        if !value.is_finite() {
+            return Err(format!("{name}: must be finite, got {value}"));
+        }
+        if let Some(min) = self.min.filter(|&min| value < min) {
+            return Err(format!(
+                "{name}: must be at least {min} (the model description's min), got {value}"
+            ));
+        }
+        if let Some(max) = self.max.filter(|&max| value > max) {
+            return Err(format!(
+                "{name}: must be at most {max} (the model description's max), got {value}"
+            ));
+        }
+        if self.positive && value <= 0.0 {
+            return Err(format!(
+                "{name}: must be positive (the model description's <Positive> rule), got {value}"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Checks `value` of the parameter `name` against its rule ([`Rule::check`]).
 ///
 /// # Panics
 /// If `name` is not a numeric parameter of the model description: a fragment names its values
 /// wrongly, which the fragments' tests catch.
 pub fn check(name: &str, value: f64) -> Result<(), String> {
-    let Some(rule) = rule(name) else {
-        panic!("{name} is not a numeric parameter of the model description");
-    };
-    if !value.is_finite() {
-        return Err(format!("{name}: must be finite, got {value}"));
+    match rule(name) {
+        Some(rule) => rule.check(name, value),
+        None => panic!("{name} is not a numeric parameter of the model description"),
     }
-    if let Some(min) = rule.min.filter(|&min| value < min) {
-        return Err(format!(
-            "{name}: must be at least {min} (the model description's min), got {value}"
-        ));
-    }
-    if let Some(max) = rule.max.filter(|&max| value > max) {
-        return Err(format!(
-            "{name}: must be at most {max} (the model description's max), got {value}"
-        ));
-    }
-    if rule.positive && value <= 0.0 {
-        return Err(format!(
-            "{name}: must be positive (the model description's <Positive> rule), got {value}"
-        ));
-    }
-    Ok(())
 }
 
 /// [`check`] for each `(name, value)`; the first error.

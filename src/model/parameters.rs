@@ -112,11 +112,12 @@ pub fn check(index: usize, value: &Value) -> Result<(), String> {
     let Value::Real(v) = value else {
         return Ok(());
     };
-    if rules::rule(VARIABLES[index].name).is_some() {
-        rules::check(VARIABLES[index].name, *v)?;
+    let name = VARIABLES[index].name;
+    if let Some(rule) = rules::rule(name) {
+        rule.check(name, *v)?;
     }
     if VARIABLES[index].causality == Causality::Parameter && *v != 0.0 {
-        check_magnitude(VARIABLES[index].name, *v)?;
+        check_magnitude(name, *v)?;
     }
     Ok(())
 }
