@@ -37,7 +37,10 @@ pub mod fragments;
 pub mod math;
 pub mod model;
 pub mod solver;
-#[cfg(any(target_family = "wasm", feature = "analysis"))]
+#[cfg(any(
+    all(target_family = "wasm", not(target_os = "wasi")),
+    feature = "analysis"
+))]
 pub mod web;
 
 // The hash of the sources this library is built from (`SOURCE_HASH`, `SOURCE_MARKER`), written by
@@ -47,6 +50,7 @@ include!(concat!(env!("OUT_DIR"), "/source_hash.rs"));
 // The FMI 2.0 C API (Co-Simulation and Model Exchange) of the shipped FMU.
 #[cfg(not(target_family = "wasm"))]
 export_fmi2_cosimulation!(crate::model::HydraulicSlewingPlate);
-// The FMI 3.0 C API of the same model, for the FMI 3.0 FMU (the same binary).
-#[cfg(not(target_family = "wasm"))]
+// The FMI 3.0 C API of the same model, for the FMI 3.0 FMU (the same binary), and under the
+// WebAssembly component of the FMI 3.0 FMU (`fmi3::component`, built for wasm32-wasip2).
+#[cfg(any(not(target_family = "wasm"), target_os = "wasi"))]
 export_fmi3!(crate::model::HydraulicSlewingPlate);

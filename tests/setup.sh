@@ -28,15 +28,17 @@
 #                                           against the ziglang package's libSystem stubs: no
 #                                           Apple SDK needed
 #            wasm32-unknown-unknown     the browser build (docs/web/hsp.wasm, `hsp web`)
+#            wasm32-wasip2              the FMI 3.0 FMU's WebAssembly component
+#                                       (binaries/wasm32-wasip2, fmi-ls-wasm)
 #   .venv    tests/requirements.txt: fmpy, libcosimpy, ecospy, fmu_manipulation_toolbox, scipy, pytest,
-#            pytest-timeout, selenium, and
+#            pytest-timeout, selenium, wasmtime (the component's importer), and
 #            the build tools ziglang and cargo-zigbuild (the Linux binaries against glibc 2.17;
 #            ziglang's libSystem.tbd for the macOS binaries)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 RUST_TARGETS=(x86_64-pc-windows-gnu aarch64-unknown-linux-gnu x86_64-apple-darwin aarch64-apple-darwin
-    wasm32-unknown-unknown)
+    wasm32-unknown-unknown wasm32-wasip2)
 AARCH64_ROOT=/usr/aarch64-linux-gnu
 
 # bindgen (through clang-sys) dlopens libclang.so, libclang-N.so or libclang.so.N; test for exactly
@@ -90,7 +92,7 @@ done
 
 venv_complete() {
     [ -x .venv/bin/python ] && [ -x .venv/bin/cargo-zigbuild ] &&
-        .venv/bin/python -c "import fmpy, libcosimpy, ecospy, fmu_manipulation_toolbox, scipy, pytest, pytest_timeout, distributed, matplotlib, selenium" 2>/dev/null &&
+        .venv/bin/python -c "import fmpy, libcosimpy, ecospy, fmu_manipulation_toolbox, scipy, pytest, pytest_timeout, distributed, matplotlib, selenium, wasmtime.component" 2>/dev/null &&
         .venv/bin/python -m ziglang version >/dev/null 2>&1
 }
 if ! venv_complete; then

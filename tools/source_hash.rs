@@ -1,5 +1,6 @@
 //! The hash of the sources a build of the FMU library comes from: FNV-1a over the library's
-//! source files (`src/` without the command-line tools in `src/bin/`, `tools/*.rs`, `build.rs`,
+//! source files (`src/` without the command-line tools in `src/bin/`: its Rust files and the WIT
+//! interfaces the WebAssembly component is generated from; `tools/*.rs`, `build.rs`,
 //! `Cargo.toml`, `Cargo.lock` and `modelDescription/modelDescription.xml`), each as its path
 //! relative to the checkout and its bytes, in path order.
 //!
@@ -24,7 +25,7 @@ pub fn library_sources(root: &Path) -> Vec<PathBuf> {
                 if relative != Path::new("src/bin") {
                     walk(root, &path, out);
                 }
-            } else if path.extension().is_some_and(|e| e == "rs") {
+            } else if path.extension().is_some_and(|e| e == "rs" || e == "wit") {
                 out.push(relative);
             }
         }

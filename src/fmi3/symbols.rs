@@ -75,10 +75,10 @@ macro_rules! export_fmi3 {
             use $crate::fmi3::entries as x;
             use $crate::fmi3::ffi::*;
             use $crate::fmi3::variables::Fmi3Table;
-            type M = $model;
+            pub type M = $model;
 
             /// The model's FMI 3.0 variables, grouped once per process.
-            fn table() -> &'static Fmi3Table {
+            pub fn table() -> &'static Fmi3Table {
                 static TABLE: std::sync::OnceLock<Fmi3Table> = std::sync::OnceLock::new();
                 TABLE.get_or_init(|| {
                     Fmi3Table::new(

@@ -6,6 +6,7 @@
 //! | (none) | `aarch64-linux` | `cargo zigbuild --target aarch64-unknown-linux-gnu.2.17` |
 //! | `win64` | `x86_64-windows` | `cargo build --target x86_64-pc-windows-gnu` (mingw-w64) |
 //! | `darwin64` (universal: x86-64 and arm64) | `x86_64-darwin`, `aarch64-darwin` (one each) | `cargo rustc --target {x86_64,aarch64}-apple-darwin` with `ld64.lld` |
+//! | (none) | `wasm32-wasip2` (a WebAssembly component, fmi-ls-wasm) | `cargo build --target wasm32-wasip2` |
 //!
 //! - The Linux binaries are built against glibc 2.17 with `cargo-zigbuild` (zig as the linker), so
 //!   that they load on every Linux of the last decade (RHEL 7, Ubuntu 14.04 and later). Without
@@ -23,6 +24,10 @@
 //!   ad-hoc code signature Apple silicon requires. FMI 2.0's `darwin64` gets one universal (fat)
 //!   binary of both, which macOS importers load on either processor ([`write_universal`]); FMI
 //!   3.0 names one folder per processor and gets the single-architecture binaries.
+//! - `wasm32-wasip2`: the FMI 3.0 FMU as a WebAssembly component after the draft layered standard
+//!   fmi-ls-wasm (`hydraulic_slewing_plate::fmi3::component`, its WIT in `src/fmi3/wit/`), with the
+//!   layered standard's manifest in `extra/org.modelica.fmi-ls-wasm/` ([`super::ecosystem::ls_wasm`]).
+//!   FMI 2.0 has no such platform.
 //!
 //! `tests/setup.sh` installs every toolchain (zig and cargo-zigbuild into `.venv` from PyPI, the
 //! Rust targets with rustup, mingw-w64 with apt). With `--require-portable` a missing toolchain is
@@ -43,6 +48,8 @@ pub const LINUX_GLIBC: &str = "2.17";
 const LINUX_TARGET: &str = "x86_64-unknown-linux-gnu";
 const LINUX_AARCH64_TARGET: &str = "aarch64-unknown-linux-gnu";
 const WINDOWS_TARGET: &str = "x86_64-pc-windows-gnu";
+/// The WebAssembly component's target (fmi-ls-wasm's platform folder has its name).
+pub const WASI_TARGET: &str = "wasm32-wasip2";
 const MACOS_TARGETS: [&str; 2] = ["x86_64-apple-darwin", "aarch64-apple-darwin"];
 /// Where the universal macOS binary is written, under the target directory.
 const MACOS_UNIVERSAL_DIR: &str = "universal-apple-darwin/release";
@@ -54,10 +61,12 @@ const HOST_FMU_DIR: &str = "fmu-host";
 const CRATE_LIB: &str = "hydraulic_slewing_plate";
 
 /// One binary: its folders under `binaries/` in the FMI 2.0 and the FMI 3.0 FMU (`None`: not in
-/// that FMU), its extension and the built file.
+/// that FMU), the Rust target it is built for (the universal macOS file: its x86-64 one; the
+/// arm64 slice is the `aarch64-darwin` binary's), its extension and the built file.
 pub struct Binary {
     pub fmi2: Option<&'static str>,
     pub fmi3: Option<&'static str>,
+    pub target: &'static str,
     pub extension: &'static str,
     pub path: PathBuf,
 }
@@ -148,6 +157,7 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
     let mut binaries = vec![Binary {
         fmi2: Some("linux64"),
         fmi3: Some("x86_64-linux"),
+        target: LINUX_TARGET,
         extension: "so",
         path: timed("binaries/linux64", || build_linux64(portability))?,
     }];
@@ -162,6 +172,7 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
         binaries.push(Binary {
             fmi2: None,
             fmi3: Some("aarch64-linux"),
+            target: LINUX_AARCH64_TARGET,
             extension: "so",
             path,
         });
@@ -170,20 +181,34 @@ pub fn build(portability: Portability) -> Result<Vec<Binary>, String> {
         binaries.push(Binary {
             fmi2: Some("win64"),
             fmi3: Some("x86_64-windows"),
+            target: WINDOWS_TARGET,
             extension: "dll",
+            path,
+        });
+    }
+    if let Some(path) = timed_optional("binaries/wasm32-wasip2", || {
+        build_wasm_component(require_portable)
+    })? {
+        binaries.push(Binary {
+            fmi2: None,
+            fmi3: Some(WASI_TARGET),
+            target: WASI_TARGET,
+            extension: "wasm",
             path,
         });
     }
     let macos = timed_optional("the macOS binaries", || build_macos(require_portable))?;
     if let Some([universal, x86_64, aarch64]) = macos {
-        for (fmi2, fmi3, path) in [
-            (Some("darwin64"), None, universal),
-            (None, Some("x86_64-darwin"), x86_64),
-            (None, Some("aarch64-darwin"), aarch64),
+        let [x86_64_target, aarch64_target] = MACOS_TARGETS;
+        for (fmi2, fmi3, target, path) in [
+            (Some("darwin64"), None, x86_64_target, universal),
+            (None, Some("x86_64-darwin"), x86_64_target, x86_64),
+            (None, Some("aarch64-darwin"), aarch64_target, aarch64),
         ] {
             binaries.push(Binary {
                 fmi2,
                 fmi3,
+                target,
                 extension: "dylib",
                 path,
             });
@@ -595,16 +620,32 @@ fn build_win64(require_portable: bool) -> Result<Option<PathBuf>, String> {
             require_portable,
         );
     }
+    cargo_build_for(WINDOWS_TARGET, &format!("{CRATE_LIB}.dll")).map(Some)
+}
+
+/// `cargo build` of the FMU's library for `target`, and the built `file`.
+fn cargo_build_for(target: &str, file: &str) -> Result<PathBuf, String> {
     let mut command = cargo_build_library();
-    command.args(["--target", WINDOWS_TARGET]);
-    run(command, &format!("cargo build --target {WINDOWS_TARGET}"))?;
-    built(
-        target_dir()
-            .join(WINDOWS_TARGET)
-            .join("release")
-            .join(format!("{CRATE_LIB}.dll")),
-    )
-    .map(Some)
+    command.args(["--target", target]);
+    run(command, &format!("cargo build --target {target}"))?;
+    built(target_dir().join(target).join("release").join(file))
+}
+
+/// The FMI 3.0 FMU's WebAssembly component (`binaries/wasm32-wasip2`). Rust's `wasm32-wasip2`
+/// target links a component by itself (`wasm-component-ld`, shipped with the target), from the
+/// bindings `wit-bindgen` generates of `src/fmi3/wit/`.
+fn build_wasm_component(require_portable: bool) -> Result<Option<PathBuf>, String> {
+    if !has_rust_target(WASI_TARGET) {
+        return missing(
+            format!(
+                "{}, so the FMI 3.0 FMU gets no binaries/{WASI_TARGET}; `bash tests/setup.sh` \
+                 installs it",
+                not_installed(&[WASI_TARGET])
+            ),
+            require_portable,
+        );
+    }
+    cargo_build_for(WASI_TARGET, &format!("{CRATE_LIB}.wasm")).map(Some)
 }
 
 #[cfg(test)]

@@ -11,8 +11,9 @@
 //!
 //! The crates are those `cargo tree` lists for the library as `hsp package` builds it: normal
 //! dependencies only (no build or dev dependencies), without the `cli` feature's tool-only crates,
-//! without procedural macros (they run in the compiler and leave no code in the binary), on every
-//! target. Their licence files are read from cargo's registry sources (`$CARGO_HOME/registry/src`),
+//! without procedural macros (they run in the compiler and leave no code in the binary), on the
+//! targets of the binaries built (the WebAssembly component's `wit-bindgen`, for one, only when
+//! the FMU has the component). Their licence files are read from cargo's registry sources (`$CARGO_HOME/registry/src`),
 //! where the build found them.
 
 use std::fmt::Write as _;
@@ -38,11 +39,12 @@ pub struct Crate {
     pub license: String,
 }
 
-/// The crates of the FMU's library, from `cargo tree` (see the module's documentation); the
-/// project's own package is left out.
-pub fn crates() -> Result<Vec<Crate>, String> {
+/// The crates of the FMU's library built for `targets` (Rust target triples), from `cargo tree`
+/// (see the module's documentation); the project's own package is left out.
+pub fn crates(targets: &[&str]) -> Result<Vec<Crate>, String> {
     let output = Command::new(cargo())
-        .args(["tree", "--no-default-features", "--target", "all"])
+        .args(["tree", "--no-default-features"])
+        .args(targets.iter().flat_map(|t| ["--target", t]))
         .args(["-e", "normal,no-proc-macro", "--prefix", "none"])
         .args(["--format", "{p}|{l}"])
         .current_dir(root())
@@ -156,10 +158,17 @@ and unwinder libgcc_eh (GPL-3.0 with the GCC Runtime Library Exception, which se
 on the binary made with them) and the mingw-w64 runtime's libmingw32 and libmingwex (public \
 domain and ZPL-2.1 notices; Debian's copyright file of mingw-w64 lists them).";
 
-/// Everything of [`DIR`], `(name inside the FMU, bytes)`. `windows` says whether the FMU has the
-/// Windows binary.
-pub fn entries(windows: bool) -> Result<Vec<Entry>, String> {
-    let crates = crates()?;
+/// Where the WebAssembly component's interface comes from.
+const WIT_INTERFACES: &str = "The WebAssembly component of the FMI 3.0 FMU \
+(binaries/wasm32-wasip2) implements the interfaces of the draft FMI layered standard for \
+WebAssembly, fmi-ls-wasm (https://github.com/modelica/fmi-ls-wasm, 2-Clause BSD License, copyright \
+the Modelica Association Project FMI), whose declarations it carries as its component type.";
+
+/// Everything of [`DIR`], `(name inside the FMU, bytes)`, for the binaries built for `targets`
+/// (Rust target triples).
+pub fn entries(targets: &[&str]) -> Result<Vec<Entry>, String> {
+    let windows = targets.iter().any(|t| t.contains("windows"));
+    let crates = crates(targets)?;
     let mut text = String::new();
     let own = env!("CARGO_PKG_NAME");
     writeln!(
@@ -193,6 +202,9 @@ pub fn entries(windows: bool) -> Result<Vec<Entry>, String> {
     .unwrap();
     if windows {
         writeln!(text, "\n{WINDOWS_RUNTIME}").unwrap();
+    }
+    if targets.contains(&super::binaries::WASI_TARGET) {
+        writeln!(text, "\n{WIT_INTERFACES}").unwrap();
     }
     let mut entries: Vec<Entry> = vec![(format!("{DIR}/license.txt"), text.into_bytes())];
     for name in OWN {

@@ -14,6 +14,7 @@
 //! `fmi3*` functions too) under FMI 3.0's platform names (`x86_64-linux`, `x86_64-windows`), with
 //! the aarch64 Linux binary (`aarch64-linux`, a folder FMI 2.0 has no name for) and the macOS one
 //! per processor (`x86_64-darwin`, `aarch64-darwin`) in place of the universal one, the
+//! WebAssembly component (`wasm32-wasip2`, with `extra/org.modelica.fmi-ls-wasm/manifest.xml`), the
 //! FMI 3.0 `modelDescription.xml` written by `modelDescription/fmi3.py`, the same documentation
 //! and `extra/`, and `terminalsAndIcons/` (the icon and the terminals) in place of `model.png`.
 //!
@@ -145,8 +146,8 @@ fn write_all(
     shared.extend(ecosystem::extra(&xml_text)?);
     // The reference result: this very FMU run in its default experiment.
     let recorded = ecosystem::result::run_default_experiment(tmp, &xml_text)?;
-    let windows = binaries.iter().any(|b| b.extension == "dll");
-    shared.extend(licenses::entries(windows)?);
+    let targets: Vec<&str> = binaries.iter().map(|b| b.target).collect();
+    shared.extend(licenses::entries(&targets)?);
     // The interactive page with the browser build, in the FMUs and beside its sources.
     if with_web {
         let page = web::page_files()?;
@@ -163,10 +164,20 @@ fn write_all(
     let xml3_path = root().join("modelDescription/fmi3/modelDescription.xml");
     let xml3 = std::fs::read(&xml3_path).map_err(|e| format!("{}: {e}", xml3_path.display()))?;
     let terminals_and_icons = ecosystem::fmi3_only(&String::from_utf8_lossy(&xml3), &recorded)?;
+    // The WebAssembly component comes with the manifest of its layered standard.
+    let wasm = binaries
+        .iter()
+        .any(|b| b.fmi3 == Some(binaries::WASI_TARGET));
+    let ls_wasm = if wasm {
+        ecosystem::ls_wasm::entries()
+    } else {
+        Vec::new()
+    };
     let entries3: Vec<(String, Vec<u8>)> = std::iter::once(("modelDescription.xml".into(), xml3))
         .chain(files3)
         .chain(shared)
         .chain(terminals_and_icons)
+        .chain(ls_wasm)
         .collect();
     entries.extend(ecosystem::fmi2_only(&recorded)?);
     write_archive(tmp, &entries)?;

@@ -3,6 +3,8 @@
 //! - [`ls_ref`]: the folder of the FMI layered standard for references
 //!   (`extra/org.fmi-standard.fmi-ls-ref/`): its manifest, the default experiment's result and
 //!   the presets' parameter sets, and its page `documentation/fmi-ls-ref.html`;
+//! - [`ls_wasm`]: the folder of the draft layered standard for WebAssembly
+//!   (`extra/org.modelica.fmi-ls-wasm/`), in the FMI 3.0 FMU when it carries the component;
 //! - [`result`]: the default experiment's result, every output, in each FMU's layout;
 //! - [`ssp`]: the presets of `src/model/presets.rs` as SSP 1.0 parameter sets (`.ssv`) and an
 //!   example SSP system (`.ssd`, and the `.ssp` archive with the FMU);
@@ -15,6 +17,7 @@
 
 pub mod icon;
 pub mod ls_ref;
+pub mod ls_wasm;
 pub mod result;
 pub mod ssp;
 pub mod terminals;
