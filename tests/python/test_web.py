@@ -525,7 +525,11 @@ def test_the_ssv_download_applied_by_the_fmu_gives_the_pages_run(probe, page_dir
     run = wait_for_run(probe)
     assert run["request"]["settings"]["servo_valve.p_supply"] == 1.2e7
     probe.find_element(By.ID, "download-ssv").click()
-    WebDriverWait(probe, 20).until(lambda d: list(tmp_path.glob("*.ssv")))
+    probe.find_element(By.ID, "download-json").click()
+    WebDriverWait(probe, 20).until(lambda d: list(tmp_path.glob("*.ssv")) and list(tmp_path.glob("*.json")))
+    # The panel's setting is in the JSON settings too.
+    settings = json.loads(next(tmp_path.glob("*.json")).read_text())["settings"]
+    assert settings["servo_valve.p_supply"] == 1.2e7 and settings["controller.A1"] == 3
     text = next(tmp_path.glob("*.ssv")).read_text()
     assert "<ssv:ParameterSet" in text and "the browser page" in text
     values = read_ssv(text)
@@ -697,3 +701,19 @@ def test_a_plate_at_rest_is_said_to_be_and_not_exaggerated(probe, page_dir):
     wait_for_run(probe)
     view = probe.execute_script("return hspPage.plateView")
     assert not view["atRest"] and view["exaggeration"] > 1 and "drawn ×" in view["label"], view
+
+
+def test_a_narrow_window_shows_the_whole_page(page_dir, tmp_path):
+    # The narrowest window headless Chromium makes (it widens 420 px to 500): nothing is cut off
+    # at the right, the parameter panel's open tables scrolling within their box.
+    driver = chrome(tmp_path, size="420,900")
+    try:
+        open_page(driver, page_dir, "?speed=fast")
+        wait_for_run(driver)
+        driver.execute_script(
+            "document.querySelectorAll('#parameter-groups details').forEach((d) => { d.open = true; })")
+        width, window = driver.execute_script(
+            "return [document.documentElement.scrollWidth, window.innerWidth]")
+        assert width <= window, (width, window)
+    finally:
+        driver.quit()
