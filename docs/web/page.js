@@ -871,7 +871,7 @@ function draw(run) {
   if (Number(cursor.max) !== run.stop) cursor.max = run.stop;
   if (page.cursor === null) cursor.value = run.samples.t.last();
   $("cursor-value").textContent = `t = ${cursorTime(run).toFixed(3)} s${page.cursor === null ? " (following the run)" : ""}`;
-  $("view-note").textContent = page.view ? `Zoomed on ${format(page.view.x0)} s to ${format(page.view.x1)} s.` : "";
+  $("view-note").textContent = page.view ? `· zoomed on ${format(page.view.x0)} s to ${format(page.view.x1)} s.` : "";
   $("pressure-caption").textContent = run.fullValve
     ? "Motor chamber pressures p1, p2 and load pressure [bar]" : "Load pressure [bar]";
   drawPlate(run);
