@@ -41,6 +41,7 @@ const page = {
   drawn: 0, // when the page was last drawn
   panel: new Map(), // the parameter panel's rows by parameter name
   panelSettings: {}, // the panel's settings of the last run asked for
+  motor: null, // the motor variable the motor control is on
   layout: {}, // each plot's frame, legend and span as last drawn
   view: null, // the plots' zoom {x0, x1} [s], or null: the whole run
   cursor: null, // the time cursor [s], or null: following the run
@@ -89,14 +90,42 @@ function presetValue(name) {
   return page.model.variable(name).start;
 }
 
+// A switch's value for the run: the parameter panel's, else the preset's.
+function switchValue(name) {
+  const row = page.panel.get(name);
+  if (!row) return presetValue(name);
+  return row.v.type === "Boolean" ? row.input.value === "true" : Number(row.input.value);
+}
+
 // The variable that sizes the motor: the full servo valve's or the LOES's.
 function motorVariable() {
-  const hydraulics = presetValue("hydraulics.model");
+  const hydraulics = switchValue("hydraulics.model");
   return hydraulics === 1 || hydraulics === "Loes" ? "loes.D_m" : "servo_valve.D_m";
+}
+
+// The motor displacement control at the motor variable's value [cm³/rad] (6 digits shown, the
+// exact value kept behind them: a preset's D_m runs as the preset has it).
+function showMotor() {
+  const name = motorVariable();
+  const row = page.panel.get(name);
+  const x = row && row.input.dataset.si !== undefined ? Number(row.input.dataset.si) : presetValue(name);
+  $("D_m").value = +(x * 1e6).toPrecision(6);
+  $("D_m").dataset.si = String(x);
+  $("D_m").dataset.shown = $("D_m").value;
+  page.motor = name;
+}
+
+// After a switch of the panel: the shakers shown for a motor not coupled to the hub, the motor
+// control on the motor the hydraulics have, the panel's rows of the controls not edited.
+function syncSwitches() {
+  $("shakers").hidden = !shaken();
+  if (page.motor !== motorVariable()) showMotor();
+  flagControlled();
 }
 
 // Fills the plant and command controls from the preset.
 function loadPreset() {
+  fillPanel();
   const preset = page.model.presets.find((p) => p.name === $("preset").value);
   $("preset-description").textContent = preset ? `${preset.description} (paper: ${preset.paper})` : "";
   const angle = presetValue("reference.angle");
@@ -108,16 +137,15 @@ function loadPreset() {
   $("A2").value = presetValue("controller.A2");
   $("bar_k").value = presetValue("torsion_bar.k");
   $("zeta").value = presetValue("plate.zeta");
-  $("D_m").value = +(presetValue(motorVariable()) * 1e6).toPrecision(6);
+  showMotor();
   for (const id of ["F1", "F2", "shaker_f"]) $(id).value = 0;
-  $("shakers").hidden = !shaken();
   for (const id of NUMBERS) delete $(id).dataset.raw;
-  fillPanel();
+  syncSwitches();
 }
 
-// Whether the preset drives the plate by the shakers alone (its motor is not coupled to the hub).
+// Whether the plate is driven by the shakers alone (the motor is not coupled to the hub).
 function shaken() {
-  return presetValue("hydraulics.motor_coupled") === false;
+  return switchValue("hydraulics.motor_coupled") === false;
 }
 
 // The number in a field, or why it is not one the page accepts: text that is no number (typed,
@@ -212,7 +240,10 @@ function buildPanel() {
       }
       input.name = v.name;
       input.setAttribute("aria-label", v.name);
-      input.addEventListener("change", start);
+      input.addEventListener("change", () => {
+        syncSwitches();
+        start();
+      });
       const range = v.type === "Boolean" || v.type === "Enumeration" ? "" :
         `${v.min === null ? "−∞" : shownText(v, v.min)} … ${v.max === null ? "∞" : shownText(v, v.max)}`;
       tr.innerHTML = `<td><code>${escapeHtml(v.name)}</code><div class="desc">${escapeHtml(v.description)}</div></td>` +
@@ -237,15 +268,21 @@ function showInPanel(row, x) {
 
 // The panel at the chosen preset's values.
 function fillPanel() {
-  const ctl = controlled();
   for (const [name, row] of page.panel) {
     const x = presetValue(name);
     showInPanel(row, x);
     row.tr.querySelector("td.preset").textContent = row.input.tagName === "SELECT"
       ? row.input.selectedOptions[0]?.textContent ?? String(x) : row.input.value;
-    row.input.disabled = !!ctl[name];
-    row.input.title = ctl[name] ? `set by the control '${ctl[name]}' on the left` : "";
     row.tr.classList.remove("changed");
+  }
+}
+
+// The panel's rows of the variables the controls set: shown, not edited.
+function flagControlled() {
+  const ctl = controlled();
+  for (const [name, row] of page.panel) {
+    row.input.disabled = !!ctl[name];
+    if (ctl[name]) row.input.title = `set by the control '${ctl[name]}' on the left`;
   }
 }
 
@@ -337,7 +374,8 @@ function readControls() {
     "torsion_bar.k": v.bar_k,
     "plate.zeta": v.zeta,
   };
-  settings[motorVariable()] = v.D_m * 1e-6;
+  const motor = $("D_m");
+  settings[motorVariable()] = motor.value === motor.dataset.shown ? Number(motor.dataset.si) : v.D_m * 1e-6;
   showControlled(settings);
   const shaker = shaken() && (v.F1 !== 0 || v.F2 !== 0)
     ? { F1: v.F1, F2: v.F2, f: v.shaker_f, tStart: v.t_start } : null;
@@ -357,11 +395,8 @@ function fromQuery() {
   const q = new URLSearchParams(location.search);
   const problems = [];
   const known = [...CONTROLS, "command", "speed"];
-  const ctl = controlled();
   for (const key of q.keys()) {
-    if (page.panel.has(key)) {
-      if (ctl[key]) problems.push(`'${key}' in the address is set by the page's control '${ctl[key]}'`);
-    } else if (!known.includes(key)) {
+    if (!page.panel.has(key) && !known.includes(key)) {
       problems.push(`'${key}' in the address is not a setting of the page (${known.join(", ")}) nor a parameter of the model`);
     }
   }
@@ -371,6 +406,15 @@ function fromQuery() {
     else problems.push(`preset '${name}' in the address is not one of the presets (${page.model.presets.map((p) => p.name).join(", ")})`);
   }
   loadPreset();
+  // The switches first: they decide which variables the controls set.
+  for (const [name, row] of page.panel) {
+    if (q.has(name) && row.input.tagName === "SELECT") problems.push(...setPanel(row, q.get(name)));
+  }
+  syncSwitches();
+  const ctl = controlled();
+  for (const key of q.keys()) {
+    if (ctl[key]) problems.push(`'${key}' in the address is set by the page's control '${ctl[key]}'`);
+  }
   for (const id of NUMBERS) {
     if (!q.has(id)) continue;
     const raw = q.get(id);
@@ -378,7 +422,7 @@ function fromQuery() {
     if ($(id).value === "" && raw !== "") $(id).dataset.raw = raw; // the browser dropped it
   }
   for (const [name, row] of page.panel) {
-    if (q.has(name) && !ctl[name]) problems.push(...setPanel(row, q.get(name)));
+    if (q.has(name) && !ctl[name] && row.input.tagName !== "SELECT") problems.push(...setPanel(row, q.get(name)));
   }
   for (const name of ["command", "speed"]) {
     if (!q.has(name)) continue;

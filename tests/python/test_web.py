@@ -717,3 +717,35 @@ def test_a_narrow_window_shows_the_whole_page(page_dir, tmp_path):
         assert width <= window, (width, window)
     finally:
         driver.quit()
+
+
+def test_a_switch_in_the_panel_moves_the_controls_with_it(probe, page_dir, md):
+    from selenium.webdriver.support.ui import Select
+    start = {v.name: v.start for v in md.modelVariables}
+    # A preset's motor displacement runs as the model has it, not as the 6 digits shown.
+    open_page(probe, page_dir, "?speed=fast&stop=0.5&preset=loes-motor")
+    run = wait_for_run(probe)
+    assert probe.find_element(By.ID, "D_m").get_attribute("value") == "80.3787"
+    assert run["request"]["settings"]["loes.D_m"] == float(start["loes.D_m"])
+    # The complete system switched to the LOES in the panel: the motor control sets the LOES's
+    # displacement, the pressures plotted are the LOES's, the full valve's D_m is the panel's.
+    open_page(probe, page_dir, "?speed=fast&stop=0.5")
+    wait_for_run(probe)
+    Select(panel_field(probe, "hydraulics.model")).select_by_value("1")
+    run = wait_for_run(probe)
+    settings = run["request"]["settings"]
+    assert settings["hydraulics.model"] == 1 and settings["loes.D_m"] == float(start["loes.D_m"])
+    assert "servo_valve.D_m" not in settings, settings
+    assert panel_field(probe, "loes.D_m").get_attribute("disabled") is not None
+    assert panel_field(probe, "servo_valve.D_m").get_attribute("disabled") is None
+    assert probe.find_element(By.ID, "pressure-caption").text == "Load pressure [bar]"
+    # The motor uncoupled in the panel: the shakers are offered; the address carries both.
+    Select(panel_field(probe, "hydraulics.motor_coupled")).select_by_value("false")
+    wait_for_run(probe)
+    assert probe.find_element(By.ID, "shakers").is_displayed()
+    link = probe.current_url
+    assert "hydraulics.model=1" in link and "hydraulics.motor_coupled=false" in link, link
+    probe.get("about:blank")
+    again = open_page(probe, page_dir, link[link.index("?"):])
+    assert again["error"] is None and wait_for_run(probe)["request"]["settings"]["hydraulics.model"] == 1
+    assert probe.find_element(By.ID, "shakers").is_displayed()
