@@ -148,6 +148,7 @@ fn generate(text: &str) -> Result<(String, String), String> {
     // The numeric parameters' (position, min, max), for the rules table.
     let mut ranges: Vec<(usize, String, String)> = Vec::new();
     let mut table = String::new();
+    let mut shown = String::new();
     let mut idx_consts = String::new();
     let mut vr_consts = String::new();
     let mut index_arms = String::new();
@@ -338,6 +339,19 @@ fn generate(text: &str) -> Result<(String, String), String> {
             sv.unit,
         )
         .unwrap();
+        let display_unit = match md.display_unit(sv) {
+            Some(d) => format!(
+                "Some(DisplayUnit {{ name: {:?}, factor: {:?}, offset: {:?} }})",
+                d.name, d.factor, d.offset
+            ),
+            None => "None".to_string(),
+        };
+        writeln!(
+            shown,
+            "    Shown {{ group: {:?}, display_unit: {display_unit} }},",
+            sv.group.as_deref().unwrap_or("")
+        )
+        .unwrap();
         let id = ident(name);
         // Brackets in a description (plate.I[1]) would be read as intra-doc links.
         let doc_text = description.replace('[', "\\[").replace(']', "\\]");
@@ -432,6 +446,9 @@ fn generate(text: &str) -> Result<(String, String), String> {
          pub const GUID: &str = {guid:?};\n\
          /// Every ScalarVariable, in XML order.\n\
          pub static VARIABLES: [Variable; {n}] = [\n{table}];\n\
+         /// How each variable of [`VARIABLES`] is shown (same order): the group the XML puts it\n\
+         /// in (the comment before it) and its display unit.\n\
+         pub static SHOWN: [Shown; {n}] = [\n{shown}];\n\
          /// The magnitudes a nonzero Real parameter may have, in SI units: the `<Magnitudes>`\n\
          /// rule of the XML's `<VendorAnnotations>`.\n\
          pub const MAGNITUDES: core::ops::RangeInclusive<f64> = {smallest:?}..={largest:?};\n\

@@ -4,7 +4,7 @@ the same run natively, and the page's agreement with the native FMU preset by pr
 bench/web.md and the page's screenshot docs/img/web_page.png.
 
     cargo run --release --bin hsp -- package        # the FMU, and docs/web/hsp.wasm beside the page
-    .venv/bin/python bench/web_speed.py [--rounds 5] [--before REV] [--parts speed,pause,agreement]
+    .venv/bin/python bench/web_speed.py [--rounds 5] [--before REV] [--parts speed,pause,agreement,screenshot]
 
 Speed: the page opened with ?speed=fast&stop=10 (the default move, 10 s at 1 ms communication
 steps, drawn as it goes), each round in a fresh Chromium (cold cache: the module is compiled
@@ -184,7 +184,8 @@ def main():
     parser.add_argument("--pause-rounds", type=int, default=3)
     parser.add_argument("--before", metavar="REV",
                         help="also measure the Pause of the page's sources at commit REV")
-    parser.add_argument("--parts", default="speed,pause,agreement")
+    parser.add_argument("--parts", default="speed,pause,agreement,screenshot",
+                        help="what to do (--parts screenshot: only the screenshot)")
     parser.add_argument("--out", default=str(ROOT / "bench" / "web.md"))
     parser.add_argument("--screenshot", default=str(ROOT / "docs" / "img" / "web_page.png"))
     args = parser.parse_args()
@@ -317,9 +318,6 @@ def main():
                     agreement.append((preset, run, worst, dev[worst][0], identical, warnings))
                     print(f"{preset}: {dev[worst][0]:.1e} ({worst}), bit-identical {identical}",
                           flush=True)
-                choose_preset(driver, "complete")
-                wait_for_run(driver)
-                driver.save_screenshot(args.screenshot)
             finally:
                 driver.quit()
             lines += [
@@ -336,6 +334,21 @@ def main():
                 lines.append(f"| {preset} | the controls' values, {command} | {d:.1e} | "
                              f"{worst if d > 0 else '–'} | "
                              f"{'yes' if identical else 'no'} | {warnings} |")
+
+        if "screenshot" in parts:
+            # The page after the default move, the link box blanked (it shows where the page
+            # was opened from: a path of this machine).
+            driver = chrome(tmp / "screenshot")
+            try:
+                driver.get((PAGE / "index.html").as_uri() + "?speed=fast")
+                wait_for_run(driver)
+                driver.execute_script("document.getElementById('link').value = ''")
+                driver.save_screenshot(args.screenshot)
+            finally:
+                driver.quit()
+            if parts == ["screenshot"]:
+                print(f"wrote {args.screenshot}")
+                return
 
     size = lambda name: f"<!-- hsp docs: web-size {name} -->0<!-- /hsp docs: web-size -->"  # noqa: E731
     head = [

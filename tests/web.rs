@@ -1,7 +1,9 @@
 //! The browser build's simulation API (`src/web/`), natively: what the `.wasm` exports and
 //! `docs/web/hsp.js` calls. The page itself, in Chromium, is `tests/python/test_web.py`.
 
-use hydraulic_slewing_plate::web::{parse_request, value_reference, variables_json, Simulation};
+use hydraulic_slewing_plate::web::{
+    parameter_set_json, parse_request, value_reference, variables_json, Simulation,
+};
 
 fn vr(name: &str) -> u32 {
     value_reference(name).unwrap_or_else(|| panic!("no variable {name}"))
@@ -225,4 +227,111 @@ fn run_is_step_by_step_in_one_call() {
     assert_eq!(rows[..3 * refs.len()], expected[..3 * refs.len()]);
     let (_, result) = fresh.run(1e-3, vr("r"), &inputs[..2], &refs, &mut rows);
     assert!(result.unwrap_err().contains("places"));
+}
+
+#[test]
+fn the_deflection_map_times_the_recorded_coordinates_is_the_deflection() {
+    // What the page draws at a scrubbed time (the map times the coordinates it recorded then)
+    // is what `deflection` gives at that time, to the bit (the same products summed in order).
+    let mut sim = Simulation::new("complete", &settings(&[("reference.duration", "1")])).unwrap();
+    let (nx, ny) = (21, 7);
+    let (coordinates, map) = sim.deflection_map(nx, ny).unwrap();
+    let n = coordinates.len();
+    assert!(
+        n > 0 && map.len() == nx * ny * n,
+        "{n} coordinates, {}",
+        map.len()
+    );
+    let mut moved = 0.0f64;
+    for _ in 0..6 {
+        for _ in 0..200 {
+            sim.step(1e-3).unwrap();
+        }
+        let mut eta = vec![0.0; n];
+        sim.get_reals(&coordinates, &mut eta).unwrap();
+        let mut grid = vec![0.0; nx * ny];
+        sim.deflection(nx, ny, &mut grid).unwrap();
+        for (k, w) in grid.iter().enumerate() {
+            let drawn: f64 = (0..n).map(|c| map[k * n + c] * eta[c]).sum();
+            assert_eq!(
+                drawn.to_bits(),
+                w.to_bits(),
+                "point {k} at t = {}",
+                sim.time()
+            );
+        }
+        moved = moved.max(grid[nx - 1 + nx * (ny / 2)].abs());
+    }
+    assert!(moved > 1e-5, "the plate barely moved ({moved} m)");
+    assert!(sim.deflection_map(1, 7).unwrap_err().contains("2 x 2"));
+}
+
+#[test]
+fn the_pages_parameter_set_is_the_preset_with_its_settings_over_it() {
+    let set = parameter_set_json(
+        r#"{"preset": "loes-motor", "settings": {"controller.A1": 3, "reference.angle": 0.1, "plate.root": "Locked"}, "name": "run-1"}"#,
+    )
+    .unwrap();
+    assert!(
+        set.contains(r#"<ssv:ParameterSet version="1.0" name="run-1""#),
+        "{set}"
+    );
+    // The preset's switch, written as its integer with the item's name.
+    assert!(set.contains(r#"<ssv:Parameter name="hydraulics.model"><ssv:Integer value="1"/><!-- HydraulicsModel.Loes -->"#), "{set}");
+    // A setting over the preset replaces its value in place; a new one comes after; an item's
+    // name becomes its value; a Real is the shortest text of its double.
+    assert_eq!(set.matches(r#"name="reference.angle""#).count(), 1, "{set}");
+    assert!(
+        set.contains(r#"<ssv:Parameter name="reference.angle"><ssv:Real value="0.1"/>"#),
+        "{set}"
+    );
+    assert!(
+        set.contains(r#"<ssv:Parameter name="controller.A1"><ssv:Real value="3.0"/>"#),
+        "{set}"
+    );
+    assert!(
+        set.contains(r#"<ssv:Parameter name="plate.root"><ssv:Integer value="2"/>"#),
+        "{set}"
+    );
+    let angle = set.find("reference.angle").unwrap();
+    assert!(
+        set.find("hydraulics.model").unwrap() < angle && angle < set.find("controller.A1").unwrap()
+    );
+    // Bad settings are named.
+    let bad = parameter_set_json(r#"{"preset": "complete", "settings": {"controller.A1": "x"}}"#);
+    assert!(bad
+        .unwrap_err()
+        .contains("controller.A1: 'x' is not a number"));
+    let bad = parameter_set_json(r#"{"settings": {"nope": 1}}"#);
+    assert!(bad.unwrap_err().contains("unknown variable 'nope'"));
+}
+
+#[test]
+fn the_variable_table_gives_each_parameter_its_group_and_display_unit() {
+    let table = variables_json();
+    let find = |name: &str| {
+        table
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|v| v["name"] == name)
+            .unwrap()
+            .clone()
+    };
+    // modelDescription.xml: controller.k_pot is in the "analog controller" group, in V/deg.
+    let k_pot = find("controller.k_pot");
+    assert_eq!(k_pot["group"], "analog controller");
+    assert_eq!(k_pot["displayUnit"]["name"], "V/deg");
+    assert_eq!(k_pot["displayUnit"]["factor"], 0.017453292519943295);
+    assert_eq!(k_pot["variability"], "fixed");
+    // No displayUnit attribute: the unit's first display unit (cm3/rad for m3/rad).
+    assert_eq!(find("loes.D_m")["displayUnit"]["name"], "cm3/rad");
+    assert!(find("controller.A1")["displayUnit"].is_null());
+    let root = find("plate.root");
+    assert_eq!(root["items"][1]["name"], "Locked");
+    assert_eq!(root["items"][1]["value"], 2);
+    assert!(find("servo_valve.p_supply")["group"]
+        .as_str()
+        .unwrap()
+        .starts_with("servo valve"));
 }

@@ -103,6 +103,10 @@ pub struct ScalarVariable {
     pub nominal: Option<String>,
     /// `derivative`: the 1-based index of the variable this one is the derivative of.
     pub derivative: Option<String>,
+    /// The group the XML puts it in: the text of the last comment before it in
+    /// `<ModelVariables>` (`analog controller`, `servo valve (hydraulics.model = 2): ...`),
+    /// whitespace collapsed; `None` before the first comment.
+    pub group: Option<String>,
 }
 
 /// An `<Unknown>` of `<ModelStructure>`.
@@ -161,13 +165,22 @@ impl ModelDescription {
                     .collect()
             })
             .unwrap_or_default();
-        let variables = child("ModelVariables")
+        // Each variable in the group of the last comment before it.
+        let mut group: Option<String> = None;
+        let mut variables = Vec::new();
+        for n in child("ModelVariables")
             .ok_or("no <ModelVariables>")?
             .children()
-            .filter(|n| n.has_tag_name("ScalarVariable"))
-            .enumerate()
-            .map(|(i, sv)| variable(i + 1, sv))
-            .collect::<Result<_, _>>()?;
+        {
+            if n.is_comment() {
+                let text = n.text().unwrap_or("").split_whitespace();
+                group = Some(text.collect::<Vec<_>>().join(" "));
+            } else if n.has_tag_name("ScalarVariable") {
+                let mut sv = variable(variables.len() + 1, n)?;
+                sv.group = group.clone();
+                variables.push(sv);
+            }
+        }
         let structure = child("ModelStructure").ok_or("no <ModelStructure>")?;
         let list = |tag: &str| -> Result<Vec<Unknown>, String> {
             match structure.children().find(|n| n.has_tag_name(tag)) {
@@ -228,6 +241,16 @@ impl ModelDescription {
     /// The unit named `name`.
     pub fn unit(&self, name: &str) -> Option<&Unit> {
         self.units.iter().find(|u| u.name == name)
+    }
+
+    /// The display unit a variable is shown in: its `displayUnit`, else its unit's first
+    /// display unit (none when its unit has none).
+    pub fn display_unit(&self, v: &ScalarVariable) -> Option<&DisplayUnit> {
+        let list = &self.unit(v.unit.as_deref()?)?.display_units;
+        match &v.display_unit {
+            Some(d) => list.iter().find(|u| &u.name == d),
+            None => list.first(),
+        }
     }
 }
 
@@ -326,6 +349,7 @@ fn variable(position: usize, sv: roxmltree::Node) -> Result<ScalarVariable, Stri
         declared_type: typed("declaredType"),
         nominal: typed("nominal"),
         derivative: typed("derivative"),
+        group: None,
     })
 }
 

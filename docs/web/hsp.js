@@ -9,6 +9,7 @@
 //   sim.run(1e-3, "r", [0, 0.1, 0.1], ["y_pot"]);     // several, r before each, y_pot after
 //   sim.get(["y_pot", "theta_hub", "w_tip"]);         // -> Float64Array, SI units
 //   sim.deflection(11, 5);                           // the plate's deflection on a grid [m]
+//   model.parameterSet({preset, settings});          // the settings as an SSP 1.0 .ssv
 //   sim.messages();  sim.reset();  sim.free();
 //
 // HSP.script is this script's own text, to run it in a Web Worker made from a Blob (a page opened
@@ -125,6 +126,19 @@
       if (handle === 0) throw new Error(this.text(this.exports.hsp_text_len()));
       return new Simulation(this, handle);
     }
+
+    // The settings of a run as an SSP 1.0 parameter set (.ssv text) the FMU applies alone (`hsp
+    // run --ssv`, fmpy): the preset's settings with `settings` over them, typed as the FMU's
+    // variables (the library's writer, the one `hsp ssp` and `hsp identify --out` use).
+    parameterSet({ preset = "", settings = {}, name, description } = {}) {
+      const [ptr, len] = this.put(encoder.encode(JSON.stringify({ preset, settings, name, description })));
+      try {
+        this.guard(() => this.check(this.exports.hsp_parameter_set(ptr, len)));
+      } finally {
+        this.exports.hsp_dealloc(ptr, len);
+      }
+      return this.text(this.exports.hsp_text_len());
+    }
   }
 
   class Simulation {
@@ -208,6 +222,16 @@
       const po = this.scratch("out", 8 * nx * ny);
       m.guard(() => m.check(m.exports.hsp_deflection(this.handle, nx, ny, po)));
       return new Float64Array(m.exports.memory.buffer, po, nx * ny).slice();
+    }
+
+    // What deflection() multiplies, to draw the plate at a time recorded earlier:
+    // {coordinates: the value references of the plate's coordinates (n), map: Float64Array of
+    // nx*ny rows of n, row i + nx j times the coordinates = the deflection there [m]}.
+    deflectionMap(nx, ny) {
+      const m = this.model;
+      m.guard(() => m.check(m.exports.hsp_deflection_map(this.handle, nx, ny)));
+      const { coordinates, map } = JSON.parse(m.text(m.exports.hsp_text_len()));
+      return { coordinates, map: Float64Array.from(map) };
     }
 
     // The plate's length a and width b [m].

@@ -7,12 +7,16 @@
 //
 //   page -> worker  {type: "load", bytes}
 //                   {type: "start", id, request, names, step, stop, grid, command, rStep, tStart,
-//                    r, speed}                   a new run (the one before it is dropped)
+//                    r, speed, shaker, plateEvery}  a new run (the one before it is dropped);
+//                                                shaker: null or {F1, F2, f, tStart} (the forces)
+//                   {type: "ssv", id, request, name, description}  the settings as an .ssv
 //                   {type: "pause"}, {type: "resume"}, {type: "stop"}
 //                   {type: "speed", speed}      "realtime" or "fast"
 //                   {type: "r", value}          the slider's r, for the coming steps
 //   worker -> page  {type: "ready", variables, presets}
-//                   {type: "started", id, kPot, monitors, plate, batch}
+//                   {type: "started", id, kPot, monitors, plate, map, batch}
+//                                                map: deflectionMap(grid) or {error}
+//                   {type: "ssv", id, text, error}
 //                   {type: "data", id, batch}
 //                   {type: "paused", id, time}  the run is stopped at `time`
 //                   {type: "refused", id, message}
@@ -20,7 +24,9 @@
 //
 // A batch is what the run did since the last one: t, the input r set before each step (inputs),
 // the recorded outputs after each step (values, row by row), the messages logged, the plate's
-// deflection at its last point, and the run's state (time, stepMs, done, failed).
+// plate's coordinates every plateEvery steps (frames, with their times frameT) and at the last
+// point (eta), the shakers' forces F1, F2 of each step when they drive the run (forces), and the
+// run's state (time, stepMs, done, failed).
 function hspWorker(scope) {
   "use strict";
 
@@ -70,7 +76,7 @@ function hspWorker(scope) {
   }
 
   function newBatch() {
-    return { t: [], inputs: [], values: [], messages: [] };
+    return { t: [], inputs: [], values: [], messages: [], frames: [], frameT: [], forces: [], eta: null };
   }
 
   function concat(chunks) {
@@ -87,16 +93,13 @@ function hspWorker(scope) {
   function payload(batch) {
     const out = {
       t: concat(batch.t), inputs: concat(batch.inputs), values: concat(batch.values),
+      frames: concat(batch.frames), frameT: Float64Array.from(batch.frameT),
+      forces: concat(batch.forces), eta: batch.eta,
       messages: batch.messages, time: run.time, stepMs: run.stepMs, done: run.done,
-      failed: run.failed, deflection: null, deflectionError: null,
+      failed: run.failed,
     };
-    try {
-      out.deflection = sim.deflection(run.grid[0], run.grid[1]);
-    } catch (e) {
-      out.deflectionError = e.message;
-    }
-    const transfer = [out.t.buffer, out.inputs.buffer, out.values.buffer];
-    if (out.deflection) transfer.push(out.deflection.buffer);
+    const transfer = [out.t.buffer, out.inputs.buffer, out.values.buffer, out.frames.buffer,
+      out.frameT.buffer, out.forces.buffer];
     return [out, transfer];
   }
 
@@ -113,6 +116,31 @@ function hspWorker(scope) {
     return 0;
   }
 
+  // The shakers' forces [F1, F2] on the step from time t: F_i sin(2 pi f (t - tStart)) from
+  // tStart (f = 0: a constant force from tStart).
+  function forces(t) {
+    const s = run.shaker;
+    if (t < s.tStart - 1e-12) return [0, 0];
+    const wave = s.f > 0 ? Math.sin(2 * Math.PI * s.f * (t - s.tStart)) : 1;
+    return [s.F1 * wave, s.F2 * wave];
+  }
+
+  // The recorded rows of `done` (steps of the run from step k0): the outputs into the batch, the
+  // plate's coordinates every plateEvery steps and at the last.
+  function keep(b, done, k0, times) {
+    const w = run.names.length, n = run.coordinates.length, width = w + n;
+    const values = new Float64Array(done.steps * w);
+    for (let i = 0; i < done.steps; i++) {
+      values.set(done.values.subarray(i * width, i * width + w), i * w);
+      if (n && (k0 + i + 1) % run.plateEvery === 0) {
+        b.frames.push(done.values.slice(i * width + w, (i + 1) * width));
+        b.frameT.push(times[i]);
+      }
+    }
+    if (n && done.steps) b.eta = done.values.slice((done.steps - 1) * width + w, done.steps * width);
+    b.values.push(values);
+  }
+
   // Steps until the run's time reaches `until` or `budgetMs` of wall time is spent, CHUNK steps
   // per call into the module (r for each step computed before, the outputs of each read after).
   function advance(until, budgetMs) {
@@ -120,7 +148,13 @@ function hspWorker(scope) {
     const b = run.batch;
     while (run.k < run.steps && run.k * run.step < until - 1e-12) {
       const wanted = Math.ceil((until - run.k * run.step) / run.step - 1e-9);
-      const n = Math.max(1, Math.min(CHUNK, run.steps - run.k, wanted));
+      // With the shakers on, one step per call: their forces are set before each.
+      const n = run.shaker ? 1 : Math.max(1, Math.min(CHUNK, run.steps - run.k, wanted));
+      if (run.shaker) {
+        const f = forces(run.time);
+        sim.set({ F1: f[0], F2: f[1] });
+        b.forces.push(Float64Array.from(f));
+      }
       const inputs = new Float64Array(n);
       const times = new Float64Array(n);
       let t = run.time;
@@ -129,11 +163,11 @@ function hspWorker(scope) {
         t += run.step; // the FMU's own time after the step (the same sum)
         times[i] = t;
       }
-      const done = sim.run(run.step, "r", inputs, run.names);
+      const done = sim.run(run.step, "r", inputs, run.read);
       if (done.steps > 0) {
         b.t.push(times.subarray(0, done.steps));
         b.inputs.push(inputs.subarray(0, done.steps));
-        b.values.push(done.values);
+        keep(b, done, run.k, times);
         run.time = times[done.steps - 1];
       }
       run.k += done.steps;
@@ -171,18 +205,33 @@ function hspWorker(scope) {
       try {
         sim = model.create(m.request);
         const [kPot] = sim.get(["controller.k_pot"]);
+        // The plate's coordinates are read with the outputs at every step, to draw the plate at
+        // any recorded time (the map times them); a plate the variables do not show is said so.
+        let map;
+        try {
+          map = sim.deflectionMap(m.grid[0], m.grid[1]);
+        } catch (e) {
+          map = { error: e.message, coordinates: [] };
+        }
         run = {
           ...m, kPot, rStep: m.command === "step" ? kPot * m.angle : 0,
           steps: Math.round(m.stop / m.step), k: 0, time: sim.time, stepMs: 0, paused: 0,
           pausedAt: 0, stepping: false, done: false, failed: null, batch: newBatch(),
+          coordinates: map.coordinates, read: [...m.names, ...map.coordinates],
         };
         // The initial point.
         run.batch.t.push(new Float64Array([run.time]));
         run.batch.values.push(sim.get(run.names));
+        if (run.coordinates.length) {
+          const eta = sim.get(run.coordinates);
+          run.batch.frames.push(eta);
+          run.batch.frameT.push(run.time);
+          run.batch.eta = eta.slice();
+        }
         const [batch, transfer] = payload(run.batch);
         run.batch = newBatch();
         post({ type: "started", id: run.id, kPot, rStep: run.rStep, monitors: sim.monitors(),
-          plate: sim.plateSize(), batch }, transfer);
+          plate: sim.plateSize(), map, batch }, transfer);
       } catch (e) {
         const id = m.id;
         drop();
@@ -190,6 +239,13 @@ function hspWorker(scope) {
         return;
       }
       schedule();
+    },
+    ssv(m) {
+      try {
+        post({ type: "ssv", id: m.id, text: model.parameterSet(m) });
+      } catch (e) {
+        post({ type: "ssv", id: m.id, error: e.message });
+      }
     },
     pause() {
       if (!run || run.done || run.pausedAt) return;

@@ -39,6 +39,19 @@ pub enum Variability {
     Continuous,
 }
 
+impl Variability {
+    /// The name `modelDescription.xml` gives it (`variability="..."`).
+    pub fn xml_name(self) -> &'static str {
+        match self {
+            Variability::Constant => "constant",
+            Variability::Fixed => "fixed",
+            Variability::Tunable => "tunable",
+            Variability::Discrete => "discrete",
+            Variability::Continuous => "continuous",
+        }
+    }
+}
+
 /// An enumeration type of `<TypeDefinitions>` (`<SimpleType>` with `<Enumeration>`): the
 /// values a variable of it may take, each with a name.
 #[derive(Debug, PartialEq, Eq)]

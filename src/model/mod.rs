@@ -4,6 +4,8 @@
 //!
 //! - [`variables`]: the generated variable table (positions and value references by name).
 //! - [`parameters`]: the typed parameter set read from the FMU's values, and `--set NAME=VALUE`.
+//! - `parameter_set`: settings as an SSP 1.0 parameter set (`.ssv`), for the tools and the
+//!   browser page (not in the FMU's binaries).
 //! - [`presets`]: the paper's configurations as named parameter sets (`hsp run --preset NAME`).
 //! - [`compose`]: which fragments make up the model for a parameter set, as one bond graph.
 //! - [`assembly`]: that graph compiled, with its inputs, outputs and states placed among the FMU's
@@ -24,6 +26,8 @@ pub mod margin;
 pub mod oscillation;
 #[cfg(feature = "analysis")]
 pub mod paper;
+#[cfg(any(target_family = "wasm", feature = "analysis"))]
+pub mod parameter_set;
 pub mod parameters;
 pub mod presets;
 pub mod realtime_guard;

@@ -2,11 +2,29 @@
 //! [`idx`] gives each variable's position (for the value store), [`vr`] its value reference; each
 //! enumeration type of `<TypeDefinitions>` is a Rust enum of the same name ([`HydraulicsModel`],
 //! [`SolverMethod`], ...). The parameters' rules are in [`crate::fragments::rules`], generated
-//! from the same file.
+//! from the same file; [`SHOWN`] how each variable is shown (its group and display unit).
 
 use crate::fmu::variables::{Causality, EnumerationType, Item, Kind, Variability, Variable};
 
 include!(concat!(env!("OUT_DIR"), "/variables.rs"));
+
+/// How a variable is shown to people (the browser page's parameter panel): the group the XML puts
+/// it in, and its display unit. Nothing of the FMU's behaviour depends on it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shown {
+    /// The text of the comment before it in `<ModelVariables>` (empty before the first).
+    pub group: &'static str,
+    /// Its `displayUnit`, else its unit's first display unit.
+    pub display_unit: Option<DisplayUnit>,
+}
+
+/// A `<DisplayUnit>`: a value `v` in the variable's unit is `factor * v + offset` in it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DisplayUnit {
+    pub name: &'static str,
+    pub factor: f64,
+    pub offset: f64,
+}
 
 /// The position in [`VARIABLES`] of the variable named `name`.
 pub fn position(name: &str) -> Option<usize> {

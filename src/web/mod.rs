@@ -25,7 +25,7 @@ use crate::fragments::plate::PlateModel;
 use crate::fragments::validity::Monitor;
 use crate::model::parameters::parse_setting;
 use crate::model::presets;
-use crate::model::variables::{position, VARIABLES};
+use crate::model::variables::{position, SHOWN, VARIABLES};
 use crate::model::HydraulicSlewingPlate;
 
 #[cfg(target_family = "wasm")]
@@ -333,6 +333,24 @@ impl Simulation {
         read
     }
 
+    /// What [`Simulation::deflection`] multiplies, for a page that draws the plate at any time
+    /// of a run it recorded: the value references of the plate's coordinates (`x.plate.C[k].q`,
+    /// `n` of them) and the `(nx ny) x n` matrix, row by row, whose row `i + nx j` times the
+    /// coordinates is the deflection at grid point `(i, j)` \[m\].
+    pub fn deflection_map(&mut self, nx: usize, ny: usize) -> Result<(Vec<u32>, Vec<f64>), String> {
+        if nx < 2 || ny < 2 {
+            return Err(format!(
+                "deflection: a grid of at least 2 x 2 points, got {nx} x {ny}"
+            ));
+        }
+        let grid = self.deflection_grid(nx, ny)?;
+        let map = (0..nx * ny)
+            .flat_map(|k| (0..grid.eta.len()).map(move |c| (k, c)))
+            .map(|(k, c)| grid.map[(k, c)])
+            .collect();
+        Ok((grid.coordinates, map))
+    }
+
     fn deflection_grid(&self, nx: usize, ny: usize) -> Result<DeflectionGrid, String> {
         let p = &self
             .instance
@@ -374,11 +392,14 @@ impl Simulation {
 }
 
 /// The variable table as JSON for the page: name, value reference, causality, variability,
-/// type, unit, description, start, min and max (as `modelDescription.xml` has them).
+/// type, unit, description, start, min and max (as `modelDescription.xml` has them), the group
+/// the XML puts it in and its display unit (`{name, factor, offset}` or null, from [`SHOWN`]),
+/// and an Enumeration's items (`[{name, value, description}]`).
 pub fn variables_json() -> serde_json::Value {
     VARIABLES
         .iter()
-        .map(|v| {
+        .zip(SHOWN.iter())
+        .map(|(v, shown)| {
             let (start, min, max) = match v.kind {
                 Kind::Real { start, min, max } => (
                     start.map(Into::into),
@@ -399,10 +420,31 @@ pub fn variables_json() -> serde_json::Value {
                 Kind::String { start } => (start.map(Into::into), None, None),
             };
             let start: Option<serde_json::Value> = start;
+            let items: Option<Vec<serde_json::Value>> = match v.kind {
+                Kind::Enumeration { declared, .. } => Some(
+                    declared
+                        .items
+                        .iter()
+                        .map(|i| {
+                            serde_json::json!({
+                                "name": i.name, "value": i.value, "description": i.description
+                            })
+                        })
+                        .collect(),
+                ),
+                _ => None,
+            };
+            let display_unit = shown.display_unit.map(
+                |d| serde_json::json!({"name": d.name, "factor": d.factor, "offset": d.offset}),
+            );
             serde_json::json!({
                 "name": v.name,
                 "valueReference": v.value_reference,
                 "causality": v.causality.xml_name(),
+                "variability": v.variability.xml_name(),
+                "group": shown.group,
+                "displayUnit": display_unit,
+                "items": items,
                 "type": v.kind.type_name(),
                 "unit": v.unit,
                 "description": v.description,
@@ -412,6 +454,69 @@ pub fn variables_json() -> serde_json::Value {
             })
         })
         .collect()
+}
+
+/// The settings of a request ([`parse_request`]) as one SSP 1.0 parameter set that the FMU
+/// applies alone (no preset needed): the preset's settings, each replaced in place by the
+/// request's setting of the same name, then the request's others, every value checked and
+/// written as its variable's type reads it back (a Real as the shortest text of its double).
+/// `name` and `description` go into the set. The error names the culprit setting.
+pub fn parameter_set(
+    preset: &str,
+    settings: &[(String, String)],
+    name: &str,
+    description: &str,
+) -> Result<String, String> {
+    let mut all: Vec<(String, String)> = Vec::new();
+    if !preset.is_empty() {
+        let p = presets::preset(preset)?;
+        all.extend(
+            p.settings
+                .iter()
+                .map(|(n, v)| (n.to_string(), v.to_string())),
+        );
+    }
+    for (n, v) in settings {
+        match all.iter_mut().find(|(m, _)| m == n) {
+            Some(slot) => slot.1 = v.clone(),
+            None => all.push((n.clone(), v.clone())),
+        }
+    }
+    let typed: Vec<(String, String)> = all
+        .iter()
+        .map(|(n, text)| {
+            let (_, value) = parse_setting(n, text)?;
+            let text = match value {
+                Value::Real(x) => format!("{x:?}"),
+                Value::Integer(i) => i.to_string(),
+                Value::Boolean(b) => b.to_string(),
+                Value::String(s) => s,
+            };
+            Ok((n.clone(), text))
+        })
+        .collect::<Result<_, String>>()?;
+    crate::model::parameter_set::parameter_set_of(
+        name,
+        description,
+        "the browser page (docs/web/page.js) from its run's settings",
+        typed.iter().map(|(n, v)| (n.as_str(), v.as_str())),
+    )
+}
+
+/// [`parameter_set`] of a request as [`parse_request`] reads it, with the set's `name` and
+/// `description` beside (`{"preset", "settings", "name", "description"}`; the last two optional).
+pub fn parameter_set_json(json: &str) -> Result<String, String> {
+    let (preset, settings) = parse_request(json)?;
+    let request: serde_json::Value =
+        serde_json::from_str(json).map_err(|e| format!("the request is not JSON: {e}"))?;
+    let text = |key: &str, default: &'static str| match request.get(key) {
+        None | Some(serde_json::Value::Null) => Ok(default.to_string()),
+        Some(serde_json::Value::String(s)) => Ok(s.clone()),
+        Some(other) => Err(format!("{key}: {other} is not a text")),
+    };
+    let name = text("name", "browser-run")?;
+    let description = text("description", "")?;
+    parameter_set(&preset, &settings, &name, &description)
 }
 
 /// Reads a request to make a simulation, `{"preset": NAME, "settings": {NAME: VALUE, ...}}`

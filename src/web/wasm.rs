@@ -270,6 +270,42 @@ pub unsafe extern "C" fn hsp_deflection(
     status(unsafe { simulation(sim) }.and_then(|s| s.deflection(nx, ny, out).map(|_| false)))
 }
 
+/// What [`hsp_deflection`] multiplies, as the text `{"coordinates": [VR, ...], "map": [...]}`
+/// (see [`Simulation::deflection_map`]); status 0 with it as the text answer, 3 with the message.
+///
+/// # Safety
+/// As [`hsp_free`].
+#[no_mangle]
+pub unsafe extern "C" fn hsp_deflection_map(sim: *mut Simulation, nx: usize, ny: usize) -> i32 {
+    // SAFETY: the caller's contract.
+    let made = unsafe { simulation(sim) }.and_then(|s| s.deflection_map(nx, ny));
+    match made {
+        Ok((coordinates, map)) => {
+            answer(serde_json::json!({"coordinates": coordinates, "map": map}).to_string());
+            0
+        }
+        Err(message) => status(Err(message)),
+    }
+}
+
+/// The SSP 1.0 parameter set of `{"preset", "settings", "name", "description"}` (see
+/// [`super::parameter_set_json`]); status 0 with the `.ssv`'s text as the text answer, 3 with
+/// the message.
+///
+/// # Safety
+/// As [`text`].
+#[no_mangle]
+pub unsafe extern "C" fn hsp_parameter_set(ptr: *const u8, len: usize) -> i32 {
+    // SAFETY: the caller's contract.
+    match unsafe { text(ptr, len) }.and_then(super::parameter_set_json) {
+        Ok(set) => {
+            answer(set);
+            0
+        }
+        Err(message) => status(Err(message)),
+    }
+}
+
 /// The plate's size as the text `[a, b]` \[m\]; returns its length (0 before the model is built).
 ///
 /// # Safety

@@ -208,7 +208,11 @@ def open_page(driver, page_dir, query):
 
 def change(driver, field, text):
     """Types `text` into a field in place of its value and leaves it (the change event)."""
-    box = driver.find_element(By.ID, field)
+    retype(driver.find_element(By.ID, field), text)
+
+
+def retype(box, text):
+    """Types `text` into the field `box` in place of its value and leaves it."""
     box.send_keys(Keys.CONTROL, "a")
     box.send_keys(Keys.DELETE)
     box.send_keys(text, Keys.TAB)
@@ -389,3 +393,359 @@ def test_results_download_as_csv_and_settings_as_json(probe, page_dir, tmp_path)
     assert settings["stop_time"] == 2 and settings["step_size"] == 1e-3
     assert settings["command"] == "step" and "r steps from 0 to" in settings["input_r"]
     assert settings["address"] == probe.current_url
+
+
+# ---------------------------------------------------------------- the parameter panel (issue 42)
+
+def xml_groups():
+    """Each parameter's group as modelDescription.xml groups them (the comment before it in
+    <ModelVariables>), and its display unit, read here with Python's own parser."""
+    import xml.etree.ElementTree as ET
+    parser = ET.XMLParser(target=ET.TreeBuilder(insert_comments=True))
+    root = ET.parse(ROOT / "modelDescription" / "modelDescription.xml", parser).getroot()
+    units = {u.get("name"): [d.get("name") for d in u.findall("DisplayUnit")]
+             for u in root.find("UnitDefinitions")}
+    groups, shown, group = {}, {}, None
+    for node in root.find("ModelVariables"):
+        if node.tag is ET.Comment:
+            group = " ".join(node.text.split())
+        elif node.get("causality") == "parameter":
+            groups[node.get("name")] = group
+            t = node[0]
+            unit = t.get("unit")
+            shown[node.get("name")] = t.get("displayUnit") or (units.get(unit) or [unit])[0]
+    return groups, shown
+
+
+def panel_rows(driver):
+    return driver.execute_script("""
+        return [...document.querySelectorAll('#parameter-groups tr[data-name]')].map((tr) => ({
+            name: tr.dataset.name, group: tr.closest('details').dataset.group,
+            unit: tr.querySelector('td.unit').textContent, preset: tr.querySelector('td.preset').textContent,
+            range: tr.querySelector('td.range').textContent, value: tr.querySelector('td.value > *').value,
+            disabled: tr.querySelector('td.value > *').disabled,
+            description: tr.querySelector('.desc').textContent, changed: tr.classList.contains('changed')}));""")
+
+
+def panel_field(driver, name):
+    """The panel's field of a parameter, its group opened."""
+    driver.execute_script("""document.querySelector(`#parameter-groups tr[data-name="${arguments[0]}"]`)
+        .closest('details').open = true;""", name)
+    return driver.find_element(By.CSS_SELECTOR, f'#parameter-groups tr[data-name="{name}"] td.value > *')
+
+
+def test_the_parameter_panel_shows_every_parameter_as_the_xml_declares_it(probe, page_dir, md):
+    open_page(probe, page_dir, "?speed=fast&preset=loes-motor")
+    wait_for_run(probe)
+    rows = {r["name"]: r for r in panel_rows(probe)}
+    # Every parameter of the packaged FMU's model description (read by fmpy), in its XML group
+    # and display unit (read by Python's XML parser), with its description.
+    parameters = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
+    assert set(rows) == set(parameters), set(rows) ^ set(parameters)
+    groups, shown = xml_groups()
+    for name, v in parameters.items():
+        assert rows[name]["group"] == groups[name], (name, rows[name]["group"], groups[name])
+        assert rows[name]["unit"] == ("" if shown[name] in (None, "1") else shown[name]), name
+        assert rows[name]["description"] == v.description, name
+    assert rows["controller.k_pot"]["unit"] == "V/deg"
+    assert rows["servo_valve.p_supply"]["unit"] == "bar" and rows["servo_valve.p_supply"]["preset"] == "140"
+    assert rows["solver.rtol"]["range"] == "1e-15 … 1"
+    # The preset's value (loes-motor's switch to the LOES), in the display unit (cm3/rad).
+    assert rows["hydraulics.model"]["preset"] == "1 = Loes", rows["hydraulics.model"]
+    assert rows["loes.D_m"]["unit"] == "cm3/rad" and rows["loes.D_m"]["preset"] == "80.3787285294"
+    # What the controls set is shown, not edited.
+    assert rows["controller.A1"]["disabled"] and rows["controller.A1"]["value"] == "2"
+    assert rows["loes.D_m"]["disabled"] and not rows["servo_valve.D_m"]["disabled"]
+
+
+def test_a_panel_value_is_checked_run_and_carried_by_the_address(probe, page_dir):
+    open_page(probe, page_dir, "?speed=fast&stop=1")
+    first = wait_for_run(probe)
+    # Beyond the model's range: refused, named with the parameter and its limit; nothing runs.
+    rtol = panel_field(probe, "solver.rtol")
+    retype(rtol, "2")
+    WebDriverWait(probe, 10).until(lambda d: d.execute_script("return hspPage.error"))
+    state = page_state(probe)
+    assert state["id"] == first["id"], "a run started with solver.rtol = 2"
+    assert "solver.rtol" in state["error"] and "above the model's maximum of 1" in state["error"], \
+        state["error"]
+    assert rtol.get_attribute("aria-invalid") is not None
+    retype(rtol, "abc")
+    WebDriverWait(probe, 10).until(lambda d: "'abc' is not a number" in d.execute_script("return hspPage.error"))
+    retype(rtol, "1e-6")
+    # In the display unit: 120 bar of supply pressure is 1.2e7 Pa for the model.
+    supply = panel_field(probe, "servo_valve.p_supply")
+    retype(supply, "120")
+    run = wait_for_run(probe)
+    assert run["id"] > first["id"] and run["error"] is None, run["error"]
+    assert run["request"]["settings"]["servo_valve.p_supply"] == 1.2e7, run["request"]["settings"]
+    assert "solver.rtol" not in run["request"]["settings"]  # the preset's value again
+    assert {r["name"] for r in panel_rows(probe) if r["changed"]} == {"servo_valve.p_supply"}
+    link = probe.current_url
+    assert "servo_valve.p_supply=12000000" in link, link
+    # The JSON settings carry it; the link opened again runs it to the same doubles.
+    probe.get("about:blank")
+    open_page(probe, page_dir, link[link.index("?"):])
+    again = wait_for_run(probe)
+    assert again["request"] == run["request"] and again["samples"] == run["samples"]
+    assert panel_field(probe, "servo_valve.p_supply").get_attribute("value") == "120"
+    # A parameter the controls set is refused from the address, by name.
+    state = open_page(probe, page_dir, "?speed=fast&controller.A1=3")
+    assert state["runs"] == 0 and "'controller.A1' in the address is set by the page's control 'A1'" \
+        in state["error"], state["error"]
+
+
+def test_the_shakers_drive_the_plate_of_paper_fig10(probe, page_dir, fmu_path):
+    open_page(probe, page_dir, "?speed=fast&preset=complete")
+    wait_for_run(probe)
+    assert not probe.find_element(By.ID, "shakers").is_displayed()
+    open_page(probe, page_dir, "?speed=fast&preset=paper-fig10&stop=1.5&F1=2&F2=-1&shaker_f=3")
+    run = wait_for_run(probe)
+    assert probe.find_element(By.ID, "shakers").is_displayed()
+    assert run["error"] is None and run["failed"] is None, (run["error"], run["failed"])
+    forces = run["forces"]
+    assert len(forces) == 2 * len(run["inputs"]) == 2 * 1500
+    # 2 N and -1 N times sin(2 pi 3 Hz (t - 0.5 s)) from the preset's start, 0.5 s.
+    k = 600  # the step from t = 0.6 s
+    wave = np.sin(2 * np.pi * 3 * (run["samples"]["t"][k] - 0.5))
+    assert forces[2 * k] == pytest.approx(2 * wave, rel=1e-12) and forces[2 * k + 1] == pytest.approx(-wave, rel=1e-12)
+    assert forces[2 * 100] == 0
+    assert max(abs(w) for w in run["samples"]["w_tip"]) > 1e-5  # the plate is shaken
+    # The same forces through the native FMU: the same outputs.
+    dev = deviation(run["samples"], native(fmu_path, run))
+    worst = max(dev, key=lambda n: dev[n][0])
+    assert dev[worst][0] <= AGREEMENT, (worst, dev[worst])
+
+
+def test_the_ssv_download_applied_by_the_fmu_gives_the_pages_run(probe, page_dir, fmu_path, tmp_path):
+    from conftest import read_ssv
+    probe.execute_cdp_cmd("Browser.setDownloadBehavior",
+                          {"behavior": "allow", "downloadPath": str(tmp_path)})
+    open_page(probe, page_dir, "?speed=fast&stop=2&A1=3&servo_valve.p_supply=12000000&preset=complete")
+    run = wait_for_run(probe)
+    assert run["request"]["settings"]["servo_valve.p_supply"] == 1.2e7
+    probe.find_element(By.ID, "download-ssv").click()
+    probe.find_element(By.ID, "download-json").click()
+    WebDriverWait(probe, 20).until(lambda d: list(tmp_path.glob("*.ssv")) and list(tmp_path.glob("*.json")))
+    # The panel's setting is in the JSON settings too.
+    settings = json.loads(next(tmp_path.glob("*.json")).read_text())["settings"]
+    assert settings["servo_valve.p_supply"] == 1.2e7 and settings["controller.A1"] == 3
+    text = next(tmp_path.glob("*.ssv")).read_text()
+    assert "<ssv:ParameterSet" in text and "the browser page" in text
+    values = read_ssv(text)
+    # The preset's settings and the page's over them, in one set the FMU applies alone.
+    assert values["hydraulics.model"] == 2 and values["controller.A1"] == 3
+    assert values["servo_valve.p_supply"] == 1.2e7
+    alone = {**run, "request": {"preset": "", "settings": values}}
+    dev = deviation(run["samples"], native(fmu_path, alone))
+    worst = max(dev, key=lambda n: dev[n][0])
+    identical = all(same for _, same in dev.values())
+    print(f".ssv through fmpy: worst {worst} {dev[worst][0]:.3e} of its range; bit-identical: {identical}")
+    assert dev[worst][0] <= AGREEMENT, (worst, dev[worst])
+
+
+# ---------------------------------------------------------------- plots to read (issue 42)
+
+@pytest.fixture(scope="module")
+def plots(page_dir, tmp_path_factory):
+    """The FMU's page from the disk in a browser of its own, after the default move."""
+    driver = chrome(tmp_path_factory.mktemp("plots"))
+    open_page(driver, page_dir, "?speed=fast")
+    wait_for_run(driver)
+    yield driver
+    driver.quit()
+
+
+def plot_point(driver, canvas_id, fraction):
+    """The offset from the canvas's centre (CSS pixels) of the point at `fraction` of its frame's
+    width, halfway up."""
+    return driver.execute_script("""
+        const c = document.getElementById(arguments[0]), lay = hspPage.layout[arguments[0]];
+        const r = c.getBoundingClientRect(), k = r.width / c.width;
+        const x = (lay.frame.x + arguments[1] * lay.frame.w) * k, y = (lay.frame.y + lay.frame.h / 2) * k;
+        return [Math.round(x - r.width / 2), Math.round(y - r.height / 2)];""", canvas_id, fraction)
+
+
+def test_the_legends_sit_outside_the_data(plots):
+    layout = plots.execute_script("return hspPage.layout")
+    for canvas in ["plot-loop", "plot-angles", "plot-tip", "plot-pressures"]:
+        frame = layout[canvas]["frame"]
+        assert layout[canvas]["legend"], canvas
+        for box in layout[canvas]["legend"]:
+            assert box["y"] + box["h"] <= frame["y"], (canvas, box, frame)  # above the frame
+
+
+def test_hovering_a_plot_reads_its_values(plots):
+    from selenium.webdriver.common.action_chains import ActionChains
+    driver = plots
+    canvas = driver.find_element(By.ID, "plot-loop")
+    dx, dy = plot_point(driver, "plot-loop", 0.3)
+    ActionChains(driver).move_to_element_with_offset(canvas, dx, dy).perform()
+    readout = driver.execute_script("return hspPage.readout")
+    run = page_state(driver)
+    i = readout["i"]
+    span = driver.execute_script("return hspPage.layout['plot-loop']")
+    assert abs(readout["t"] - (span["x0"] + 0.3 * (span["x1"] - span["x0"]))) < 0.02, readout
+    assert readout["t"] == run["samples"]["t"][i]
+    assert readout["values"]["y_pot"] == run["samples"]["y_pot"][i]
+    assert readout["values"]["reference"] == run["samples"]["controller.reference"][i]
+    text = driver.find_element(By.ID, "readout").text
+    assert driver.find_element(By.ID, "readout").is_displayed() and f"t = {readout['t']:.3f} s" in text, text
+    ActionChains(driver).move_by_offset(0, 400).perform()
+
+
+def test_dragging_zooms_every_plot_and_a_double_click_shows_the_whole_run(plots):
+    from selenium.webdriver.common.action_chains import ActionChains
+    driver = plots
+    run = wait_for_run(driver)
+    canvas = driver.find_element(By.ID, "plot-tip")
+    a, y = plot_point(driver, "plot-tip", 0.25)
+    b, _ = plot_point(driver, "plot-tip", 0.5)
+    ActionChains(driver).move_to_element_with_offset(canvas, a, y).click_and_hold() \
+        .move_by_offset((b - a) // 2, 0).move_by_offset(b - a - (b - a) // 2, 0).release().perform()
+    view = driver.execute_script("return hspPage.view")
+    stop = run["samples"]["t"][-1]
+    assert view and abs(view["x0"] - 0.25 * stop) < 0.03 and abs(view["x1"] - 0.5 * stop) < 0.03, view
+    layout = driver.execute_script("return hspPage.layout")
+    for canvas_id in ["plot-loop", "plot-angles", "plot-tip", "plot-pressures"]:
+        assert (layout[canvas_id]["x0"], layout[canvas_id]["x1"]) == (view["x0"], view["x1"])
+    # The zoomed plot's range is that of the points in the span, not of the whole run.
+    tip = np.array(run["samples"]["w_tip"]) * 1e3
+    t = np.array(run["samples"]["t"])
+    inside = tip[(t >= view["x0"]) & (t <= view["x1"])]
+    lo, hi = layout["plot-tip"]["lo"], layout["plot-tip"]["hi"]
+    pad = 0.06 / 1.12 * (hi - lo)
+    assert lo + pad == pytest.approx(inside.min(), rel=1e-9) or np.ptp(inside) == 0
+    driver.execute_script("""document.getElementById('plot-tip').dispatchEvent(
+        new MouseEvent('dblclick', {bubbles: true}))""")
+    WebDriverWait(driver, 5).until(lambda d: d.execute_script(
+        "return hspPage.view === null && hspPage.layout['plot-tip'].x1 === hspPage.run.stop"))
+
+
+def scrub(driver, t):
+    driver.execute_script("""const c = document.getElementById('cursor'); c.value = arguments[0];
+        c.dispatchEvent(new Event('input'));""", t)
+    WebDriverWait(driver, 5).until(lambda d: d.execute_script(
+        "return hspPage.plateView && Math.abs(hspPage.plateView.t - arguments[0]) < 0.002", t))
+    return driver.execute_script("return hspPage.plateView")
+
+
+def test_the_time_cursor_scrubs_the_plate_through_the_run(plots):
+    driver = plots
+    run = wait_for_run(driver)
+    w_tip = run["samples"]["w_tip"]
+    views = []
+    for t in (0.0, 1.2, 2.0, 4.5):
+        view = scrub(driver, t)
+        # The drawn plate at the cursor is the model's state then: its tip is w_tip there.
+        assert view["tip"] == pytest.approx(w_tip[view["at"]], rel=1e-12, abs=1e-15), view
+        assert f"t = {view['t']:.3f} s" in driver.find_element(By.ID, "plate-caption").text
+        views.append(view)
+    assert abs(views[0]["tip"]) < 1e-12 and abs(views[1]["tip"]) > 1e-3  # at rest at t = 0
+    # The cursor drawn on the plots; "Follow the run" lets go of it.
+    assert driver.execute_script("return hspPage.cursor") == 4.5
+    driver.find_element(By.ID, "cursor-live").click()
+    assert driver.execute_script("return hspPage.cursor") is None
+
+
+def test_the_face_view_keeps_one_colour_scale_with_its_legend(plots):
+    driver = plots
+    wait_for_run(driver)
+    run = page_state(driver)
+    early, late = scrub(driver, 1.2), scrub(driver, 4.5)
+    # One scale for the run, whatever the deflection at the cursor: a 1-2-5 number at or above
+    # the run's largest deflection (at least its tip's).
+    scale = early["scale"]
+    assert late["scale"] == scale, (early, late)
+    assert scale >= max(abs(w) for w in run["samples"]["w_tip"])
+    mantissa = scale / 10 ** np.floor(np.log10(scale))
+    assert min(abs(mantissa - m) for m in (1, 2, 5)) < 1e-9, scale
+    assert early["wmax"] != late["wmax"] and max(early["wmax"], late["wmax"]) <= scale
+    driver.find_element(By.ID, "cursor-live").click()
+
+
+def test_the_previous_run_is_overlaid_dimmed(plots):
+    from selenium.webdriver.common.action_chains import ActionChains
+    driver = plots
+    choose_preset(driver, "complete")
+    before = wait_for_run(driver)
+    change(driver, "duration", "1")
+    after = wait_for_run(driver)
+    assert after["id"] > before["id"]
+    layout = driver.execute_script("return hspPage.layout")
+    assert layout["plot-tip"]["overlay"] == before["id"]
+    assert any("previous" in box["label"] for box in layout["plot-tip"]["legend"])
+    # The readout gives both runs' values at the time under the pointer.
+    dx, dy = plot_point(driver, "plot-tip", 0.3)
+    ActionChains(driver).move_to_element_with_offset(driver.find_element(By.ID, "plot-tip"), dx, dy).perform()
+    readout = driver.execute_script("return hspPage.readout")
+    assert readout["previous"]["w_tip"] == before["samples"]["w_tip"][readout["i"]] * 1e3
+    assert readout["values"]["w_tip"] == after["samples"]["w_tip"][readout["i"]] * 1e3
+    # Off: no overlay.
+    driver.find_element(By.ID, "overlay").click()
+    WebDriverWait(driver, 5).until(lambda d: d.execute_script("return hspPage.layout['plot-tip'].overlay") is None)
+    driver.find_element(By.ID, "overlay").click()
+    change(driver, "duration", "2")
+    wait_for_run(driver)
+
+
+def test_a_plate_at_rest_is_said_to_be_and_not_exaggerated(probe, page_dir):
+    # The servo valve on the motor alone: the motor is not coupled to the hub, the plate is not
+    # driven (no shaker force).
+    open_page(probe, page_dir, "?speed=fast&preset=servo-valve-motor&stop=1")
+    run = wait_for_run(probe)
+    assert max(abs(w) for w in run["samples"]["w_tip"]) < 1e-6
+    view = probe.execute_script("return hspPage.plateView")
+    assert view["atRest"] and view["exaggeration"] == 1 and "the plate is at rest" in view["label"], view
+    open_page(probe, page_dir, "?speed=fast&stop=1")
+    wait_for_run(probe)
+    view = probe.execute_script("return hspPage.plateView")
+    assert not view["atRest"] and view["exaggeration"] > 1 and "drawn ×" in view["label"], view
+
+
+def test_a_narrow_window_shows_the_whole_page(page_dir, tmp_path):
+    # The narrowest window headless Chromium makes (it widens 420 px to 500): nothing is cut off
+    # at the right, the parameter panel's open tables scrolling within their box.
+    driver = chrome(tmp_path, size="420,900")
+    try:
+        open_page(driver, page_dir, "?speed=fast")
+        wait_for_run(driver)
+        driver.execute_script(
+            "document.querySelectorAll('#parameter-groups details').forEach((d) => { d.open = true; })")
+        width, window = driver.execute_script(
+            "return [document.documentElement.scrollWidth, window.innerWidth]")
+        assert width <= window, (width, window)
+    finally:
+        driver.quit()
+
+
+def test_a_switch_in_the_panel_moves_the_controls_with_it(probe, page_dir, md):
+    from selenium.webdriver.support.ui import Select
+    start = {v.name: v.start for v in md.modelVariables}
+    # A preset's motor displacement runs as the model has it, not as the 6 digits shown.
+    open_page(probe, page_dir, "?speed=fast&stop=0.5&preset=loes-motor")
+    run = wait_for_run(probe)
+    assert probe.find_element(By.ID, "D_m").get_attribute("value") == "80.3787"
+    assert run["request"]["settings"]["loes.D_m"] == float(start["loes.D_m"])
+    # The complete system switched to the LOES in the panel: the motor control sets the LOES's
+    # displacement, the pressures plotted are the LOES's, the full valve's D_m is the panel's.
+    open_page(probe, page_dir, "?speed=fast&stop=0.5")
+    wait_for_run(probe)
+    Select(panel_field(probe, "hydraulics.model")).select_by_value("1")
+    run = wait_for_run(probe)
+    settings = run["request"]["settings"]
+    assert settings["hydraulics.model"] == 1 and settings["loes.D_m"] == float(start["loes.D_m"])
+    assert "servo_valve.D_m" not in settings, settings
+    assert panel_field(probe, "loes.D_m").get_attribute("disabled") is not None
+    assert panel_field(probe, "servo_valve.D_m").get_attribute("disabled") is None
+    assert probe.find_element(By.ID, "pressure-caption").text == "Load pressure [bar]"
+    # The motor uncoupled in the panel: the shakers are offered; the address carries both.
+    Select(panel_field(probe, "hydraulics.motor_coupled")).select_by_value("false")
+    wait_for_run(probe)
+    assert probe.find_element(By.ID, "shakers").is_displayed()
+    link = probe.current_url
+    assert "hydraulics.model=1" in link and "hydraulics.motor_coupled=false" in link, link
+    probe.get("about:blank")
+    again = open_page(probe, page_dir, link[link.index("?"):])
+    assert again["error"] is None and wait_for_run(probe)["request"]["settings"]["hydraulics.model"] == 1
+    assert probe.find_element(By.ID, "shakers").is_displayed()

@@ -54,6 +54,7 @@ def page_state(driver):
         const p = window.hspPage, r = p.run, rec = p.recorded ? p.recorded() : {};
         return {error: p.error, failed: r && r.failed, request: r && r.request,
                 samples: rec.samples || null, inputs: rec.inputs || null,
+                forces: rec.forces || null,
                 messages: r && r.messages, status: document.getElementById('status').textContent,
                 status_class: document.getElementById('status').className, id: r && r.id,
                 runs: p.runs};""")
@@ -68,7 +69,7 @@ def _md_and_dir(fmu_path):
 def native(fmu_path, run):
     """The page's run through the packaged FMU's C ABI (fmpy's low-level FMU2Slave): the same
     preset and settings, the same communication steps with the same r set before each, the same
-    outputs at every point."""
+    outputs at every point (and the shakers' forces before each step when the page drove them)."""
     request = run["request"]
     md, unzipped = _md_and_dir(fmu_path)
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -83,8 +84,11 @@ def native(fmu_path, run):
         refs = [vr[n] for n in RECORDED]
         rows = [slave.getReal(refs)]
         t = 0.0
-        for r in run["inputs"]:
+        forces = run.get("forces") or []
+        for k, r in enumerate(run["inputs"]):
             slave.setReal([vr["r"]], [r])
+            if forces:  # the shakers' F1, F2 of the step, as the page set them
+                slave.setReal([vr["F1"], vr["F2"]], forces[2 * k:2 * k + 2])
             slave.doStep(t, STEP)
             t += STEP  # the FMU's own time, as the page reads it (the same sum of steps)
             rows.append(slave.getReal(refs))

@@ -6,16 +6,7 @@ use std::fmt::Write as _;
 use hydraulic_slewing_plate::model::presets::PRESETS;
 
 use super::text::{escape, short, short_text};
-use crate::model_description::{DisplayUnit, ModelDescription, ScalarVariable};
-
-/// The display unit a variable is shown in: its `displayUnit`, else its unit's first display unit.
-fn display<'a>(md: &'a ModelDescription, v: &ScalarVariable) -> Option<&'a DisplayUnit> {
-    let list = &md.unit(v.unit.as_deref()?)?.display_units;
-    match &v.display_unit {
-        Some(d) => list.iter().find(|u| &u.name == d),
-        None => list.first(),
-    }
-}
+use crate::model_description::{ModelDescription, ScalarVariable};
 
 /// The variable tables, one a causality present, each under its title and a note.
 pub fn variables(md: &ModelDescription) -> String {
@@ -87,7 +78,10 @@ fn variable_table(md: &ModelDescription, causalities: &[&str], s: &mut String) {
         .iter()
         .filter(|v| causalities.contains(&v.causality.as_str()))
     {
-        let display = match (display(md, v), v.start.as_deref().map(str::parse::<f64>)) {
+        let display = match (
+            md.display_unit(v),
+            v.start.as_deref().map(str::parse::<f64>),
+        ) {
             (Some(unit), Some(Ok(x))) => format!(
                 "{} {}",
                 short(x * unit.factor + unit.offset),

@@ -19,7 +19,6 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use hydraulic_slewing_plate::fmu::Kind;
 use hydraulic_slewing_plate::model::presets::{Preset, PRESETS};
 use hydraulic_slewing_plate::model::variables::{MODEL_IDENTIFIER, VARIABLES};
 
@@ -65,70 +64,8 @@ pub fn parameter_set(p: &Preset) -> Result<String, String> {
     .map_err(|e| format!("preset {}: {e}", p.name))
 }
 
-/// An SSP 1.0 parameter set (`.ssv`) named `name` of the `(NAME, VALUE)` settings, each typed
-/// as its FMU variable (module doc), with a comment saying it was written by `written_by`; an
-/// error names a setting that is no variable or whose value is not of its type.
-pub fn parameter_set_of<'a>(
-    name: &str,
-    description: &str,
-    written_by: &str,
-    settings: impl IntoIterator<Item = (&'a str, &'a str)>,
-) -> Result<String, String> {
-    let mut s = String::new();
-    s.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    writeln!(s, "<!-- Written by {written_by} -->").unwrap();
-    writeln!(
-        s,
-        "<ssv:ParameterSet version=\"1.0\" name=\"{}\" description=\"{}\"\n    \
-         xmlns:ssv=\"{SSV_NS}\">",
-        escape(name),
-        escape(description)
-    )
-    .unwrap();
-    s.push_str("  <ssv:Parameters>\n");
-    for (name, value) in settings {
-        let var = VARIABLES
-            .iter()
-            .find(|v| v.name == name)
-            .ok_or_else(|| format!("no variable {name}"))?;
-        let bad = || format!("{name} = {value} is not a {:?}", var.kind);
-        let typed = match var.kind {
-            Kind::Real { .. } => {
-                value.parse::<f64>().map_err(|_| bad())?;
-                format!("<ssv:Real value=\"{value}\"/>")
-            }
-            Kind::Integer { .. } => {
-                value.parse::<i32>().map_err(|_| bad())?;
-                format!("<ssv:Integer value=\"{value}\"/>")
-            }
-            Kind::Enumeration { declared, .. } => {
-                let v = value.parse::<i32>().map_err(|_| bad())?;
-                let item = declared
-                    .items
-                    .iter()
-                    .find(|i| i.value == v)
-                    .ok_or_else(bad)?;
-                format!(
-                    "<ssv:Integer value=\"{value}\"/><!-- {}.{} -->",
-                    declared.name, item.name
-                )
-            }
-            Kind::Boolean { .. } => {
-                value.parse::<bool>().map_err(|_| bad())?;
-                format!("<ssv:Boolean value=\"{value}\"/>")
-            }
-            Kind::String { .. } => format!("<ssv:String value=\"{}\"/>", escape(value)),
-        };
-        writeln!(
-            s,
-            "    <ssv:Parameter name=\"{}\">{typed}</ssv:Parameter>",
-            escape(name)
-        )
-        .unwrap();
-    }
-    s.push_str("  </ssv:Parameters>\n</ssv:ParameterSet>\n");
-    Ok(s)
-}
+/// The writer of SSP 1.0 parameter sets is the library's (the browser page writes them too).
+pub use hydraulic_slewing_plate::model::parameter_set::{parameter_set_of, SSV_NS};
 
 /// The `(NAME, VALUE)` settings of an SSP 1.0 parameter set (`.ssv`) in its order, each value as
 /// its typed element (`ssv:Real`, `ssv:Integer`, `ssv:Boolean`, `ssv:String`) gives it: what
@@ -168,9 +105,6 @@ pub fn read_parameter_set(text: &str) -> Result<Vec<(String, String)>, String> {
     }
     Ok(settings)
 }
-
-/// The namespace of SSP 1.0 parameter sets.
-const SSV_NS: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
 
 /// The two forms of the example system: SSP's own, whose system exposes the component's
 /// connectors (fmpy's SSP runner needs every input connected), and the one libcosim 0.0.6 and
