@@ -38,6 +38,7 @@ WARNINGS = {
     "Windows binary": ["rustup target add x86_64-pc-windows-gnu", "binaries/win64"],
     "macOS binaries": ["rustup target add x86_64-apple-darwin aarch64-apple-darwin",
                        "binaries/darwin64"],
+    "WebAssembly component": ["rustup target add wasm32-wasip2", "binaries/wasm32-wasip2"],
 }
 
 
