@@ -3,7 +3,8 @@
 //! away from the defaults, each point multiplied by `1 + n` with `n` complex Gaussian noise of
 //! 1 % RMS (`0.01 (a + j b) / sqrt 2`, `a`, `b` standard normal), written as the command's CSV,
 //! fitted by the command from the defaults. The truths are the generating values, independent of
-//! the fit.
+//! the fit. The paper's own identification (eq. 2) is run backwards from `G_est`'s closed-form
+//! response.
 
 #[path = "common/fmu.rs"]
 mod fmu;
@@ -14,8 +15,14 @@ use std::process::Command;
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
+use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
+use hydraulic_slewing_plate::fragments::loes::LoesParameters;
+use hydraulic_slewing_plate::fragments::servo_valve::g_est;
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::frf::response_at;
+use hydraulic_slewing_plate::model::paper::{
+    G_EST_POLE_1, G_EST_POLE_2, PRINTED_C3, PRINTED_I_B, PRINTED_R7,
+};
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use serde_json::Value as Json;
@@ -399,5 +406,114 @@ fn the_report_page_shows_the_fit_and_each_response() {
             assert!(svg.contains(legend), "frf_{}.svg: no {legend}", k + 1);
         }
         assert!(page.contains(&format!("](frf_{}.svg)", k + 1)), "{page}");
+    }
+}
+
+/// The loop of eq. 1 closed with unity feedback around the identified `G_est(s) = 2.25e6 / (s
+/// (s+65) (s+753))` (eq. 2, the paper's identification), from `r` to `y_pot`: `T = G_est / (1 +
+/// G_est)` at [`POINTS`] log-spaced frequencies, with 1 % complex noise from `seed` (none for
+/// `None`), written as `dir/g_est.csv`; the `--frf` argument for it.
+fn g_est_closed_loop(dir: &Path, seed: Option<u64>) -> String {
+    let mut noise = seed.map(Normal);
+    let mut csv = String::from("f_Hz,re,im\n");
+    for k in 0..POINTS {
+        let f = 0.5 * (120.0f64 / 0.5).powf(k as f64 / (POINTS - 1) as f64);
+        let g = g_est(2.0 * std::f64::consts::PI * f);
+        let mut h = g / (g + 1.0);
+        if let Some(n) = noise.as_mut() {
+            let (a, b) = (n.next(), n.next());
+            h *= nalgebra::Complex::new(1.0 + 0.01 * a / 2f64.sqrt(), 0.01 * b / 2f64.sqrt());
+        }
+        csv.push_str(&format!("{f:?},{:?},{:?}\n", h.re, h.im));
+    }
+    let file = dir.join("g_est.csv");
+    std::fs::write(&file, csv).unwrap();
+    format!("r:y_pot:{}", file.display())
+}
+
+/// The LOES parameters that set `G_est`'s poles and gain (`R7`: `1/(R7 C3)` = 65 + 753 s⁻¹;
+/// `D_m`: `D_m²/(C3 I_b)` = 65 · 753 s⁻²; `k_sv`: the gain), their truths from the closed-form
+/// derivation (`LoesParameters::from_g_est`, docs/model-notes.md item 7), and the fit's start:
+/// the printed `R7` = 3.8e7 (poles at 135 and 364 rad/s), `D_m` and `k_sv` 1.5 and 0.6 times
+/// theirs.
+fn loes_case() -> ([(&'static str, f64); 3], Vec<String>) {
+    let truth = LoesParameters::from_g_est(&ControllerParameters::default());
+    let truths = [
+        ("loes.R7", truth.r7),
+        ("loes.D_m", truth.d_m),
+        ("loes.k_sv", truth.k_sv),
+    ];
+    let start = [PRINTED_R7, 1.5 * truth.d_m, 0.6 * truth.k_sv];
+    let mut extra = vec!["--preset".to_string(), "loes-motor".to_string()];
+    for ((name, _), s) in truths.iter().zip(start) {
+        extra.push("--set".into());
+        extra.push(format!("{name}={s:?}"));
+    }
+    (truths, extra)
+}
+
+/// The paper's identification (eq. 2) run backwards: from the closed-loop response of `G_est`,
+/// the LOES on the motor alone (preset `loes-motor`) gives back the parameters that set its poles
+/// and gain. Exact data: each to 1e-6 (the issue asks 1e-3; the fit does better), so that the
+/// poles `-65` and `-753` rad/s of the fitted `s² + s/(R7 C3) + D_m²/(C3 I_b)` come back too;
+/// 1 % noise: each truth inside its interval, each interval within ±1 %.
+#[test]
+fn the_loes_parameters_come_back_from_a_response_of_eq_2() {
+    let dir = folder("g_est");
+    let (truths, extra) = loes_case();
+    let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+    let fit: Vec<&str> = truths.iter().map(|(n, _)| *n).collect();
+    let (json, _) = identify(&[g_est_closed_loop(&dir, None)], &fit, &extra);
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    let value = |json: &Json, name: &str| json["parameters"][name]["value"].as_f64().unwrap();
+    for (name, truth) in truths {
+        let v = value(&json, name);
+        assert!(
+            (v / truth - 1.0).abs() < 1e-6,
+            "{name}: {v} against {truth}: {json:#}"
+        );
+    }
+    // The poles of the fitted loop, roots of s^2 + s / (R7 C3) + D_m^2 / (C3 I_b).
+    let sum = 1.0 / (value(&json, "loes.R7") * PRINTED_C3);
+    let product = value(&json, "loes.D_m").powi(2) / (PRINTED_C3 * PRINTED_I_B);
+    let root = (sum * sum / 4.0 - product).sqrt();
+    let poles = [sum / 2.0 - root, sum / 2.0 + root];
+    for (pole, paper) in poles.iter().zip([G_EST_POLE_1, G_EST_POLE_2]) {
+        assert!(
+            (pole / paper - 1.0).abs() < 1e-6,
+            "pole -{pole} against eq. 2's -{paper}"
+        );
+    }
+    let (json, _) = identify(&[g_est_closed_loop(&dir, Some(1))], &fit, &extra);
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    for (name, truth) in truths {
+        let (lo, hi) = ci95(&json, name).unwrap_or_else(|| panic!("{name}: no interval"));
+        assert!(
+            lo <= truth && truth <= hi,
+            "{name}: {truth} not in [{lo}, {hi}]: {json:#}"
+        );
+        assert!(hi / lo < 1.02, "{name}: [{lo}, {hi}] is wide: {json:#}");
+    }
+}
+
+/// `G_est` has three numbers (two poles and a gain); the LOES has five constants. With the
+/// chamber's `C3` fitted as well, the data cannot separate it from the others: the command names
+/// the four and gives no interval (the paper keeps the printed `C3` and `I_b`).
+#[test]
+fn eq_2_cannot_separate_the_chamber_from_the_other_loes_constants() {
+    let dir = folder("g_est_c3");
+    let (truths, extra) = loes_case();
+    let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+    let mut fit: Vec<&str> = vec!["loes.C3"];
+    fit.extend(truths.iter().map(|(n, _)| *n));
+    let (json, _) = identify(&[g_est_closed_loop(&dir, Some(1))], &fit, &extra);
+    assert!(
+        warnings(&json).iter().any(|w| w
+            .contains("cannot separate loes.C3, loes.R7, loes.D_m, loes.k_sv")
+            && w.contains("undetermined")),
+        "{json:#}"
+    );
+    for name in fit {
+        assert_eq!(ci95(&json, name), None, "{name}: {json:#}");
     }
 }
