@@ -19,9 +19,9 @@ use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
 use hydraulic_slewing_plate::fragments::loes::LoesParameters;
 use hydraulic_slewing_plate::fragments::servo_valve::g_est;
 use hydraulic_slewing_plate::model::assembly::Assembled;
-use hydraulic_slewing_plate::model::frf::response_at;
+use hydraulic_slewing_plate::model::frf::{frequency_response, response_at};
 use hydraulic_slewing_plate::model::paper::{
-    G_EST_POLE_1, G_EST_POLE_2, PRINTED_C3, PRINTED_I_B, PRINTED_R7,
+    G_EST_POLE_1, G_EST_POLE_2, PRINTED_C3, PRINTED_I_B, PRINTED_R7, TABLE1,
 };
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
@@ -515,5 +515,89 @@ fn eq_2_cannot_separate_the_chamber_from_the_other_loes_constants() {
     );
     for name in fit {
         assert_eq!(ci95(&json, name), None, "{name}: {json:#}");
+    }
+}
+
+/// The worked case's data, `examples/data/table1_fig9b_peaks.csv`, is Table 1's second column
+/// (the peaks of Fig. 9b) as `src/model/paper.rs` holds it, for the three bending modes (the
+/// paper's model has no other peaks, docs/model-notes.md item 9), each with half a unit of its
+/// last printed digit as its uncertainty.
+#[test]
+fn the_table_1_peaks_file_is_the_papers_table_1() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/table1_fig9b_peaks.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("f_Hz,sigma_Hz"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| {
+            let (f, s) = l.split_once(',').unwrap();
+            (f.parse().unwrap(), s.parse().unwrap())
+        })
+        .collect();
+    let bending: Vec<_> = TABLE1.iter().filter(|r| r.mode.1 == 1).collect();
+    assert_eq!(rows.len(), bending.len());
+    for ((f, sigma), row) in rows.iter().zip(bending) {
+        assert_eq!(*f, row.fig9b.hz, "{row:?}");
+        assert_eq!(*sigma, row.fig9b.half_unit(), "{row:?}");
+    }
+}
+
+/// `--peaks`: the resonance peaks of the paper's model (preset `paper-fig9b`) with the plate's
+/// modulus at 7.2e10 Pa, found by `hsp frf`'s peak search on a fine grid, give the modulus back
+/// from the paper's 6.89e10 to 1e-6, each model peak on its measured one; the variance is known
+/// (`s^2 = 1`).
+#[test]
+fn peaks_of_a_known_model_give_back_its_parameter() {
+    let dir = folder("peaks");
+    let truth = 7.2e10;
+    let mut values = Values::from_start(&VARIABLES);
+    hydraulic_slewing_plate::model::presets::apply(&mut values, "paper-fig9b").unwrap();
+    set_by_name(&mut values, "plate.E", &truth.to_string()).unwrap();
+    let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+    let system = Assembled::new(&p.sliding()).unwrap();
+    let lin = system
+        .compiled()
+        .linearize(&system.initial_state(), system.inputs());
+    let response = frequency_response(&lin, "r", "acc_tip", 1.0, 60.0, 20000).unwrap();
+    assert_eq!(response.peaks.len(), 3, "{:?}", response.peaks);
+    let mut csv = String::from("f_Hz,sigma_Hz\n");
+    for (f, _) in &response.peaks {
+        csv.push_str(&format!("{f:?},0.01\n"));
+    }
+    let file = dir.join("peaks.csv");
+    std::fs::write(&file, csv).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
+        .args([
+            "identify",
+            "--json",
+            "--preset",
+            "paper-fig9b",
+            "--fit",
+            "plate.E",
+        ])
+        .args(["--peaks", &format!("r:acc_tip:{}", file.display())])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: Json = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    let v = json["parameters"]["plate.E"]["value"].as_f64().unwrap();
+    assert!(
+        (v / truth - 1.0).abs() < 1e-6,
+        "{v} against {truth}: {json:#}"
+    );
+    assert_eq!(json["variance"].as_f64(), Some(1.0), "{json:#}");
+    let peaks = &json["peaks"][0];
+    for (m, f) in peaks["fitted_Hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(&response.peaks)
+    {
+        assert!((m.as_f64().unwrap() / f.0 - 1.0).abs() < 1e-6, "{peaks}");
     }
 }
