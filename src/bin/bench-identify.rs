@@ -94,23 +94,19 @@ fn summary(t: &mut [f64]) -> (f64, f64, f64) {
     (t[t.len() / 2], t[0], t[t.len() - 1])
 }
 
+/// What to time (module doc).
+#[derive(clap::Parser)]
+struct Args {
+    /// Rounds of each timing
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    rounds: u32,
+    /// A build of hsp to time (repeatable; default: the hsp beside this binary)
+    #[arg(long = "hsp", value_name = "PATH")]
+    builds: Vec<PathBuf>,
+}
+
 fn main() {
-    let mut rounds = 5;
-    let mut builds: Vec<PathBuf> = Vec::new();
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--rounds" => {
-                rounds = args
-                    .next()
-                    .and_then(|s| s.parse().ok())
-                    .filter(|&n: &usize| n > 0)
-                    .expect("--rounds N (N > 0)")
-            }
-            "--hsp" => builds.push(args.next().expect("--hsp PATH").into()),
-            other => panic!("unknown argument {other} (--rounds N, --hsp PATH)"),
-        }
-    }
+    let Args { rounds, mut builds } = clap::Parser::parse();
     if builds.is_empty() {
         let me = std::env::current_exe().expect("this binary's path");
         builds.push(me.with_file_name("hsp"));

@@ -16,12 +16,10 @@
 //! so that with peaks alone the residuals are in units of their standard uncertainties and the
 //! fit's variance is known (`s^2 = 1`, super::intervals).
 
-use std::path::Path;
-
 use hydraulic_slewing_plate::bond_graph::Linearization;
 use hydraulic_slewing_plate::model::frf::frequency_response;
 
-use crate::plot::Table;
+use super::data::Measured;
 
 /// The model's grid: log-spaced, neighbours `1 + GRID_STEP` apart (0.5 %), four points within
 /// the half-power band `2 zeta f` of a mode damped at `zeta` = 0.01, so that no such peak falls
@@ -47,20 +45,9 @@ impl Peaks {
     /// finite, every uncertainty positive and finite, no two frequencies equal; an error names
     /// the file, the data row and the value. The rows are sorted by frequency.
     pub fn read(spec: &str) -> Result<Peaks, String> {
-        let mut parts = spec.splitn(3, ':');
-        let (Some(input), Some(output), Some(file)) = (parts.next(), parts.next(), parts.next())
-        else {
-            return Err(format!("--peaks '{spec}': expected INPUT:OUTPUT:FILE.csv"));
-        };
-        let table = Table::read_csv(Path::new(file))?;
-        let column = |name: &str| {
-            table.column(name).ok_or_else(|| {
-                format!(
-                    "{file}: no column '{name}' (the header has {:?}; expected f_Hz,sigma_Hz)",
-                    table.names
-                )
-            })
-        };
+        let m = Measured::read("--peaks", spec)?;
+        let file = &m.file;
+        let column = |name: &str| m.column(name, "f_Hz,sigma_Hz");
         let (f, sigma) = (column("f_Hz")?, column("sigma_Hz")?);
         if f.is_empty() {
             return Err(format!("{file}: no data rows"));
@@ -86,9 +73,9 @@ impl Peaks {
             return Err(format!("{file}: the peak at {} Hz is given twice", w[0].0));
         }
         Ok(Peaks {
-            input: input.to_string(),
-            output: output.to_string(),
-            file: file.to_string(),
+            input: m.input.clone(),
+            output: m.output.clone(),
+            file: m.file.clone(),
             f_hz: rows.iter().map(|r| r.0).collect(),
             sigma_hz: rows.iter().map(|r| r.1).collect(),
         })
