@@ -5,7 +5,7 @@
 //! which splits the cost of an iteration.
 //!
 //! ```text
-//! cargo build --release --bins && target/release/bench-identify [--rounds 5] [--hsp PATH]...
+//! cargo build --release --bin hsp --bin bench-identify && target/release/bench-identify [--rounds 5] [--hsp PATH]...
 //! ```
 //!
 //! `--hsp PATH` (repeatable; default: the `hsp` beside this binary) times each build given, the
