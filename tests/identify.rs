@@ -333,6 +333,27 @@ fn bad_input_is_refused_naming_the_culprit() {
         "torsion_bar.k",
     ]);
     assert!(e.contains("no column 'im'"), "{e}");
+    // Time series: each file refused with its culprit named.
+    for (text, culprit) in [
+        (
+            "time,r,y_pot,nonsense\n0,0,0.1,1\n0.1,0,0.2,1\n",
+            "column 'nonsense' is neither an input nor an output of the FMU",
+        ),
+        (
+            "time,r,y_pot\n0,0,0.1\n0,0,0.2\n",
+            "data row 2: time 0 is not finite and after",
+        ),
+    ] {
+        let series = dir.join("series.csv");
+        std::fs::write(&series, text).unwrap();
+        let e = run(&[
+            "--series",
+            series.to_str().unwrap(),
+            "--fit",
+            "torsion_bar.k",
+        ]);
+        assert!(e.contains(culprit), "{e}");
+    }
 }
 
 /// Over 20 noise seeds the 95 % intervals of the three-parameter fit hold the truth in 17 to 20
@@ -599,5 +620,90 @@ fn peaks_of_a_known_model_give_back_its_parameter() {
         .zip(&response.peaks)
     {
         assert!((m.as_f64().unwrap() / f.0 - 1.0).abs() < 1e-6, "{peaks}");
+    }
+}
+
+/// A time series of the FMU (FMI 2.0 co-simulation, through its C entry points) with the
+/// parameters `TRUTH`: the default move plus a chirp of `r` (0.1 V, 0.5 to 20 Hz over the 6 s),
+/// `r` held over each 5 ms step, `y_pot` and `acc_tip` read at each point, each output with
+/// Gaussian noise of 1 % of its RMS from `seed`; written as `dir/series.csv`.
+fn series_of_the_fmu(dir: &Path, seed: u64) -> PathBuf {
+    let fmu = Fmu::new();
+    for (name, v) in TRUTH {
+        assert_eq!(fmu.set_real(name, v), Fmi2Status::Ok, "{}", fmu.last());
+    }
+    let (h, steps, stop) = (0.005, 1200, 6.0);
+    let r = |t: f64| {
+        let (f0, f1) = (0.5, 20.0);
+        0.1 * (2.0 * std::f64::consts::PI * (f0 * t + (f1 - f0) * t * t / (2.0 * stop))).sin()
+    };
+    assert_eq!(fmu.init(0.0), Fmi2Status::Ok, "{}", fmu.last());
+    let mut rows: Vec<[f64; 4]> = Vec::new();
+    for k in 0..=steps {
+        let t = k as f64 * h;
+        assert_eq!(fmu.set_real("r", r(t)), Fmi2Status::Ok);
+        let y = ["y_pot", "acc_tip"].map(|n| fmu.get_real(n).1);
+        rows.push([t, r(t), y[0], y[1]]);
+        if k < steps {
+            assert_eq!(fmu.step(t, h), Fmi2Status::Ok, "{}", fmu.last());
+        }
+    }
+    let mut noise = Normal(seed);
+    let rms: Vec<f64> = (2..4)
+        .map(|c| (rows.iter().map(|r| r[c] * r[c]).sum::<f64>() / rows.len() as f64).sqrt())
+        .collect();
+    let mut csv = String::from("time,r,y_pot,acc_tip\n");
+    for row in &rows {
+        let y_pot = row[2] + 0.01 * rms[0] * noise.next();
+        let acc_tip = row[3] + 0.01 * rms[1] * noise.next();
+        csv.push_str(&format!(
+            "{:?},{:?},{y_pot:?},{acc_tip:?}\n",
+            row[0], row[1]
+        ));
+    }
+    let file = dir.join("series.csv");
+    std::fs::write(&file, csv).unwrap();
+    file
+}
+
+/// `--series`: the default move plus a chirp of `r` with 1 % noise gives the three parameters
+/// of the synthetic case back within their intervals, and the same as the frequency-response fit
+/// (seed 1) within the interval of their difference (the two intervals' half-widths added in
+/// quadrature: independent noise).
+#[test]
+fn a_time_series_gives_the_parameters_of_the_frf_fit() {
+    let dir = folder("series");
+    let file = series_of_the_fmu(&dir, 7);
+    let fit: Vec<&str> = TRUTH.iter().map(|(n, _)| *n).collect();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hsp"));
+    cmd.args(["identify", "--json", "--series", file.to_str().unwrap()]);
+    for f in &fit {
+        cmd.args(["--fit", f]);
+    }
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let series: Json = serde_json::from_slice(&out.stdout).unwrap();
+    eprintln!("{series:#}");
+    assert!(warnings(&series).is_empty(), "{series:#}");
+    let frf = fit_three(&folder("series_frf"), 1, None);
+    for (name, truth) in TRUTH {
+        let (lo, hi) = ci95(&series, name).unwrap_or_else(|| panic!("{name}: no interval"));
+        assert!(
+            lo <= truth && truth <= hi,
+            "{name}: {truth} not in [{lo}, {hi}]: {series:#}"
+        );
+        let (flo, fhi) = ci95(&frf, name).unwrap();
+        let value = |j: &Json| j["parameters"][name]["value"].as_f64().unwrap().ln();
+        let half = ((hi.ln() - lo.ln()).powi(2) + (fhi.ln() - flo.ln()).powi(2)).sqrt() / 2.0;
+        assert!(
+            (value(&series) - value(&frf)).abs() <= half,
+            "{name}: series {} against FRF {}, difference beyond its interval ±{half} in ln",
+            value(&series).exp(),
+            value(&frf).exp()
+        );
     }
 }

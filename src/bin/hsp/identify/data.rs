@@ -31,6 +31,16 @@ impl Measured {
         Ok(Measured {
             input: input.to_string(),
             output: output.to_string(),
+            ..Measured::read_file(file)?
+        })
+    }
+
+    /// Reads `file`'s table, with no input and output named (a time series names them in its
+    /// columns).
+    pub fn read_file(file: &str) -> Result<Measured, String> {
+        Ok(Measured {
+            input: String::new(),
+            output: String::new(),
             file: file.to_string(),
             table: Table::read_csv(Path::new(file))?,
         })

@@ -5,13 +5,14 @@
 //! - [`data`]: the measured responses (`--frf`) and the fitted parameters (`--fit`), with their
 //!   coordinates;
 //! - [`peaks`]: measured resonance peaks (`--peaks`) and the model's peaks taken for them;
+//! - [`series`]: measured time series (`--series`) and the FMU's simulation of them;
 //! - [`residuals`]: the weighted residuals and their sensitivities;
 //! - [`optimiser`]: the Levenberg–Marquardt solver;
 //! - [`intervals`]: the intervals, correlations and identifiability warnings;
 //! - [`report`]: the JSON, the text table and the `.ssv`;
 //! - [`page`]: the markdown page with its Bode plots (`--report DIR`).
 //!
-//! Time series (`--series`) and multi-start are a later step.
+//! Multi-start and exact sensitivities are a later step.
 
 mod data;
 mod intervals;
@@ -20,6 +21,7 @@ mod page;
 mod peaks;
 mod report;
 mod residuals;
+mod series;
 
 use std::path::Path;
 
@@ -30,6 +32,7 @@ use data::{Fitted, Frf};
 use optimiser::{levenberg_marquardt, LeastSquares, Stop, Tolerances};
 use peaks::Peaks;
 use residuals::Problem;
+use series::Series;
 
 #[derive(Args)]
 pub struct IdentifyArgs {
@@ -39,7 +42,7 @@ pub struct IdentifyArgs {
     #[arg(
         long = "frf",
         value_name = "INPUT:OUTPUT:FILE.csv",
-        required_unless_present = "peaks"
+        required_unless_present_any = ["peaks", "series"]
     )]
     frf: Vec<String>,
     /// Measured resonance peaks of OUTPUT's response to INPUT, INPUT:OUTPUT:FILE.csv
@@ -47,6 +50,11 @@ pub struct IdentifyArgs {
     /// its standard uncertainty); each is fitted by the model's peak nearest it
     #[arg(long = "peaks", value_name = "INPUT:OUTPUT:FILE.csv")]
     peaks: Vec<String>,
+    /// A measured time series, FILE.csv (repeatable): a CSV with a header and the columns time
+    /// (s) and any of the FMU's inputs (which drive it, held from row to row) and outputs (which
+    /// are fitted)
+    #[arg(long = "series", value_name = "FILE.csv")]
+    series: Vec<String>,
     /// A parameter to fit, NAME or NAME:LOW:HIGH (repeatable); log-scaled where positive
     #[arg(long = "fit", value_name = "NAME[:LOW:HIGH]", required = true)]
     fit: Vec<String>,
@@ -130,12 +138,17 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         .iter()
         .map(|s| Peaks::read(s))
         .collect::<Result<_, _>>()?;
+    let series = args
+        .series
+        .iter()
+        .map(|s| Series::read(s))
+        .collect::<Result<_, _>>()?;
     let fitted = args
         .fit
         .iter()
         .map(|s| Fitted::parse(s, &base))
         .collect::<Result<_, _>>()?;
-    let problem = Problem::new(base, frfs, peaks, fitted)?;
+    let problem = Problem::new(base, frfs, peaks, series, fitted)?;
     let t0: Vec<f64> = problem
         .fitted
         .iter()

@@ -24,20 +24,23 @@ pub fn write(fit: &Fit, starting: &str, dir: &Path) -> Result<Vec<PathBuf>, Stri
     let (before, after) = (problem.responses(&start)?, problem.responses(&values)?);
     let mut written = Vec::new();
     let mut s = format!(
-        "# hsp identify: {} fitted from {} measured responses and {} sets of peaks\n\n\
+        "# hsp identify: {} fitted from {} measured responses, {} sets of peaks and {} time \
+         series\n\n\
          Starting configuration: {}. Cost (sum of the squared weighted residuals) {} after {} \
-         iterations (stop: {:?}), {} residuals, residual variance {}. Sensitivities: central \
-         differences of the exact linearisation (docs/identify.md).\n\n\
+         iterations (stop: {:?}), {} residuals, residual variance {}. Sensitivities: {} \
+         (docs/identify.md).\n\n\
          | parameter | start | fitted | 95 % interval |\n| --- | ---: | ---: | ---: |\n",
         values.len(),
         problem.frfs.len(),
         problem.peaks.len(),
+        problem.series.len(),
         escape(starting),
         num(fit.cost),
         fit.iterations,
         fit.stop,
         problem.len(),
         num(fit.statistics.variance),
+        super::report::sensitivities(fit),
     );
     for (j, f) in problem.fitted.iter().enumerate() {
         let ci = fit.statistics.ci95[j].map_or("none".into(), |(lo, hi)| {

@@ -44,7 +44,7 @@ pub fn json(fit: &Fit) -> serde_json::Value {
         "variance": fit.statistics.variance,
         "evaluations": fit.problem.evaluations.get(),
         "stop": format!("{:?}", fit.stop).to_lowercase(),
-        "sensitivities": "central differences of the exact linearisation",
+        "sensitivities": sensitivities(fit),
         "responses": fit.problem.frfs.iter().zip(&fit.rms).map(|(d, (before, after))| json!({
             "input": d.input,
             "output": d.output,
@@ -63,6 +63,15 @@ pub fn json(fit: &Fit) -> serde_json::Value {
             "fitted_Hz": after,
         })).collect::<Vec<_>>(),
     })
+}
+
+/// How the sensitivities were computed, in words.
+pub fn sensitivities(fit: &Fit) -> &'static str {
+    if fit.problem.series.is_empty() {
+        "central differences of the exact linearisation"
+    } else {
+        "central differences of the exact linearisation and of the simulation"
+    }
 }
 
 /// The table of the fit and its warnings.

@@ -11,7 +11,10 @@
 //! split into its real and imaginary parts, so that a 1 % error counts the same on a resonance
 //! peak and in an anti-resonance, and the responses of outputs in different units weigh alike.
 //! Measured resonance peaks (`--peaks`) add one residual each, the model's peak's error in units
-//! of the measured one's uncertainty ([`super::peaks`]).
+//! of the measured one's uncertainty ([`super::peaks`]); measured time series (`--series`) one
+//! per output and time, the error of the FMU's simulation relative to the output's RMS
+//! ([`super::series`]). The time series' sensitivities are central differences of the
+//! simulation (below).
 //!
 //! **Sensitivities, a first step:** the derivatives of the residuals with respect to the fitted
 //! parameters (in their coordinates `z`, [`super::data::Scale`]) are central finite differences
@@ -30,6 +33,7 @@ use nalgebra::{Complex, DMatrix, DVector};
 
 use super::data::{Fitted, Frf};
 use super::peaks::Peaks;
+use super::series::Series;
 
 /// The central-difference step in `z` (a relative step of 1e-4 for a log-scaled parameter):
 /// truncation error of order `STEP^2` = 1e-8 of the sensitivity, round-off of order 1e-16 /
@@ -42,6 +46,7 @@ pub struct Problem {
     pub base: Values,
     pub frfs: Vec<Frf>,
     pub peaks: Vec<Peaks>,
+    pub series: Vec<Series>,
     pub fitted: Vec<Fitted>,
     /// Per response: the index of its input and its output in the linearisation.
     ports: Vec<(usize, usize)>,
@@ -56,15 +61,16 @@ impl Problem {
         base: Values,
         frfs: Vec<Frf>,
         peaks: Vec<Peaks>,
+        series: Vec<Series>,
         fitted: Vec<Fitted>,
     ) -> Result<Problem, String> {
         if fitted.is_empty() {
             return Err("nothing to fit: give at least one --fit NAME".into());
         }
-        if frfs.is_empty() && peaks.is_empty() {
+        if frfs.is_empty() && peaks.is_empty() && series.is_empty() {
             return Err(
-                "no data: give at least one --frf INPUT:OUTPUT:FILE.csv or --peaks \
-                 INPUT:OUTPUT:FILE.csv"
+                "no data: give at least one --frf INPUT:OUTPUT:FILE.csv, --peaks \
+                 INPUT:OUTPUT:FILE.csv or --series FILE.csv"
                     .into(),
             );
         }
@@ -100,6 +106,7 @@ impl Problem {
             base,
             frfs,
             peaks,
+            series,
             fitted,
             ports,
             evaluations: std::cell::Cell::new(0),
@@ -110,12 +117,14 @@ impl Problem {
     pub fn len(&self) -> usize {
         2 * self.frfs.iter().map(|d| d.f_hz.len()).sum::<usize>()
             + self.peaks.iter().map(|d| d.f_hz.len()).sum::<usize>()
+            + self.series.iter().map(Series::len).sum::<usize>()
     }
 
     /// Whether the residuals' variance is known: peaks alone, each residual in units of its
-    /// standard uncertainty; with a frequency response it is estimated from the fit.
+    /// standard uncertainty; with a frequency response or a time series it is estimated from
+    /// the fit.
     pub fn known_variance(&self) -> bool {
-        self.frfs.is_empty()
+        self.frfs.is_empty() && self.series.is_empty()
     }
 
     /// The starting configuration with the fitted parameters at `p`; an error names a value the
@@ -184,6 +193,12 @@ impl Problem {
             let model = d.model(&lin)?;
             for ((m, f), sigma) in model.iter().zip(&d.f_hz).zip(&d.sigma_hz) {
                 r.push((m - f) / sigma);
+            }
+        }
+        if !self.series.is_empty() {
+            let values = self.values_at(p)?;
+            for d in &self.series {
+                d.residuals(&d.simulate(&values)?, &mut r);
             }
         }
         Ok(DVector::from_vec(r))
