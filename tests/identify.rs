@@ -3,7 +3,8 @@
 //! away from the defaults, each point multiplied by `1 + n` with `n` complex Gaussian noise of
 //! 1 % RMS (`0.01 (a + j b) / sqrt 2`, `a`, `b` standard normal), written as the command's CSV,
 //! fitted by the command from the defaults. The truths are the generating values, independent of
-//! the fit.
+//! the fit. The paper's own identification (eq. 2) is run backwards from `G_est`'s closed-form
+//! response.
 
 #[path = "common/fmu.rs"]
 mod fmu;
@@ -14,8 +15,14 @@ use std::process::Command;
 use fmu::Fmu;
 use hydraulic_slewing_plate::fmi2::ffi::Fmi2Status;
 use hydraulic_slewing_plate::fmu::{Experiment, Values};
+use hydraulic_slewing_plate::fragments::controller::ControllerParameters;
+use hydraulic_slewing_plate::fragments::loes::LoesParameters;
+use hydraulic_slewing_plate::fragments::servo_valve::g_est;
 use hydraulic_slewing_plate::model::assembly::Assembled;
-use hydraulic_slewing_plate::model::frf::response_at;
+use hydraulic_slewing_plate::model::frf::{frequency_response, response_at};
+use hydraulic_slewing_plate::model::paper::{
+    G_EST_POLE_1, G_EST_POLE_2, PRINTED_C3, PRINTED_I_B, PRINTED_R7, TABLE1,
+};
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use serde_json::Value as Json;
@@ -326,6 +333,27 @@ fn bad_input_is_refused_naming_the_culprit() {
         "torsion_bar.k",
     ]);
     assert!(e.contains("no column 'im'"), "{e}");
+    // Time series: each file refused with its culprit named.
+    for (text, culprit) in [
+        (
+            "time,r,y_pot,nonsense\n0,0,0.1,1\n0.1,0,0.2,1\n",
+            "column 'nonsense' is neither an input nor an output of the FMU",
+        ),
+        (
+            "time,r,y_pot\n0,0,0.1\n0,0,0.2\n",
+            "data row 2: time 0 is not finite and after",
+        ),
+    ] {
+        let series = dir.join("series.csv");
+        std::fs::write(&series, text).unwrap();
+        let e = run(&[
+            "--series",
+            series.to_str().unwrap(),
+            "--fit",
+            "torsion_bar.k",
+        ]);
+        assert!(e.contains(culprit), "{e}");
+    }
 }
 
 /// Over 20 noise seeds the 95 % intervals of the three-parameter fit hold the truth in 17 to 20
@@ -399,5 +427,283 @@ fn the_report_page_shows_the_fit_and_each_response() {
             assert!(svg.contains(legend), "frf_{}.svg: no {legend}", k + 1);
         }
         assert!(page.contains(&format!("](frf_{}.svg)", k + 1)), "{page}");
+    }
+}
+
+/// The loop of eq. 1 closed with unity feedback around the identified `G_est(s) = 2.25e6 / (s
+/// (s+65) (s+753))` (eq. 2, the paper's identification), from `r` to `y_pot`: `T = G_est / (1 +
+/// G_est)` at [`POINTS`] log-spaced frequencies, with 1 % complex noise from `seed` (none for
+/// `None`), written as `dir/g_est.csv`; the `--frf` argument for it.
+fn g_est_closed_loop(dir: &Path, seed: Option<u64>) -> String {
+    let mut noise = seed.map(Normal);
+    let mut csv = String::from("f_Hz,re,im\n");
+    for k in 0..POINTS {
+        let f = 0.5 * (120.0f64 / 0.5).powf(k as f64 / (POINTS - 1) as f64);
+        let g = g_est(2.0 * std::f64::consts::PI * f);
+        let mut h = g / (g + 1.0);
+        if let Some(n) = noise.as_mut() {
+            let (a, b) = (n.next(), n.next());
+            h *= nalgebra::Complex::new(1.0 + 0.01 * a / 2f64.sqrt(), 0.01 * b / 2f64.sqrt());
+        }
+        csv.push_str(&format!("{f:?},{:?},{:?}\n", h.re, h.im));
+    }
+    let file = dir.join("g_est.csv");
+    std::fs::write(&file, csv).unwrap();
+    format!("r:y_pot:{}", file.display())
+}
+
+/// The LOES parameters that set `G_est`'s poles and gain (`R7`: `1/(R7 C3)` = 65 + 753 s⁻¹;
+/// `D_m`: `D_m²/(C3 I_b)` = 65 · 753 s⁻²; `k_sv`: the gain), their truths from the closed-form
+/// derivation (`LoesParameters::from_g_est`, docs/model-notes.md item 7), and the fit's start:
+/// the printed `R7` = 3.8e7 (poles at 135 and 364 rad/s), `D_m` and `k_sv` 1.5 and 0.6 times
+/// theirs.
+fn loes_case() -> ([(&'static str, f64); 3], Vec<String>) {
+    let truth = LoesParameters::from_g_est(&ControllerParameters::default());
+    let truths = [
+        ("loes.R7", truth.r7),
+        ("loes.D_m", truth.d_m),
+        ("loes.k_sv", truth.k_sv),
+    ];
+    let start = [PRINTED_R7, 1.5 * truth.d_m, 0.6 * truth.k_sv];
+    let mut extra = vec!["--preset".to_string(), "loes-motor".to_string()];
+    for ((name, _), s) in truths.iter().zip(start) {
+        extra.push("--set".into());
+        extra.push(format!("{name}={s:?}"));
+    }
+    (truths, extra)
+}
+
+/// The paper's identification (eq. 2) run backwards: from the closed-loop response of `G_est`,
+/// the LOES on the motor alone (preset `loes-motor`) gives back the parameters that set its poles
+/// and gain. Exact data: each to 1e-6 (the issue asks 1e-3; the fit does better), so that the
+/// poles `-65` and `-753` rad/s of the fitted `s² + s/(R7 C3) + D_m²/(C3 I_b)` come back too;
+/// 1 % noise: each truth inside its interval, each interval within ±1 %.
+#[test]
+fn the_loes_parameters_come_back_from_a_response_of_eq_2() {
+    let dir = folder("g_est");
+    let (truths, extra) = loes_case();
+    let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+    let fit: Vec<&str> = truths.iter().map(|(n, _)| *n).collect();
+    let (json, _) = identify(&[g_est_closed_loop(&dir, None)], &fit, &extra);
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    let value = |json: &Json, name: &str| json["parameters"][name]["value"].as_f64().unwrap();
+    for (name, truth) in truths {
+        let v = value(&json, name);
+        assert!(
+            (v / truth - 1.0).abs() < 1e-6,
+            "{name}: {v} against {truth}: {json:#}"
+        );
+    }
+    // The poles of the fitted loop, roots of s^2 + s / (R7 C3) + D_m^2 / (C3 I_b).
+    let sum = 1.0 / (value(&json, "loes.R7") * PRINTED_C3);
+    let product = value(&json, "loes.D_m").powi(2) / (PRINTED_C3 * PRINTED_I_B);
+    let root = (sum * sum / 4.0 - product).sqrt();
+    let poles = [sum / 2.0 - root, sum / 2.0 + root];
+    for (pole, paper) in poles.iter().zip([G_EST_POLE_1, G_EST_POLE_2]) {
+        assert!(
+            (pole / paper - 1.0).abs() < 1e-6,
+            "pole -{pole} against eq. 2's -{paper}"
+        );
+    }
+    let (json, _) = identify(&[g_est_closed_loop(&dir, Some(1))], &fit, &extra);
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    for (name, truth) in truths {
+        let (lo, hi) = ci95(&json, name).unwrap_or_else(|| panic!("{name}: no interval"));
+        assert!(
+            lo <= truth && truth <= hi,
+            "{name}: {truth} not in [{lo}, {hi}]: {json:#}"
+        );
+        assert!(hi / lo < 1.02, "{name}: [{lo}, {hi}] is wide: {json:#}");
+    }
+}
+
+/// `G_est` has three numbers (two poles and a gain); the LOES has five constants. With the
+/// chamber's `C3` fitted as well, the data cannot separate it from the others: the command names
+/// the four and gives no interval (the paper keeps the printed `C3` and `I_b`).
+#[test]
+fn eq_2_cannot_separate_the_chamber_from_the_other_loes_constants() {
+    let dir = folder("g_est_c3");
+    let (truths, extra) = loes_case();
+    let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+    let mut fit: Vec<&str> = vec!["loes.C3"];
+    fit.extend(truths.iter().map(|(n, _)| *n));
+    let (json, _) = identify(&[g_est_closed_loop(&dir, Some(1))], &fit, &extra);
+    assert!(
+        warnings(&json).iter().any(|w| w
+            .contains("cannot separate loes.C3, loes.R7, loes.D_m, loes.k_sv")
+            && w.contains("undetermined")),
+        "{json:#}"
+    );
+    for name in fit {
+        assert_eq!(ci95(&json, name), None, "{name}: {json:#}");
+    }
+}
+
+/// The worked case's data, `examples/data/table1_fig9b_peaks.csv`, is Table 1's second column
+/// (the peaks of Fig. 9b) as `src/model/paper.rs` holds it, for the three bending modes (the
+/// paper's model has no other peaks, docs/model-notes.md item 9), each with half a unit of its
+/// last printed digit as its uncertainty.
+#[test]
+fn the_table_1_peaks_file_is_the_papers_table_1() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/table1_fig9b_peaks.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("f_Hz,sigma_Hz"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| {
+            let (f, s) = l.split_once(',').unwrap();
+            (f.parse().unwrap(), s.parse().unwrap())
+        })
+        .collect();
+    let bending: Vec<_> = TABLE1.iter().filter(|r| r.mode.1 == 1).collect();
+    assert_eq!(rows.len(), bending.len());
+    for ((f, sigma), row) in rows.iter().zip(bending) {
+        assert_eq!(*f, row.fig9b.hz, "{row:?}");
+        assert_eq!(*sigma, row.fig9b.half_unit(), "{row:?}");
+    }
+}
+
+/// `--peaks`: the resonance peaks of the paper's model (preset `paper-fig9b`) with the plate's
+/// modulus at 7.2e10 Pa, found by `hsp frf`'s peak search on a fine grid, give the modulus back
+/// from the paper's 6.89e10 to 1e-6, each model peak on its measured one; the variance is known
+/// (`s^2 = 1`).
+#[test]
+fn peaks_of_a_known_model_give_back_its_parameter() {
+    let dir = folder("peaks");
+    let truth = 7.2e10;
+    let mut values = Values::from_start(&VARIABLES);
+    hydraulic_slewing_plate::model::presets::apply(&mut values, "paper-fig9b").unwrap();
+    set_by_name(&mut values, "plate.E", &truth.to_string()).unwrap();
+    let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+    let system = Assembled::new(&p.sliding()).unwrap();
+    let lin = system
+        .compiled()
+        .linearize(&system.initial_state(), system.inputs());
+    let response = frequency_response(&lin, "r", "acc_tip", 1.0, 60.0, 20000).unwrap();
+    assert_eq!(response.peaks.len(), 3, "{:?}", response.peaks);
+    let mut csv = String::from("f_Hz,sigma_Hz\n");
+    for (f, _) in &response.peaks {
+        csv.push_str(&format!("{f:?},0.01\n"));
+    }
+    let file = dir.join("peaks.csv");
+    std::fs::write(&file, csv).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
+        .args([
+            "identify",
+            "--json",
+            "--preset",
+            "paper-fig9b",
+            "--fit",
+            "plate.E",
+        ])
+        .args(["--peaks", &format!("r:acc_tip:{}", file.display())])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: Json = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(warnings(&json).is_empty(), "{json:#}");
+    let v = json["parameters"]["plate.E"]["value"].as_f64().unwrap();
+    assert!(
+        (v / truth - 1.0).abs() < 1e-6,
+        "{v} against {truth}: {json:#}"
+    );
+    assert_eq!(json["variance"].as_f64(), Some(1.0), "{json:#}");
+    let peaks = &json["peaks"][0];
+    for (m, f) in peaks["fitted_Hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(&response.peaks)
+    {
+        assert!((m.as_f64().unwrap() / f.0 - 1.0).abs() < 1e-6, "{peaks}");
+    }
+}
+
+/// A time series of the FMU (FMI 2.0 co-simulation, through its C entry points) with the
+/// parameters `TRUTH`: the default move plus a chirp of `r` (0.1 V, 0.5 to 20 Hz over the 6 s),
+/// `r` held over each 5 ms step, `y_pot` and `acc_tip` read at each point, each output with
+/// Gaussian noise of 1 % of its RMS from `seed`; written as `dir/series.csv`.
+fn series_of_the_fmu(dir: &Path, seed: u64) -> PathBuf {
+    let fmu = Fmu::new();
+    for (name, v) in TRUTH {
+        assert_eq!(fmu.set_real(name, v), Fmi2Status::Ok, "{}", fmu.last());
+    }
+    let (h, steps, stop) = (0.005, 1200, 6.0);
+    let r = |t: f64| {
+        let (f0, f1) = (0.5, 20.0);
+        0.1 * (2.0 * std::f64::consts::PI * (f0 * t + (f1 - f0) * t * t / (2.0 * stop))).sin()
+    };
+    assert_eq!(fmu.init(0.0), Fmi2Status::Ok, "{}", fmu.last());
+    let mut rows: Vec<[f64; 4]> = Vec::new();
+    for k in 0..=steps {
+        let t = k as f64 * h;
+        assert_eq!(fmu.set_real("r", r(t)), Fmi2Status::Ok);
+        let y = ["y_pot", "acc_tip"].map(|n| fmu.get_real(n).1);
+        rows.push([t, r(t), y[0], y[1]]);
+        if k < steps {
+            assert_eq!(fmu.step(t, h), Fmi2Status::Ok, "{}", fmu.last());
+        }
+    }
+    let mut noise = Normal(seed);
+    let rms: Vec<f64> = (2..4)
+        .map(|c| (rows.iter().map(|r| r[c] * r[c]).sum::<f64>() / rows.len() as f64).sqrt())
+        .collect();
+    let mut csv = String::from("time,r,y_pot,acc_tip\n");
+    for row in &rows {
+        let y_pot = row[2] + 0.01 * rms[0] * noise.next();
+        let acc_tip = row[3] + 0.01 * rms[1] * noise.next();
+        csv.push_str(&format!(
+            "{:?},{:?},{y_pot:?},{acc_tip:?}\n",
+            row[0], row[1]
+        ));
+    }
+    let file = dir.join("series.csv");
+    std::fs::write(&file, csv).unwrap();
+    file
+}
+
+/// `--series`: the default move plus a chirp of `r` with 1 % noise gives the three parameters
+/// of the synthetic case back within their intervals, and the same as the frequency-response fit
+/// (seed 1) within the interval of their difference (the two intervals' half-widths added in
+/// quadrature: independent noise).
+#[test]
+fn a_time_series_gives_the_parameters_of_the_frf_fit() {
+    let dir = folder("series");
+    let file = series_of_the_fmu(&dir, 7);
+    let fit: Vec<&str> = TRUTH.iter().map(|(n, _)| *n).collect();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hsp"));
+    cmd.args(["identify", "--json", "--series", file.to_str().unwrap()]);
+    for f in &fit {
+        cmd.args(["--fit", f]);
+    }
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let series: Json = serde_json::from_slice(&out.stdout).unwrap();
+    eprintln!("{series:#}");
+    assert!(warnings(&series).is_empty(), "{series:#}");
+    let frf = fit_three(&folder("series_frf"), 1, None);
+    for (name, truth) in TRUTH {
+        let (lo, hi) = ci95(&series, name).unwrap_or_else(|| panic!("{name}: no interval"));
+        assert!(
+            lo <= truth && truth <= hi,
+            "{name}: {truth} not in [{lo}, {hi}]: {series:#}"
+        );
+        let (flo, fhi) = ci95(&frf, name).unwrap();
+        let value = |j: &Json| j["parameters"][name]["value"].as_f64().unwrap().ln();
+        let half = ((hi.ln() - lo.ln()).powi(2) + (fhi.ln() - flo.ln()).powi(2)).sqrt() / 2.0;
+        assert!(
+            (value(&series) - value(&frf)).abs() <= half,
+            "{name}: series {} against FRF {}, difference beyond its interval ±{half} in ln",
+            value(&series).exp(),
+            value(&frf).exp()
+        );
     }
 }

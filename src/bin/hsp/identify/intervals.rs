@@ -3,7 +3,10 @@
 //! over its scale) at the optimum.
 //!
 //! - Residual variance `s^2 = cost / (N - k)` (`N` real residuals, `k` parameters), so the
-//!   weights need only be relative; covariance `C = s^2 (J^T J)^-1` (the Gauss–Newton
+//!   weights need only be relative; `s^2 = 1` where the residuals are in units of known standard
+//!   uncertainties (measured peaks alone, `super::peaks`), with a warning when the cost exceeds
+//!   the 95 % quantile of chi-squared on `max(N - k, 1)` degrees of freedom (the model misses the
+//!   data by more than their uncertainties); covariance `C = s^2 (J^T J)^-1` (the Gauss–Newton
 //!   approximation), interval `z ± 1.96 sqrt(C_ii)` (the normal 97.5 % quantile; `N` is large),
 //!   mapped back to `p` (asymmetric for a log-scaled parameter).
 //! - **Not seen:** a parameter whose column of `J` has an RMS below [`NOT_SEEN`] (a change of
@@ -13,7 +16,8 @@
 //!   parameters `G`'s eigenvalues are `1 ± rho`, so this is exactly `|correlation| > 0.99`; for
 //!   more it also finds a combination of three or more. The warning names the direction of
 //!   change the data barely see (the eigenvector, as changes of the `z`, the parameters whose
-//!   component is at least [`COMPONENT`]).
+//!   change is at least [`COMPONENT`] of the largest; one parameter alone: the data barely see
+//!   it).
 //! - **Undetermined:** such an eigenvalue below [`UNDETERMINED`] (numerically singular at the
 //!   sensitivities' accuracy, `residuals.rs`): the parameters in its direction get no interval.
 //!   The others' covariance is computed with `G`'s eigenvalues floored at [`UNDETERMINED`].
@@ -31,7 +35,8 @@ pub const NOT_SEEN: f64 = 1e-6;
 pub const WEAK: f64 = 1e-2;
 /// The eigenvalue below which the direction is undetermined: no interval.
 pub const UNDETERMINED: f64 = 1e-6;
-/// The smallest component of an eigenvector that counts a parameter into its combination.
+/// The smallest change of a parameter's `z` along a weak direction, relative to the largest,
+/// that counts it into the combination.
 pub const COMPONENT: f64 = 0.1;
 
 /// What the fit's data determine.
@@ -56,23 +61,52 @@ fn coordinate(f: &Fitted) -> String {
     }
 }
 
-/// The statistics of the fit at `z` with the Jacobian `jac` (`N x k`) and the cost `|r|^2`.
+/// The 95 % quantile of chi-squared on `nu` degrees of freedom, by Wilson and Hilferty's cube
+/// (1931): within 3 % of the exact value at `nu` = 1 (3.75 against 3.84), closer above.
+pub fn chi2_95(nu: usize) -> f64 {
+    let c = 2.0 / (9.0 * nu as f64);
+    nu as f64 * (1.0 - c + 1.644_853_626_951_472_2 * c.sqrt()).powi(3)
+}
+
+/// The statistics of the fit at `z` with the Jacobian `jac` (`N x k`) and the cost `|r|^2`;
+/// `known`: the residuals are in units of known standard uncertainties (module doc).
 pub fn statistics(
     fitted: &[Fitted],
     z: &[f64],
     jac: &DMatrix<f64>,
     cost: f64,
+    known: bool,
 ) -> Result<Statistics, String> {
     let (n, k) = jac.shape();
-    if n <= k {
+    if n < k || (n == k && !known) {
         return Err(format!(
             "{k} parameters to fit from {n} residuals: the data need more points than the fit \
-             has parameters"
+             has parameters{}",
+            if known {
+                ""
+            } else {
+                " (as many, with known uncertainties)"
+            }
         ));
     }
-    let variance = cost / (n - k) as f64;
-    let norms: Vec<f64> = (0..k).map(|j| jac.column(j).norm()).collect();
     let mut warnings = Vec::new();
+    let variance = if known {
+        // With as many residuals as parameters a model that explains the data reaches them:
+        // one degree of freedom is then the check's generous side.
+        let nu = (n - k).max(1);
+        if cost > chi2_95(nu) {
+            warnings.push(format!(
+                "the fitted model misses the data by more than their uncertainties: cost {cost:.3} \
+                 above {:.3}, the 95 % quantile of chi-squared on {nu} degree(s) of freedom; the \
+                 intervals assume the model can explain the data",
+                chi2_95(nu),
+            ));
+        }
+        1.0
+    } else {
+        cost / (n - k) as f64
+    };
+    let norms: Vec<f64> = (0..k).map(|j| jac.column(j).norm()).collect();
     let seen: Vec<usize> = (0..k)
         .filter(|&j| {
             let rms = norms[j] / (n as f64).sqrt();
@@ -114,7 +148,9 @@ pub fn statistics(
         // The direction as changes of the z: v_a / D_a, the largest scaled to 1.
         let dz: Vec<f64> = (0..m).map(|a| v[a] / norms[seen[a]]).collect();
         let biggest = dz.iter().fold(0.0f64, |acc, x| acc.max(x.abs()));
-        let members: Vec<usize> = (0..m).filter(|&a| v[a].abs() >= COMPONENT).collect();
+        let members: Vec<usize> = (0..m)
+            .filter(|&a| dz[a].abs() >= COMPONENT * biggest)
+            .collect();
         let names: Vec<&str> = members
             .iter()
             .map(|&a| fitted[seen[a]].name.as_str())
@@ -140,10 +176,14 @@ pub fn statistics(
         } else {
             format!("{lambda:.1e}; rule: below {WEAK}")
         };
+        let what = if names.len() == 1 {
+            format!("the data barely see {}", names[0])
+        } else {
+            format!("the data cannot separate {}", names.join(", "))
+        };
         warnings.push(format!(
-            "the data cannot separate {}: the change ({}) leaves the fit all but unchanged \
-             (eigenvalue of the scaled information matrix {size})",
-            names.join(", "),
+            "{what}: the change ({}) leaves the fit all but unchanged (eigenvalue of the scaled \
+             information matrix {size})",
             change.join(", "),
         ));
     }
@@ -203,11 +243,44 @@ mod tests {
         let f = fitted(&["torsion_bar.k"]);
         let (n, c, cost) = (101, 0.5, 2.0);
         let z = [f[0].z_of(2500.0)];
-        let st = statistics(&f, &z, &DMatrix::from_element(n, 1, c), cost).unwrap();
+        let st = statistics(&f, &z, &DMatrix::from_element(n, 1, c), cost, false).unwrap();
         let half = Z95 * (cost / (n - 1) as f64 / (n as f64 * c * c)).sqrt();
         let (lo, hi) = st.ci95[0].unwrap();
         assert!((lo.ln() - (z[0] - half)).abs() < 1e-14 && (hi.ln() - (z[0] + half)).abs() < 1e-14);
         assert!(st.warnings.is_empty(), "{:?}", st.warnings);
+    }
+
+    /// Wilson–Hilferty against the tabulated 95 % quantiles of chi-squared (Abramowitz and
+    /// Stegun, table 26.8): 3.841 (1), 5.991 (2), 18.307 (10).
+    #[test]
+    fn chi_squared_quantiles_match_the_table() {
+        for (nu, table, tol) in [(1, 3.841, 0.03), (2, 5.991, 0.01), (10, 18.307, 0.001)] {
+            let q = chi2_95(nu);
+            assert!((q / table - 1.0).abs() < tol, "{nu}: {q} against {table}");
+        }
+    }
+
+    /// Known uncertainties: the covariance is `(J^T J)^-1` without `s^2`, and a cost beyond
+    /// chi-squared's quantile is a warning.
+    #[test]
+    fn known_uncertainties_set_the_variance_and_a_miss_is_reported() {
+        let f = fitted(&["torsion_bar.k"]);
+        let z = [f[0].z_of(2500.0)];
+        let jac = DMatrix::from_element(3, 1, 2.0);
+        let st = statistics(&f, &z, &jac, 1.0, true).unwrap();
+        assert_eq!(st.variance, 1.0);
+        let (lo, hi) = st.ci95[0].unwrap();
+        assert!((hi.ln() - z[0] - Z95 / 12f64.sqrt()).abs() < 1e-14 && lo < 2500.0);
+        assert!(st.warnings.is_empty(), "{:?}", st.warnings);
+        let st = statistics(&f, &z, &jac, 10.0, true).unwrap();
+        assert!(
+            st.warnings[0].contains("misses the data"),
+            "{:?}",
+            st.warnings
+        );
+        // As many residuals as parameters: allowed with known uncertainties only.
+        assert!(statistics(&f, &z, &jac.rows(0, 1).into_owned(), 0.0, true).is_ok());
+        assert!(statistics(&f, &z, &jac.rows(0, 1).into_owned(), 0.0, false).is_err());
     }
 
     /// Two parameters with the same column (they enter as a product), a third apart, a fourth
@@ -234,7 +307,7 @@ mod tests {
             }
             _ => 0.0,
         });
-        let st = statistics(&f, &z, &jac, 1.0).unwrap();
+        let st = statistics(&f, &z, &jac, 1.0, false).unwrap();
         assert_eq!(st.ci95[0], None);
         assert_eq!(st.ci95[1], None);
         assert_eq!(st.ci95[3], None);
@@ -251,7 +324,14 @@ mod tests {
             && w.contains("undetermined")));
         assert_eq!(st.correlations[3][0], None);
         // Only the unseen one: no interval, a warning, no eigenvalue problem of size 0.
-        let st = statistics(&f[3..], &z[3..], &jac.columns(3, 1).into_owned(), 1.0).unwrap();
+        let st = statistics(
+            &f[3..],
+            &z[3..],
+            &jac.columns(3, 1).into_owned(),
+            1.0,
+            false,
+        )
+        .unwrap();
         assert_eq!(st.ci95, vec![None]);
         assert_eq!(st.correlations, vec![vec![Some(1.0)]]);
         assert_eq!(st.warnings.len(), 1, "{:?}", st.warnings);

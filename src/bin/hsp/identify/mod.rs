@@ -1,22 +1,27 @@
-//! `hsp identify`: fits chosen parameters of the FMU to measured frequency responses, with 95 %
+//! `hsp identify`: fits chosen parameters of the FMU to measured frequency responses and
+//! resonance peaks, with 95 %
 //! confidence intervals and a warning naming what the data cannot determine, and writes the
 //! fitted configuration as an SSP parameter set (docs/identify.md). Split by job:
 //! - [`data`]: the measured responses (`--frf`) and the fitted parameters (`--fit`), with their
 //!   coordinates;
+//! - [`peaks`]: measured resonance peaks (`--peaks`) and the model's peaks taken for them;
+//! - [`series`]: measured time series (`--series`) and the FMU's simulation of them;
 //! - [`residuals`]: the weighted residuals and their sensitivities;
 //! - [`optimiser`]: the Levenberg–Marquardt solver;
 //! - [`intervals`]: the intervals, correlations and identifiability warnings;
 //! - [`report`]: the JSON, the text table and the `.ssv`;
 //! - [`page`]: the markdown page with its Bode plots (`--report DIR`).
 //!
-//! Time series (`--series`) and multi-start are a later step.
+//! Multi-start and exact sensitivities are a later step.
 
 mod data;
 mod intervals;
 mod optimiser;
 mod page;
+mod peaks;
 mod report;
 mod residuals;
+mod series;
 
 use std::path::Path;
 
@@ -25,15 +30,31 @@ use nalgebra::{DMatrix, DVector};
 
 use data::{Fitted, Frf};
 use optimiser::{levenberg_marquardt, LeastSquares, Stop, Tolerances};
+use peaks::Peaks;
 use residuals::Problem;
+use series::Series;
 
 #[derive(Args)]
 pub struct IdentifyArgs {
     /// A measured frequency response, INPUT:OUTPUT:FILE.csv (repeatable): a CSV with a header
     /// and the columns f_Hz,re,im (the complex response of OUTPUT to INPUT in SI units) and
     /// optionally weight
-    #[arg(long = "frf", value_name = "INPUT:OUTPUT:FILE.csv", required = true)]
+    #[arg(
+        long = "frf",
+        value_name = "INPUT:OUTPUT:FILE.csv",
+        required_unless_present_any = ["peaks", "series"]
+    )]
     frf: Vec<String>,
+    /// Measured resonance peaks of OUTPUT's response to INPUT, INPUT:OUTPUT:FILE.csv
+    /// (repeatable): a CSV with a header and the columns f_Hz,sigma_Hz (each peak's frequency and
+    /// its standard uncertainty); each is fitted by the model's peak nearest it
+    #[arg(long = "peaks", value_name = "INPUT:OUTPUT:FILE.csv")]
+    peaks: Vec<String>,
+    /// A measured time series, FILE.csv (repeatable): a CSV with a header and the columns time
+    /// (s) and any of the FMU's inputs (which drive it, held from row to row) and outputs (which
+    /// are fitted)
+    #[arg(long = "series", value_name = "FILE.csv")]
+    series: Vec<String>,
     /// A parameter to fit, NAME or NAME:LOW:HIGH (repeatable); log-scaled where positive
     #[arg(long = "fit", value_name = "NAME[:LOW:HIGH]", required = true)]
     fit: Vec<String>,
@@ -93,6 +114,8 @@ pub struct Fit {
     pub statistics: intervals::Statistics,
     /// Per measured response, the RMS weighted relative error at the start and fitted.
     pub rms: Vec<(f64, f64)>,
+    /// Per `--peaks`, the model's peaks taken for the measured ones at the start and fitted.
+    pub model_peaks: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Fit {
@@ -110,12 +133,22 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         .iter()
         .map(|s| Frf::read(s))
         .collect::<Result<_, _>>()?;
+    let peaks = args
+        .peaks
+        .iter()
+        .map(|s| Peaks::read(s))
+        .collect::<Result<_, _>>()?;
+    let series = args
+        .series
+        .iter()
+        .map(|s| Series::read(s))
+        .collect::<Result<_, _>>()?;
     let fitted = args
         .fit
         .iter()
         .map(|s| Fitted::parse(s, &base))
         .collect::<Result<_, _>>()?;
-    let problem = Problem::new(base, frfs, fitted)?;
+    let problem = Problem::new(base, frfs, peaks, series, fitted)?;
     let t0: Vec<f64> = problem
         .fitted
         .iter()
@@ -129,7 +162,13 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
     let out = levenberg_marquardt(&unconstrained, &t0, tolerances)?;
     let z = unconstrained.z(&out.t);
     let jac = problem.jacobian_z(&z)?;
-    let mut statistics = intervals::statistics(&problem.fitted, &z, &jac, out.cost)?;
+    let mut statistics = intervals::statistics(
+        &problem.fitted,
+        &z,
+        &jac,
+        out.cost,
+        problem.known_variance(),
+    )?;
     if out.stop == Stop::Iterations {
         statistics.warnings.insert(
             0,
@@ -141,11 +180,21 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         );
     }
     let start: Vec<f64> = problem.fitted.iter().map(|f| f.start).collect();
+    let fitted_values = problem.p_of_z(&z);
     let rms = problem
         .rms(&start)?
         .into_iter()
-        .zip(problem.rms(&problem.p_of_z(&z))?)
+        .zip(problem.rms(&fitted_values)?)
         .collect();
+    let model_peaks = if problem.peaks.is_empty() {
+        Vec::new()
+    } else {
+        problem
+            .model_peaks(&start)?
+            .into_iter()
+            .zip(problem.model_peaks(&fitted_values)?)
+            .collect()
+    };
     Ok(Fit {
         problem,
         z,
@@ -154,6 +203,7 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         stop: out.stop,
         statistics,
         rms,
+        model_peaks,
     })
 }
 

@@ -1,6 +1,7 @@
 //! `hsp identify --report DIR`: a markdown page of the fit, `DIR/index.md`, with one Bode plot
 //! per measured response (`DIR/frf_K.svg`: the measurement, the model at the start and fitted)
-//! and the tables of the parameters, the correlations and the residuals before and after.
+//! and the tables of the parameters, the correlations, the residuals before and after and the
+//! measured resonance peaks against the model's.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -23,19 +24,23 @@ pub fn write(fit: &Fit, starting: &str, dir: &Path) -> Result<Vec<PathBuf>, Stri
     let (before, after) = (problem.responses(&start)?, problem.responses(&values)?);
     let mut written = Vec::new();
     let mut s = format!(
-        "# hsp identify: {} fitted from {} measured responses\n\n\
+        "# hsp identify: {} fitted from {} measured responses, {} sets of peaks and {} time \
+         series\n\n\
          Starting configuration: {}. Cost (sum of the squared weighted residuals) {} after {} \
-         iterations (stop: {:?}), {} residuals, residual variance {}. Sensitivities: central \
-         differences of the exact linearisation (docs/identify.md).\n\n\
+         iterations (stop: {:?}), {} residuals, residual variance {}. Sensitivities: {} \
+         (docs/identify.md).\n\n\
          | parameter | start | fitted | 95 % interval |\n| --- | ---: | ---: | ---: |\n",
         values.len(),
         problem.frfs.len(),
+        problem.peaks.len(),
+        problem.series.len(),
         escape(starting),
         num(fit.cost),
         fit.iterations,
         fit.stop,
         problem.len(),
         num(fit.statistics.variance),
+        super::report::sensitivities(fit),
     );
     for (j, f) in problem.fitted.iter().enumerate() {
         let ci = fit.statistics.ci95[j].map_or("none".into(), |(lo, hi)| {
@@ -88,6 +93,25 @@ pub fn write(fit: &Fit, starting: &str, dir: &Path) -> Result<Vec<PathBuf>, Stri
             num(*rms_after)
         )
         .unwrap();
+    }
+    for (d, (start_hz, fitted_hz)) in problem.peaks.iter().zip(&fit.model_peaks) {
+        write!(
+            s,
+            "\n### Peaks of {} → {} (`{}`)\n\n| measured [Hz] | sigma [Hz] | model at the start \
+             [Hz] | model fitted [Hz] |\n| ---: | ---: | ---: | ---: |\n",
+            d.input,
+            d.output,
+            escape(&d.file)
+        )
+        .unwrap();
+        for k in 0..d.f_hz.len() {
+            writeln!(
+                s,
+                "| {} | {} | {:.4} | {:.4} |",
+                d.f_hz[k], d.sigma_hz[k], start_hz[k], fitted_hz[k]
+            )
+            .unwrap();
+        }
     }
     for (k, d) in problem.frfs.iter().enumerate() {
         let name = format!("frf_{}.svg", k + 1);

@@ -12,12 +12,14 @@ use crate::ecosystem::ssp::parameter_set_of;
 
 /// `{"parameters": {NAME: {"value", "start", "ci95": [lo, hi] or null}}, "cost", "iterations",
 /// "correlations", "fitted", "warnings", "residuals", "variance", "evaluations", "stop",
-/// "sensitivities", "responses"}`: the
+/// "sensitivities", "responses", "peaks"}`: the
 /// correlations' rows and columns in the order of `fitted` (the `--fit` order), `null` for a
 /// parameter the data do not see; `cost` is the sum of the squared weighted residuals, of which
 /// there are `residuals`; `variance` is the residual variance `s^2`; `evaluations` counts the
 /// model's linearisations; `sensitivities` says how they were computed; `responses` gives, per
-/// `--frf` in order, the RMS of the weighted relative error `|e_k|` at the start and fitted.
+/// `--frf` in order, the RMS of the weighted relative error `|e_k|` at the start and fitted;
+/// `peaks`, per `--peaks` in order, the measured peaks, their uncertainties and the model's peaks
+/// taken for them at the start and fitted.
 pub fn json(fit: &Fit) -> serde_json::Value {
     let values = fit.values();
     let mut parameters = serde_json::Map::new();
@@ -42,7 +44,7 @@ pub fn json(fit: &Fit) -> serde_json::Value {
         "variance": fit.statistics.variance,
         "evaluations": fit.problem.evaluations.get(),
         "stop": format!("{:?}", fit.stop).to_lowercase(),
-        "sensitivities": "central differences of the exact linearisation",
+        "sensitivities": sensitivities(fit),
         "responses": fit.problem.frfs.iter().zip(&fit.rms).map(|(d, (before, after))| json!({
             "input": d.input,
             "output": d.output,
@@ -51,7 +53,25 @@ pub fn json(fit: &Fit) -> serde_json::Value {
             "rms_start": before,
             "rms_fitted": after,
         })).collect::<Vec<_>>(),
+        "peaks": fit.problem.peaks.iter().zip(&fit.model_peaks).map(|(d, (before, after))| json!({
+            "input": d.input,
+            "output": d.output,
+            "file": d.file,
+            "measured_Hz": d.f_hz,
+            "sigma_Hz": d.sigma_hz,
+            "start_Hz": before,
+            "fitted_Hz": after,
+        })).collect::<Vec<_>>(),
     })
+}
+
+/// How the sensitivities were computed, in words.
+pub fn sensitivities(fit: &Fit) -> &'static str {
+    if fit.problem.series.is_empty() {
+        "central differences of the exact linearisation"
+    } else {
+        "central differences of the exact linearisation and of the simulation"
+    }
 }
 
 /// The table of the fit and its warnings.
@@ -80,6 +100,22 @@ pub fn text(fit: &Fit) -> String {
             f.name, f.start, values[j]
         )
         .unwrap();
+    }
+    for (d, (before, after)) in fit.problem.peaks.iter().zip(&fit.model_peaks) {
+        writeln!(
+            s,
+            "peaks of {} to {} ({}):\n{:>14} {:>14} {:>14} {:>14}",
+            d.output, d.input, d.file, "measured [Hz]", "sigma [Hz]", "start [Hz]", "fitted [Hz]"
+        )
+        .unwrap();
+        for k in 0..d.f_hz.len() {
+            writeln!(
+                s,
+                "{:>14} {:>14} {:>14.4} {:>14.4}",
+                d.f_hz[k], d.sigma_hz[k], before[k], after[k]
+            )
+            .unwrap();
+        }
     }
     for w in &fit.statistics.warnings {
         writeln!(s, "warning: {w}").unwrap();

@@ -10,6 +10,11 @@
 //!
 //! split into its real and imaginary parts, so that a 1 % error counts the same on a resonance
 //! peak and in an anti-resonance, and the responses of outputs in different units weigh alike.
+//! Measured resonance peaks (`--peaks`) add one residual each, the model's peak's error in units
+//! of the measured one's uncertainty ([`super::peaks`]); measured time series (`--series`) one
+//! per output and time, the error of the FMU's simulation relative to the output's RMS
+//! ([`super::series`]). The time series' sensitivities are central differences of the
+//! simulation (below).
 //!
 //! **Sensitivities, a first step:** the derivatives of the residuals with respect to the fitted
 //! parameters (in their coordinates `z`, [`super::data::Scale`]) are central finite differences
@@ -27,6 +32,8 @@ use hydraulic_slewing_plate::model::parameters::{check, Parameters};
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::data::{Fitted, Frf};
+use super::peaks::Peaks;
+use super::series::Series;
 
 /// The central-difference step in `z` (a relative step of 1e-4 for a log-scaled parameter):
 /// truncation error of order `STEP^2` = 1e-8 of the sensitivity, round-off of order 1e-16 /
@@ -38,6 +45,8 @@ pub struct Problem {
     /// The starting configuration (preset and `--set`).
     pub base: Values,
     pub frfs: Vec<Frf>,
+    pub peaks: Vec<Peaks>,
+    pub series: Vec<Series>,
     pub fitted: Vec<Fitted>,
     /// Per response: the index of its input and its output in the linearisation.
     ports: Vec<(usize, usize)>,
@@ -48,12 +57,22 @@ pub struct Problem {
 impl Problem {
     /// Checks every response's input and output against the model of the starting
     /// configuration; an error names the file and lists the model's inputs or outputs.
-    pub fn new(base: Values, frfs: Vec<Frf>, fitted: Vec<Fitted>) -> Result<Problem, String> {
+    pub fn new(
+        base: Values,
+        frfs: Vec<Frf>,
+        peaks: Vec<Peaks>,
+        series: Vec<Series>,
+        fitted: Vec<Fitted>,
+    ) -> Result<Problem, String> {
         if fitted.is_empty() {
             return Err("nothing to fit: give at least one --fit NAME".into());
         }
-        if frfs.is_empty() {
-            return Err("no data: give at least one --frf INPUT:OUTPUT:FILE.csv".into());
+        if frfs.is_empty() && peaks.is_empty() && series.is_empty() {
+            return Err(
+                "no data: give at least one --frf INPUT:OUTPUT:FILE.csv, --peaks \
+                 INPUT:OUTPUT:FILE.csv or --series FILE.csv"
+                    .into(),
+            );
         }
         for (i, a) in fitted.iter().enumerate() {
             if fitted[..i].iter().any(|b| b.index == a.index) {
@@ -61,27 +80,33 @@ impl Problem {
             }
         }
         let lin = linearization(&base)?;
+        let port = |flag: &str, file: &str, input: &str, output: &str| {
+            let i = lin.input_names.iter().position(|n| n == input);
+            let o = lin.output_names.iter().position(|n| n == output);
+            match (i, o) {
+                (Some(i), Some(o)) => Ok((i, o)),
+                (None, _) => Err(format!(
+                    "{flag} {file}: '{input}' is not an input of the model ({:?})",
+                    lin.input_names
+                )),
+                (_, None) => Err(format!(
+                    "{flag} {file}: '{output}' is not an output of the model ({:?})",
+                    lin.output_names
+                )),
+            }
+        };
         let ports = frfs
             .iter()
-            .map(|d| {
-                let i = lin.input_names.iter().position(|n| *n == d.input);
-                let o = lin.output_names.iter().position(|n| *n == d.output);
-                match (i, o) {
-                    (Some(i), Some(o)) => Ok((i, o)),
-                    (None, _) => Err(format!(
-                        "--frf {}: '{}' is not an input of the model ({:?})",
-                        d.file, d.input, lin.input_names
-                    )),
-                    (_, None) => Err(format!(
-                        "--frf {}: '{}' is not an output of the model ({:?})",
-                        d.file, d.output, lin.output_names
-                    )),
-                }
-            })
+            .map(|d| port("--frf", &d.file, &d.input, &d.output))
             .collect::<Result<_, _>>()?;
+        for d in &peaks {
+            port("--peaks", &d.file, &d.input, &d.output)?;
+        }
         Ok(Problem {
             base,
             frfs,
+            peaks,
+            series,
             fitted,
             ports,
             evaluations: std::cell::Cell::new(0),
@@ -91,6 +116,15 @@ impl Problem {
     /// The number of (real) residuals.
     pub fn len(&self) -> usize {
         2 * self.frfs.iter().map(|d| d.f_hz.len()).sum::<usize>()
+            + self.peaks.iter().map(|d| d.f_hz.len()).sum::<usize>()
+            + self.series.iter().map(Series::len).sum::<usize>()
+    }
+
+    /// Whether the residuals' variance is known: peaks alone, each residual in units of its
+    /// standard uncertainty; with a frequency response or a time series it is estimated from
+    /// the fit.
+    pub fn known_variance(&self) -> bool {
+        self.frfs.is_empty() && self.series.is_empty()
     }
 
     /// The starting configuration with the fitted parameters at `p`; an error names a value the
@@ -105,10 +139,25 @@ impl Problem {
         Ok(values)
     }
 
+    /// The model's linearisation at `p` (one model evaluation).
+    fn evaluate(&self, p: &[f64]) -> Result<Linearization, String> {
+        self.evaluations.set(self.evaluations.get() + 1);
+        linearization(&self.values_at(p)?)
+    }
+
     /// The model's responses at `p`, one vector per measured response.
     pub fn responses(&self, p: &[f64]) -> Result<Vec<Vec<Complex<f64>>>, String> {
-        self.evaluations.set(self.evaluations.get() + 1);
-        let lin = linearization(&self.values_at(p)?)?;
+        self.responses_of(&self.evaluate(p)?)
+    }
+
+    /// The model's peaks at `p` taken for the measured ones, one vector per `--peaks`.
+    pub fn model_peaks(&self, p: &[f64]) -> Result<Vec<Vec<f64>>, String> {
+        let lin = self.evaluate(p)?;
+        self.peaks.iter().map(|d| d.model(&lin)).collect()
+    }
+
+    /// The responses of the linearisation `lin`, one vector per measured response.
+    fn responses_of(&self, lin: &Linearization) -> Result<Vec<Vec<Complex<f64>>>, String> {
         // One solve per input and frequency, shared by the outputs measured there.
         let mut states: HashMap<(usize, u64), DVector<Complex<f64>>> = HashMap::new();
         let mut out = Vec::with_capacity(self.frfs.len());
@@ -118,10 +167,10 @@ impl Problem {
                 let x = match states.entry((i, f.to_bits())) {
                     std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
                     std::collections::hash_map::Entry::Vacant(e) => {
-                        e.insert(state_response_at(&lin, i, f)?)
+                        e.insert(state_response_at(lin, i, f)?)
                     }
                 };
-                h.push(output_of(&lin, x, i, o));
+                h.push(output_of(lin, x, i, o));
             }
             out.push(h);
         }
@@ -130,7 +179,8 @@ impl Problem {
 
     /// The weighted residuals at the parameters `p` (module doc).
     pub fn residuals(&self, p: &[f64]) -> Result<DVector<f64>, String> {
-        let model = self.responses(p)?;
+        let lin = self.evaluate(p)?;
+        let model = self.responses_of(&lin)?;
         let mut r = Vec::with_capacity(self.len());
         for (d, m) in self.frfs.iter().zip(&model) {
             for ((model, data), w) in m.iter().zip(&d.h).zip(&d.weight) {
@@ -139,12 +189,27 @@ impl Problem {
                 r.push(e.im);
             }
         }
+        for d in &self.peaks {
+            let model = d.model(&lin)?;
+            for ((m, f), sigma) in model.iter().zip(&d.f_hz).zip(&d.sigma_hz) {
+                r.push((m - f) / sigma);
+            }
+        }
+        if !self.series.is_empty() {
+            let values = self.values_at(p)?;
+            for d in &self.series {
+                d.residuals(&d.simulate(&values)?, &mut r);
+            }
+        }
         Ok(DVector::from_vec(r))
     }
 
     /// Per measured response, the RMS over its points of the weighted relative error `|e_k|`
     /// (module doc) of the model at `p`.
     pub fn rms(&self, p: &[f64]) -> Result<Vec<f64>, String> {
+        if self.frfs.is_empty() {
+            return Ok(Vec::new());
+        }
         let model = self.responses(p)?;
         Ok(self
             .frfs
