@@ -57,7 +57,8 @@ from webpage import RECORDED, choose_preset, chrome, deviation, native, serve, w
 PAGE = ROOT / "docs" / "web"
 FMU = ROOT / "fmu" / "HydraulicSlewingPlate.fmu"
 DOC = ROOT / "docs" / "web.md"
-SOURCES = ["index.html", "page.js", "page.css", "hsp.js", "worker.js"]  # src/bin/hsp/web.rs
+SOURCES = ["index.html", "page.css", "hsp.js", "worker.js", "controls.js", "plots.js", "plate.js",
+           "status.js", "export.js", "page.js"]  # src/bin/hsp/web.rs
 PRESETS = ["complete", "complete-hub-locked", "servo-valve-motor", "loes-motor", "paper-eq16",
            "paper-fig9b", "paper-fig10"]
 PAUSE_STOP, PAUSE_AT = 600, 400  # the run's stop time and when it is paused [s]

@@ -11,7 +11,7 @@
 //! - `mod.rs` (this file): [`Simulation`], plain Rust, tested natively (`tests/web.rs`).
 //! - `wasm.rs`: the `extern "C"` functions the `.wasm` exports (compiled only for WebAssembly).
 //!
-//! The JavaScript side is `docs/web/hsp.js` (the API) and `docs/web/index.html` with `page.js` (the page).
+//! The JavaScript side is `docs/web/hsp.js` (the API) and `docs/web/index.html` with its scripts (the page, started by `page.js`).
 
 use std::cell::RefCell;
 use std::rc::Rc;

@@ -180,8 +180,8 @@ def test_served_over_http_the_page_fetches_the_wasm_and_gives_the_same_run(page_
 def test_the_repository_page_is_the_fmus(page_dir):
     """docs/web/ (the sources, and the module `hsp package` writes beside them) is what the FMU
     carries."""
-    for name in ["index.html", "page.js", "page.css", "hsp.js", "worker.js", "hsp.wasm",
-                 "hsp.wasm.js"]:
+    for name in ["index.html", "page.css", "hsp.js", "worker.js", "controls.js", "plots.js",
+                 "plate.js", "status.js", "export.js", "page.js", "hsp.wasm", "hsp.wasm.js"]:
         assert (ROOT / "docs" / "web" / name).read_bytes() == (page_dir / name).read_bytes(), name
     assert (page_dir / "hsp.wasm").stat().st_size < 1_500_000
     text = (page_dir / "hsp.wasm.js").read_text()

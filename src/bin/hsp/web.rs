@@ -18,7 +18,18 @@ pub const TARGET: &str = "wasm32-unknown-unknown";
 pub const PAGE_DIR: &str = "docs/web";
 
 /// The page's sources (in [`PAGE_DIR`]).
-const SOURCES: [&str; 5] = ["index.html", "page.js", "page.css", "hsp.js", "worker.js"];
+const SOURCES: [&str; 10] = [
+    "index.html",
+    "page.css",
+    "hsp.js",
+    "worker.js",
+    "controls.js",
+    "plots.js",
+    "plate.js",
+    "status.js",
+    "export.js",
+    "page.js",
+];
 
 /// What is missing when the browser build cannot be made, what that means (`consequence`), and
 /// how to add it.
