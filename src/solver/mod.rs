@@ -123,6 +123,7 @@ mod method;
 pub mod radau5;
 mod registry;
 pub mod rodas5p;
+pub mod ros34pw2;
 mod step_map;
 #[cfg(any(test, feature = "analysis"))]
 pub mod testset;
