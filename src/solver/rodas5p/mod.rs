@@ -267,7 +267,7 @@ const ERR_ORDER: f64 = 5.0;
 /// The tunables of the Rodas5P integrator's step-size control, with their defaults, in the
 /// manner of the WORK parameters of Hairer's RODAS (its name given where it has one). The
 /// integrator uses `Rodas5POptions::default()`; they are not part of
-/// [`SolverOptions`](super::SolverOptions), which the integrator saves with its state.
+/// [`SolverOptions`], which the integrator saves with its state.
 ///
 /// The step size after an accepted step is that of a PI controller (Hairer & Wanner II,
 /// Sec. IV.2 / Gustafsson 1991): h_new = h · safe · err^(-β1) · err_prev^(β2), with
