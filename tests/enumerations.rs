@@ -56,9 +56,9 @@ fn set_by_name_takes_an_item_by_value_or_name_and_refuses_others() {
     set_by_name(&mut values, "hydraulics.model", "1").unwrap();
     let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
     assert_eq!(p.hydraulics, HydraulicsModel::Loes);
-    let err = set_by_name(&mut values, "solver.method", "4").unwrap_err();
+    let err = set_by_name(&mut values, "solver.method", "5").unwrap_err();
     assert!(
-        err.starts_with("solver.method: 4 is not a SolverMethod"),
+        err.starts_with("solver.method: 5 is not a SolverMethod"),
         "{err}"
     );
     let err = set_by_name(&mut values, "servo_valve.drive", "Amps").unwrap_err();
@@ -95,7 +95,7 @@ fn fmi3_sets_and_gets_enumerations_as_int64_and_refuses_non_items_by_name() {
         assert_eq!(got, 2);
         assert_eq!(f.exit(), Fmi3Status::Ok);
         // An error ends an instance's usefulness: a fresh one for each refusal.
-        for bad in [0, 4, 1 << 40] {
+        for bad in [0, 5, 1 << 40] {
             let f = Fmu3::new();
             assert_eq!(fmi3SetInt64(f.c, &vr, 1, &bad, 1), Fmi3Status::Error);
             let last = f.last();

@@ -108,7 +108,7 @@ fn set_by_name_checks_like_the_fmu() {
         ("loes.C3", "abc"),
         ("y_pot", "1"),
         ("no.such", "1"),
-        ("solver.method", "4"),
+        ("solver.method", "5"),
     ] {
         let err = set_by_name(&mut values, name, text).unwrap_err();
         assert!(err.contains(name), "{err}");

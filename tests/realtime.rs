@@ -178,6 +178,34 @@ fn every_step_does_the_same_work_whatever_the_input() {
     );
 }
 
+/// The W-method's real-time step (`solver.method = 4`, ROS34PW2) in the same closed loop: every
+/// communication step adds one step, no rejection and four right-hand sides, and a Jacobian
+/// with its factorisation comes every 10 steps exactly (`Ros34pw2Options::fixed_jacobian_interval`),
+/// whatever the input does: each run of 10 communication steps adds the same work.
+#[test]
+fn the_w_method_renews_its_jacobian_every_ten_steps_whatever_the_input() {
+    let square = |t: f64| if t % 0.2 < 0.1 { 0.25 } else { 0.0 };
+    let controller = move |t: f64, y_pot: f64| Some(20.0 * (square(t) - y_pot));
+    let sets = [("controller.external", "true"), ("solver.method", "4")];
+    let w = run(&sets, 1e-3, 1.0, controller);
+    let increments: Vec<[i32; 5]> = w
+        .counters
+        .windows(2)
+        .map(|w| std::array::from_fn(|i| w[1][i] - w[0][i]))
+        .collect();
+    assert_eq!(increments.len(), 999);
+    // Increment k is communication step k + 2's; the Jacobians come at steps 1, 11, 21, ...
+    for (k, inc) in increments.iter().enumerate() {
+        let renewed = i32::from((k + 1) % 10 == 0);
+        assert_eq!(
+            *inc,
+            [1, 0, 4, renewed, renewed],
+            "communication step {}: counters grew by {inc:?} (steps, rejected, f, J, LU)",
+            k + 2
+        );
+    }
+}
+
 /// The error estimate the real-time method reports (`solver.error_estimate`) grows with its step
 /// (order 5: much more than tenfold for a tenfold step) in the closed loop of
 /// [`every_step_does_the_same_work_whatever_the_input`], whose steps of `r` the fixed step must

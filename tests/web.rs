@@ -189,7 +189,7 @@ fn the_variable_table_is_the_fmus() {
     assert_eq!(method["type"], "Enumeration");
     assert_eq!(
         (method["min"].as_i64(), method["max"].as_i64()),
-        (Some(1), Some(3))
+        (Some(1), Some(4))
     );
 }
 

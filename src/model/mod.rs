@@ -207,7 +207,11 @@ impl HydraulicSlewingPlate {
     /// keeps them inside).
     fn out_of_bounds(&self, values: &Values) -> Option<String> {
         let p = self.parameters.as_ref()?;
-        let real_time = p.method == crate::solver::Method::Rodas5PFixed;
+        let real_time = [
+            crate::solver::Method::Rodas5PFixed,
+            crate::solver::Method::Ros34pw2Fixed,
+        ]
+        .contains(&p.method);
         (real_time && p.hydraulics == variables::HydraulicsModel::ServoValve)
             .then(|| realtime_guard::check(values, &p.servo_valve))
             .flatten()

@@ -29,6 +29,7 @@ impl From<SolverMethod> for Method {
             SolverMethod::Rodas5P => Method::Rodas5P,
             SolverMethod::Radau5 => Method::Radau5,
             SolverMethod::Rodas5PFixed => Method::Rodas5PFixed,
+            SolverMethod::Ros34pw2Fixed => Method::Ros34pw2Fixed,
         }
     }
 }

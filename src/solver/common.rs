@@ -28,6 +28,14 @@ pub(crate) fn rms(v: &[f64], sc: &[f64]) -> f64 {
     (s / v.len() as f64).sqrt()
 }
 
+/// `y += a x`.
+#[inline]
+pub(crate) fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
+    }
+}
+
 pub(crate) fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }

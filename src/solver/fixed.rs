@@ -116,22 +116,7 @@ fn advance<S: OdeSystem + ?Sized>(
             // A step too short for Rodas5P's 1/h terms (an importer's 5e-324 s): one explicit
             // Euler step over the whole call, as the adaptive drivers take (see `euler_floor`).
             rodas5p::eval_f0(integ, sys, &mut w.f0)?;
-            let x0 = &integ.x;
-            for ((x1, x), f) in w.x1.iter_mut().zip(x0).zip(&w.f0) {
-                *x1 = x + (t_end - t0) * f;
-            }
-            if outputs.pending(t_end) {
-                let x1 = &w.x1;
-                let mut linear = |theta: f64, buf: &mut [f64]| {
-                    for ((b, a), z) in buf.iter_mut().zip(x0).zip(x1) {
-                        *b = a + theta * (z - a);
-                    }
-                };
-                outputs.emit(t0, t_end - t0, t_end, x1, &mut linear, out);
-            }
-            integ.x.copy_from_slice(&w.x1);
-            integ.t = t_end;
-            integ.stats.accepted += 1;
+            euler_call(integ, &w.f0, &mut w.x1, t_end, &mut outputs, out);
             return Ok(());
         }
         for k in 1..=substeps {
@@ -141,24 +126,7 @@ fn advance<S: OdeSystem + ?Sized>(
             // Never shortened: the step is the caller's.
             let (h, result) =
                 rodas5p::factorised_step(integ, sys, w, lus, stamp, h, false, true, autonomous);
-            let err = result.map_err(|why| {
-                let (kind, what) = match why {
-                    Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
-                    Reject::Singular => (
-                        SolverErrorKind::SingularMatrix,
-                        "the iteration matrix is singular",
-                    ),
-                };
-                SolverError::new(
-                    kind,
-                    t,
-                    format!(
-                        "fixed step {k} of {substeps} (h = {h:e}): {what}; a fixed-step \
-                             method cannot shorten its step: use more substeps, a shorter \
-                             communication step or an adaptive method"
-                    ),
-                )
-            })?;
+            let err = result.map_err(|why| fixed_step_failure(why, t, k, substeps, h))?;
             // The last step ends on t_end itself, bit for bit (its size differs from h by
             // the rounding of t only).
             let t1 = if k == substeps {
@@ -185,4 +153,60 @@ fn advance<S: OdeSystem + ?Sized>(
         integ.h = h;
         Ok(())
     })
+}
+
+/// A call too short for a method's 1/h terms (below `common::euler_floor`, as an importer's
+/// 5e-324 s step is): one explicit Euler step over the whole call to `t_end`, with f0 = f(t, x)
+/// given and `x1` as the buffer of the end state, as the adaptive drivers take (see
+/// `euler_floor`).
+pub(crate) fn euler_call<St>(
+    integ: &mut Stepper<St>,
+    f0: &[f64],
+    x1: &mut [f64],
+    t_end: f64,
+    outputs: &mut Outputs<'_>,
+    out: &mut dyn FnMut(f64, &[f64]),
+) {
+    let t0 = integ.t;
+    let x0 = &integ.x;
+    for ((e, x), f) in x1.iter_mut().zip(x0).zip(f0) {
+        *e = x + (t_end - t0) * f;
+    }
+    if outputs.pending(t_end) {
+        let mut linear = |theta: f64, buf: &mut [f64]| {
+            for ((b, a), z) in buf.iter_mut().zip(x0).zip(x1.iter()) {
+                *b = a + theta * (z - a);
+            }
+        };
+        outputs.emit(t0, t_end - t0, t_end, x1, &mut linear, out);
+    }
+    integ.x.copy_from_slice(x1);
+    integ.t = t_end;
+    integ.stats.accepted += 1;
+}
+
+/// The error of a fixed step `k` of `substeps` (size `h`, from `t`) that failed for `why`.
+pub(crate) fn fixed_step_failure(
+    why: Reject,
+    t: f64,
+    k: u32,
+    substeps: u32,
+    h: f64,
+) -> SolverError {
+    let (kind, what) = match why {
+        Reject::NonFinite => (SolverErrorKind::NonFinite, "a stage is not finite"),
+        Reject::Singular => (
+            SolverErrorKind::SingularMatrix,
+            "the iteration matrix is singular",
+        ),
+    };
+    SolverError::new(
+        kind,
+        t,
+        format!(
+            "fixed step {k} of {substeps} (h = {h:e}): {what}; a fixed-step \
+                 method cannot shorten its step: use more substeps, a shorter \
+                 communication step or an adaptive method"
+        ),
+    )
 }

@@ -8,7 +8,7 @@
 //!
 //! * **Methods behind one trait.** Each method is a module with its own state behind
 //!   [`OdeMethod`] (as diffsol's `OdeSolverMethod`, and as each of Hairer's codes keeps its own
-//!   WORK arrays): [`rodas5p`], [`radau5`], [`fixed`]. The [`Integrator`] is the driver they
+//!   WORK arrays): [`rodas5p`], [`radau5`], [`fixed`], [`ros34pw2`]. The [`Integrator`] is the driver they
 //!   share: it checks every call's arguments, keeps the point every method advances (a
 //!   [`Stepper`]: options, t, x, the next step size, the counters) and hands the steps to the
 //!   method named by [`SolverOptions::method`]. A method is registered once ([`Method`]'s
@@ -24,13 +24,19 @@
 //!   number of equal substeps per call ([`SolverOptions::substeps`]), each with one Jacobian,
 //!   one factorisation, eight right-hand sides and eight solves, whatever the solution does;
 //!   see [`fixed`].
+//!   [`Method::Ros34pw2`] is the Rosenbrock-W method ROS34PW2 (Rang & Angermann 2005), 4
+//!   stages, order 3 with an embedded order-2 estimate, which keeps its order with an old
+//!   Jacobian and so keeps J and W's LU across steps; [`Method::Ros34pw2Fixed`] its step at a
+//!   fixed step size for real time, the LU kept and J renewed every 10 steps; see
+//!   [`ros34pw2`].
 //! * **Exact stop times.** [`Integrator::advance_to`] ends bit-exactly on `t_end`: the last
 //!   step is shortened to `t_end - t` and `t` is then *set* to `t_end` (no summing drift).
 //! * **Stepping past requested points.** [`Integrator::advance_past`] reports `t_end` too, but
 //!   lets Rodas5P's steps run past it (up to a limit) and reads the state at `t_end` from the
 //!   step's dense output; the step is kept, so that a run of closely spaced points costs about
 //!   the steps of one long call. A kept step is part of the saved state and is dropped by
-//!   [`Integrator::notify_discontinuity`]. Radau5 ends its steps on `t_end` all the same (its
+//!   [`Integrator::notify_discontinuity`]. (ROS34PW2 does the same, with a cubic Hermite dense
+//!   output.) Radau5 ends its steps on `t_end` all the same (its
 //!   dense output is of order 3 only).
 //! * **Failure is an error, not a panic.** Non-finite values, a step below the minimum, too
 //!   many steps or rejections return a [`SolverError`] carrying the time reached; the
@@ -123,6 +129,7 @@ mod method;
 pub mod radau5;
 mod registry;
 pub mod rodas5p;
+pub mod ros34pw2;
 mod step_map;
 #[cfg(any(test, feature = "analysis"))]
 pub mod testset;
@@ -239,7 +246,8 @@ pub struct SolverOptions {
     pub max_steps: u64,
     /// Maximum number of consecutive rejected step attempts before `TooManyRejections`.
     pub max_consecutive_rejections: u32,
-    /// [`Method::Rodas5PFixed`] only: the number of equal steps each call to `t_end` takes
+    /// The fixed-step methods ([`Method::Rodas5PFixed`], [`Method::Ros34pw2Fixed`]) only: the
+    /// number of equal steps each call to `t_end` takes
     /// (at least 1, at most [`MAX_SUBSTEPS`]). Default 1. The adaptive methods ignore it.
     #[serde(default = "one_substep")]
     pub substeps: u32,

@@ -27,6 +27,12 @@ impl Method {
     /// solution (see [`super::fixed`]). No error control: the tolerances only scale the error
     /// estimate it reports.
     pub const Rodas5PFixed: Method = Method(super::fixed::Rodas5PFixed::NAME);
+    /// Rosenbrock-W method ROS34PW2 (Rang & Angermann 2005), order 3, with the Jacobian and W's
+    /// LU kept across steps. See [`super::ros34pw2`].
+    pub const Ros34pw2: Method = Method(super::ros34pw2::Ros34pw2::NAME);
+    /// ROS34PW2's step at a fixed step size, for real time, W's LU kept across steps (see
+    /// [`super::ros34pw2::Ros34pw2Fixed`]).
+    pub const Ros34pw2Fixed: Method = Method(super::ros34pw2::Ros34pw2Fixed::NAME);
 
     /// Lower-case name as used on command lines ("rodas5p", "radau5", "rodas5p-fixed").
     pub fn name(self) -> &'static str {
@@ -174,15 +180,17 @@ macro_rules! built_in {
             $of::<super::rodas5p::Rodas5P>(),
             $of::<super::radau5::Radau5>(),
             $of::<super::fixed::Rodas5PFixed>(),
+            $of::<super::ros34pw2::Ros34pw2>(),
+            $of::<super::ros34pw2::Ros34pw2Fixed>(),
         ]
     };
 }
 
-fn built_in() -> [Registration; 3] {
+fn built_in() -> [Registration; 5] {
     built_in!(registration)
 }
 
-fn built_in_saving() -> [Saving; 3] {
+fn built_in_saving() -> [Saving; 5] {
     built_in!(saving)
 }
 

@@ -33,6 +33,8 @@ const COMPARED: [(&str, u32); 5] = [
     ("p_load", vr::P_LOAD),
 ];
 const STOP: f64 = 6.0;
+/// The real-time methods compared: `solver.method` and a name.
+const REAL_TIME: [(i32, &str); 2] = [(3, "Rodas5P fixed"), (4, "ROS34PW2 fixed")];
 const REFERENCE_RTOL: f64 = 1e-10;
 /// `solver.atol` of the reference (a fraction of each state's nominal value).
 const REFERENCE_ATOL: f64 = 1e-12;
@@ -63,13 +65,13 @@ fn simulate(
     fmu: &Fmu,
     scenario: Scenario,
     h: f64,
-    method: Option<i32>,
+    method: Option<(i32, i32)>,
 ) -> Result<Trajectory, String> {
     let inst = fmu.instantiate("bench-latency-accuracy")?;
     match method {
-        Some(substeps) => {
+        Some((method, substeps)) => {
             inst.setup(None, 0.0, STOP)?;
-            inst.set_integer(vr::SOLVER_METHOD, 3)?;
+            inst.set_integer(vr::SOLVER_METHOD, method)?;
             inst.set_integer(vr::SOLVER_SUBSTEPS, substeps)?;
         }
         None => {
@@ -139,8 +141,9 @@ pub fn report(fmu: &Fmu) -> Result<String, String> {
         md,
         "# Accuracy of the real-time method\n\n\
          Written by `cargo run --release --bin bench-latency -- --accuracy` (see \
-         `src/bin/bench-latency/accuracy.rs` for the method). The real-time method \
-         (`solver.method = 3`) against the adaptive Rodas5P at rtol {REFERENCE_RTOL:e} and `solver.atol` {REFERENCE_ATOL:e}, both \
+         `src/bin/bench-latency/accuracy.rs` for the method). The real-time methods \
+         (`solver.method = 3`: Rodas5P's step; 4: ROS34PW2's, its LU kept and its Jacobian \
+         renewed every 10 steps) against the adaptive Rodas5P at rtol {REFERENCE_RTOL:e} and `solver.atol` {REFERENCE_ATOL:e}, both \
          through the packaged FMU's FMI 2.0 entry points at the same communication step, {STOP} s. \
          Deviation: the largest difference over the run of y_pot, theta_motor, theta_hub, w_tip \
          and p_load, each relative to its range, and the output where it is largest. Estimate: \
@@ -150,24 +153,30 @@ pub fn report(fmu: &Fmu) -> Result<String, String> {
     );
     let _ = writeln!(
         md,
-        "| scenario | communication step | substeps | step h | deviation / range | worst output | estimate |\n\
-         | --- | ---: | ---: | ---: | ---: | --- | ---: |"
+        "| scenario | communication step | method | substeps | step h | deviation / range | worst output | estimate |\n\
+         | --- | ---: | --- | ---: | ---: | ---: | --- | ---: |"
     );
     for scenario in [Scenario::DefaultExperiment, Scenario::ClosedLoop] {
         for (h, substeps) in [(1e-3, &[1, 2, 4, 10][..]), (1e-4, &[1, 2][..])] {
             let reference = simulate(fmu, scenario, h, None)?;
-            for &s in substeps {
-                let row = match simulate(fmu, scenario, h, Some(s)) {
+            for (&s, &(method, method_name)) in substeps
+                .iter()
+                .flat_map(|s| REAL_TIME.iter().map(move |m| (s, m)))
+            {
+                let row = match simulate(fmu, scenario, h, Some((method, s))) {
                     Ok(run) => {
                         let (d, name) = deviation(&run, &reference);
                         format!("{d:.1e} | {name} | {:.1e}", run.largest_estimate)
                     }
                     Err(e) => format!("failed: {e} | | "),
                 };
-                eprintln!("{} at {h} s, {s} substeps: {row}", scenario.name());
+                eprintln!(
+                    "{} at {h} s, {method_name}, {s} substeps: {row}",
+                    scenario.name()
+                );
                 let _ = writeln!(
                     md,
-                    "| {} | {} ms | {s} | {} µs | {row} |",
+                    "| {} | {} ms | {method_name} | {s} | {} µs | {row} |",
                     scenario.name(),
                     h * 1e3,
                     h / f64::from(s) * 1e6
@@ -182,14 +191,17 @@ pub fn report(fmu: &Fmu) -> Result<String, String> {
          adaptive solver at the same points. In the closed loop the importer's controller is \
          sampled at the communication step, so there the loop itself, not the integrator, may \
          go unstable: then both runs fail or diverge together.\n\n\
-         | scenario | communication step | deviation / range | worst output | estimate |\n\
-         | --- | ---: | ---: | --- | ---: |"
+         | scenario | communication step | method | deviation / range | worst output | estimate |\n\
+         | --- | ---: | --- | ---: | --- | ---: |"
     );
     for scenario in [Scenario::DefaultExperiment, Scenario::ClosedLoop] {
-        for h in [1e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.5] {
+        for (h, &(method, method_name)) in [1e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.5]
+            .into_iter()
+            .flat_map(|h| REAL_TIME.iter().map(move |m| (h, m)))
+        {
             let row = match simulate(fmu, scenario, h, None) {
                 Err(e) => format!("adaptive failed too: {e} | | "),
-                Ok(reference) => match simulate(fmu, scenario, h, Some(1)) {
+                Ok(reference) => match simulate(fmu, scenario, h, Some((method, 1))) {
                     Ok(run) => {
                         let (d, name) = deviation(&run, &reference);
                         format!("{d:.1e} | {name} | {:.1e}", run.largest_estimate)
@@ -197,8 +209,16 @@ pub fn report(fmu: &Fmu) -> Result<String, String> {
                     Err(e) => format!("failed: {e} | | "),
                 },
             };
-            eprintln!("stability, {} at {h} s: {row}", scenario.name());
-            let _ = writeln!(md, "| {} | {} ms | {row} |", scenario.name(), h * 1e3);
+            eprintln!(
+                "stability, {} at {h} s, {method_name}: {row}",
+                scenario.name()
+            );
+            let _ = writeln!(
+                md,
+                "| {} | {} ms | {method_name} | {row} |",
+                scenario.name(),
+                h * 1e3
+            );
         }
     }
     Ok(md)

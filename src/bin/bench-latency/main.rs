@@ -79,6 +79,7 @@ const SOLVERS: &[(&str, i32, i32)] = &[
     ("Radau IIA (adaptive)", 2, 1),
     ("real time, 1 substep", 3, 1),
     ("real time, 4 substeps", 3, 4),
+    ("real time ROS34PW2, 1 substep", 4, 1),
 ];
 
 /// The plants: a name and the preset it applies (the preset's own move is switched off by

@@ -52,16 +52,18 @@ pub(super) use dense_output::interpolate;
 use factor::factorise;
 pub(crate) use factor::Factor;
 pub(crate) use state::check_restored;
+pub(crate) use state::{Ahead, Controller};
+
 pub use state::{Rodas5P, State, STATE_VERSION};
 
 use super::common::{
-    all_finite, eval, initial_step, jacobian_here, plan_step, rms, scale_into, with_kept_memory,
-    NextStep, Outputs, Workspace,
+    all_finite, axpy, eval, initial_step, jacobian_here, plan_step, rms, scale_into,
+    with_kept_memory, NextStep, Outputs, Workspace,
 };
 use super::jacobian;
 use super::linalg::PatternCache;
 use super::method::Stepper;
-use super::{OdeSystem, SolverError, SolverErrorKind};
+use super::{OdeSystem, SolverError, SolverErrorKind, SolverOptions};
 
 /// Number of stages.
 pub const STAGES: usize = 8;
@@ -265,7 +267,7 @@ const ERR_ORDER: f64 = 5.0;
 /// The tunables of the Rodas5P integrator's step-size control, with their defaults, in the
 /// manner of the WORK parameters of Hairer's RODAS (its name given where it has one). The
 /// integrator uses `Rodas5POptions::default()`; they are not part of
-/// [`SolverOptions`](super::SolverOptions), which the integrator saves with its state.
+/// [`SolverOptions`], which the integrator saves with its state.
 ///
 /// The step size after an accepted step is that of a PI controller (Hairer & Wanner II,
 /// Sec. IV.2 / Gustafsson 1991): h_new = h · safe · err^(-β1) · err_prev^(β2), with
@@ -297,10 +299,18 @@ pub struct Rodas5POptions {
 
 impl Default for Rodas5POptions {
     fn default() -> Self {
+        Rodas5POptions::for_order(ERR_ORDER)
+    }
+}
+
+impl Rodas5POptions {
+    /// The defaults for an error estimate err ~ h^(k+1) (k = 5 for Rodas5P's pair; another
+    /// method with this controller, ROS34PW2, has k = 3): β1 = 0.7/k, β2 = 0.4/k.
+    pub fn for_order(k: f64) -> Self {
         Rodas5POptions {
             safe: 0.9,
-            beta1: 0.7 / ERR_ORDER,
-            beta2: 0.4 / ERR_ORDER,
+            beta1: 0.7 / k,
+            beta2: 0.4 / k,
             fac_min: 0.2,
             fac_max: 6.0,
             err_floor: 1e-10,
@@ -308,10 +318,94 @@ impl Default for Rodas5POptions {
             singular_reject: 0.5,
         }
     }
+
+    /// h_new / h after a step accepted with error norm `err`, for an error estimate of order
+    /// `k` (see [`Rodas5POptions::for_order`]); records the step in `hist`.
+    pub(crate) fn accepted(&self, hist: &mut Controller, err: f64, k: f64) -> f64 {
+        let e = err.max(self.err_floor);
+        let mut fac = if hist.err_prev > 0.0 {
+            self.safe
+                * crate::math::powf(e, -self.beta1)
+                * crate::math::powf(hist.err_prev, self.beta2)
+        } else {
+            self.safe * crate::math::powf(e, -1.0 / k)
+        };
+        fac = fac.clamp(self.fac_min, self.fac_max);
+        if hist.last_rejected {
+            fac = fac.min(1.0);
+        }
+        hist.err_prev = e;
+        hist.last_rejected = false;
+        hist.first = false;
+        fac
+    }
+
+    /// h_new / h after a rejected attempt (`result`: its error norm, or why it failed), for an
+    /// error estimate of order `k`; records the rejection in `hist` and in `run` (its count of
+    /// consecutive rejections and whether the last failed by non-finite values), with the error
+    /// that ends the call if there were too many in a row.
+    pub(crate) fn rejected(
+        &self,
+        hist: &mut Controller,
+        run: &mut Rejections,
+        result: Result<f64, Reject>,
+        k: f64,
+        (t, h, max_consecutive): (f64, f64, u32),
+    ) -> (f64, Option<SolverError>) {
+        run.consecutive += 1;
+        hist.last_rejected = true;
+        let fac = match result {
+            Ok(err) => {
+                run.last_nonfinite = false;
+                (self.safe * crate::math::powf(err, -1.0 / k)).clamp(self.fac_min, 1.0)
+            }
+            Err(Reject::NonFinite) => {
+                run.last_nonfinite = true;
+                self.nonfinite_reject
+            }
+            Err(Reject::Singular) => self.singular_reject,
+        };
+        if run.consecutive > max_consecutive {
+            let kind = if run.last_nonfinite {
+                SolverErrorKind::NonFinite
+            } else {
+                SolverErrorKind::TooManyRejections
+            };
+            let n = run.consecutive;
+            let message = format!("{n} consecutive step rejections (last h = {h:e})");
+            return (fac, Some(SolverError::new(kind, t, message)));
+        }
+        (fac, None)
+    }
+}
+
+/// The rejections of one call's step loop: how many in a row, and whether the last attempt
+/// failed by non-finite values.
+#[derive(Default)]
+pub(crate) struct Rejections {
+    pub consecutive: u32,
+    pub last_nonfinite: bool,
+}
+
+impl Rejections {
+    /// Why the step size fell below the minimum, from the last rejection.
+    pub(crate) fn why_small(&self) -> (SolverErrorKind, &'static str) {
+        if self.last_nonfinite {
+            (SolverErrorKind::NonFinite, "after non-finite values of f")
+        } else {
+            (SolverErrorKind::StepTooSmall, "to meet the tolerances")
+        }
+    }
+
+    /// A step was accepted.
+    pub(crate) fn accepted(&mut self) {
+        self.consecutive = 0;
+        self.last_nonfinite = false;
+    }
 }
 
 /// Why a step attempt failed.
-pub(super) enum Reject {
+pub(crate) enum Reject {
     /// A stage produced NaN/inf.
     NonFinite,
     /// W = I/(hγ) - J is singular for this h.
@@ -514,14 +608,21 @@ fn step_body<S: OdeSystem + ?Sized>(
     if !all_finite(&w.x1) {
         return Err(Reject::NonFinite);
     }
-    scale_into(
-        &integ.options.atol,
-        integ.options.rtol,
-        &integ.x,
-        &w.x1,
-        &mut w.sc,
-    );
-    let err = rms(&w.u[STAGES - 1], &w.sc);
+    error_norm(&integ.options, &integ.x, &w.x1, &w.u[STAGES - 1], &mut w.sc)
+}
+
+/// The weighted RMS norm of a step's error estimate `e` from `x0` to `x1` (`sc` receives the
+/// weights), or a rejection if it is not finite.
+#[inline]
+pub(crate) fn error_norm(
+    options: &SolverOptions,
+    x0: &[f64],
+    x1: &[f64],
+    e: &[f64],
+    sc: &mut [f64],
+) -> Result<f64, Reject> {
+    scale_into(&options.atol, options.rtol, x0, x1, sc);
+    let err = rms(e, sc);
     if err.is_finite() {
         Ok(err)
     } else {
@@ -529,17 +630,9 @@ fn step_body<S: OdeSystem + ?Sized>(
     }
 }
 
-/// `y += a x`.
-#[inline]
-fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
-    for (yi, xi) in y.iter_mut().zip(x) {
-        *yi += a * xi;
-    }
-}
-
 /// Evaluate f0 (and Jacobian/∂f/∂t lazily later) at the current point, failing on NaN/inf.
-pub(super) fn eval_f0<S: OdeSystem + ?Sized>(
-    integ: &mut Stepper<State>,
+pub(crate) fn eval_f0<St, S: OdeSystem + ?Sized>(
+    integ: &mut Stepper<St>,
     sys: &S,
     f0: &mut [f64],
 ) -> Result<(), SolverError> {
@@ -605,16 +698,9 @@ fn advance_with<S: OdeSystem + ?Sized>(
     }
     let mut jac_ok = false; // J (and ∂f/∂t) evaluated at the current point?
     let mut attempts: u64 = 0;
-    let mut consecutive_rejections: u32 = 0;
-    let mut last_nonfinite = false;
+    let mut rejections = Rejections::default();
     loop {
-        let why_small = || {
-            if last_nonfinite {
-                (SolverErrorKind::NonFinite, "after non-finite values of f")
-            } else {
-                (SolverErrorKind::StepTooSmall, "to meet the tolerances")
-            }
-        };
+        let why_small = || rejections.why_small();
         let quantise = stamp.is_some();
         let (h, last, h_proposed) = match plan_step(
             integ,
@@ -666,24 +752,9 @@ fn advance_with<S: OdeSystem + ?Sized>(
                     integ.t = t1;
                 }
                 integ.stats.accepted += 1;
-                consecutive_rejections = 0;
-                last_nonfinite = false;
+                rejections.accepted();
                 // PI step-size controller.
-                let e = err.max(opts.err_floor);
-                let mut fac = if integ.state.hist.err_prev > 0.0 {
-                    opts.safe
-                        * crate::math::powf(e, -opts.beta1)
-                        * crate::math::powf(integ.state.hist.err_prev, opts.beta2)
-                } else {
-                    opts.safe * crate::math::powf(e, -1.0 / ERR_ORDER)
-                };
-                fac = fac.clamp(opts.fac_min, opts.fac_max);
-                if integ.state.hist.last_rejected {
-                    fac = fac.min(1.0);
-                }
-                integ.state.hist.err_prev = e;
-                integ.state.hist.last_rejected = false;
-                integ.state.hist.first = false;
+                let fac = opts.accepted(&mut integ.state.hist, err, ERR_ORDER);
                 let mut h_new = h * fac;
                 if last {
                     // The step was shortened to hit the limit: do not let that shrink the next.
@@ -698,34 +769,13 @@ fn advance_with<S: OdeSystem + ?Sized>(
             }
             result => {
                 integ.stats.rejected += 1;
-                consecutive_rejections += 1;
-                integ.state.hist.last_rejected = true;
-                let fac = match result {
-                    Ok(err) => {
-                        last_nonfinite = false;
-                        (opts.safe * crate::math::powf(err, -1.0 / ERR_ORDER))
-                            .clamp(opts.fac_min, 1.0)
-                    }
-                    Err(Reject::NonFinite) => {
-                        last_nonfinite = true;
-                        opts.nonfinite_reject
-                    }
-                    Err(Reject::Singular) => opts.singular_reject,
-                };
+                let limits = (t, h, integ.options.max_consecutive_rejections);
+                let hist = &mut integ.state.hist;
+                let (fac, too_many) =
+                    opts.rejected(hist, &mut rejections, result, ERR_ORDER, limits);
                 integ.h = h * fac;
-                if consecutive_rejections > integ.options.max_consecutive_rejections {
-                    let kind = if last_nonfinite {
-                        SolverErrorKind::NonFinite
-                    } else {
-                        SolverErrorKind::TooManyRejections
-                    };
-                    return Err(SolverError::new(
-                        kind,
-                        t,
-                        format!(
-                            "{consecutive_rejections} consecutive step rejections (last h = {h:e})"
-                        ),
-                    ));
+                if let Some(e) = too_many {
+                    return Err(e);
                 }
             }
         }

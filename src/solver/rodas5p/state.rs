@@ -33,21 +33,12 @@ impl OdeMethod for Rodas5P {
         times: &[f64],
         out: &mut dyn FnMut(f64, &[f64]),
     ) -> Result<(), SolverError> {
-        if run.state.ahead.active {
-            if t_end <= run.state.ahead.t1 {
-                emit_ahead(run, t_end, times, out);
-                let mut x = std::mem::take(&mut run.x);
-                dense_at(&run.state.ahead, t_end, &mut x);
-                run.x = x;
-                run.t = t_end;
-                return Ok(());
-            }
-            // Go on from the end of the kept step.
-            let t1 = run.state.ahead.t1;
-            emit_ahead(run, t1, times, out);
-            std::mem::swap(&mut run.x, &mut run.state.ahead.x1);
-            run.t = t1;
-            run.state.ahead.active = false;
+        if run
+            .state
+            .ahead
+            .resume(&mut run.t, &mut run.x, t_end, times, out)
+        {
+            return Ok(());
         }
         advance(run, sys, t_end, limit, times, out)
     }
@@ -94,31 +85,6 @@ pub(crate) fn check_restored(run: &Stepper<State>) -> Result<(), String> {
     run.state
         .ahead
         .check(run.x.len(), run.t, &run.x, run.options.max_step)
-}
-
-/// The state at `t` inside the kept step (t0 <= t <= t1), into `buf`: its end state at t1
-/// itself, else the dense output.
-fn dense_at(a: &Ahead, t: f64, buf: &mut [f64]) {
-    if t == a.t1 {
-        buf.copy_from_slice(&a.x1);
-        return;
-    }
-    dense(&a.x0, &a.x1, &a.coef, (t - a.t0) / a.h, buf);
-}
-
-/// Calls `out` at the output times in (t, until] from the kept step.
-fn emit_ahead(run: &Stepper<State>, until: f64, times: &[f64], out: &mut dyn FnMut(f64, &[f64])) {
-    let mut due = times
-        .iter()
-        .filter(|&&w| w > run.t && w <= until)
-        .peekable();
-    if due.peek().is_some() {
-        let mut buf = vec![0.0; run.x.len()];
-        for &w in due {
-            dense_at(&run.state.ahead, w, &mut buf);
-            out(w, &buf);
-        }
-    }
 }
 
 /// Rodas5P's state between calls. Everything but `cache` is saved.
@@ -182,8 +148,59 @@ pub(crate) struct Ahead {
 }
 
 impl Ahead {
-    fn is_idle(&self) -> bool {
+    pub(crate) fn is_idle(&self) -> bool {
         !self.active
+    }
+
+    /// The start of a call to `t_end` from the reported point (t, x) while this step is active:
+    /// calls `out` at the output times in (t, min(t_end, t1)] from its dense output, and either
+    /// moves (t, x) to t_end inside the step (true: the call is done), or to the step's end t1,
+    /// where integration goes on (false; the step is then no longer kept).
+    pub(crate) fn resume(
+        &mut self,
+        t: &mut f64,
+        x: &mut Vec<f64>,
+        t_end: f64,
+        times: &[f64],
+        out: &mut dyn FnMut(f64, &[f64]),
+    ) -> bool {
+        if !self.active {
+            return false;
+        }
+        if t_end <= self.t1 {
+            self.emit(*t, t_end, times, out);
+            self.at(t_end, x);
+            *t = t_end;
+            return true;
+        }
+        let t1 = self.t1;
+        self.emit(*t, t1, times, out);
+        std::mem::swap(x, &mut self.x1);
+        *t = t1;
+        self.active = false;
+        false
+    }
+
+    /// The state at `t` inside the step (t0 <= t <= t1), into `buf`: its end state at t1
+    /// itself, else the dense output.
+    fn at(&self, t: f64, buf: &mut [f64]) {
+        if t == self.t1 {
+            buf.copy_from_slice(&self.x1);
+            return;
+        }
+        dense(&self.x0, &self.x1, &self.coef, (t - self.t0) / self.h, buf);
+    }
+
+    /// Calls `out` at the output times in (t, until] from the step.
+    fn emit(&self, t: f64, until: f64, times: &[f64], out: &mut dyn FnMut(f64, &[f64])) {
+        let mut due = times.iter().filter(|&&w| w > t && w <= until).peekable();
+        if due.peek().is_some() {
+            let mut buf = vec![0.0; self.x0.len()];
+            for &w in due {
+                self.at(w, &mut buf);
+                out(w, &buf);
+            }
+        }
     }
 
     /// Makes the buffers hold a step from `t0` (state `x0`) to `t1` (state `x1`) of size `h`,
