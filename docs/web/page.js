@@ -31,6 +31,12 @@ const DRAW_MS = 250;
 
 const $ = (id) => document.getElementById(id);
 
+// An integer with its thousands separated by commas (not toLocaleString: its first call loads
+// the locale's data, tens of milliseconds before the first run can start).
+function grouped(n) {
+  return String(n).replace(/\B(?=(\d{3})+(?!\d))/g, ",");
+}
+
 function escapeHtml(s) {
   return s.replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;" })[c]);
 }
@@ -167,7 +173,7 @@ function receive(run, batch) {
     const eta = batch.frames.subarray(f * n, (f + 1) * n);
     for (let c = 0; c < n; c++) run.frames.push(eta[c]);
     run.frameT.push(batch.frameT[f]);
-    for (const w of deflectionOf(run, eta)) if (Math.abs(w) > run.wGrid) run.wGrid = Math.abs(w);
+    run.wGrid = Math.max(run.wGrid, largestDeflection(run, eta));
   }
   if (batch.eta) run.eta = batch.eta;
   run.time = batch.time;
@@ -442,7 +448,7 @@ function ready({ variables, presets }) {
   $("preset").value = "complete";
   buildPanel();
   $("stop-note").textContent = `Up to ${$("stop").max} s: the page keeps every point of the run ` +
-    `(${Math.round($("stop").max / STEP + 1).toLocaleString("en")} at most, ${RECORDED.length + 2} numbers each).`;
+    `(${grouped(Math.round($("stop").max / STEP + 1))} at most, ${RECORDED.length + 2} numbers each).`;
   const problems = fromQuery();
   wire();
   if (problems.length) refuse(`Not run: ${problems.join("; ")}.`, null);

@@ -8,18 +8,32 @@
 // A plate whose largest deflection in the run stays below this [m] is at rest: drawn as it is.
 const AT_REST = 1e-6;
 
-// The deflection on the grid [m] of the plate's coordinates `eta`: the model's map (from
-// Simulation::deflection_map) times them, summed in the model's order.
+// The deflection [m] at the grid's point k of the plate's coordinates `eta`: row k of the model's
+// map (from Simulation::deflection_map) times them, summed in the model's order.
+function deflectionAt(map, eta, k) {
+  const n = eta.length;
+  let w = 0;
+  for (let c = 0; c < n; c++) w += map[k * n + c] * eta[c];
+  return w;
+}
+
+// The deflection on the grid [m] of the plate's coordinates `eta`.
 function deflectionOf(run, eta) {
   const { map } = run.map;
-  const n = eta.length;
-  const out = new Float64Array(map.length / n);
-  for (let k = 0; k < out.length; k++) {
-    let w = 0;
-    for (let c = 0; c < n; c++) w += map[k * n + c] * eta[c];
-    out[k] = w;
-  }
+  const out = new Float64Array(map.length / eta.length);
+  for (let k = 0; k < out.length; k++) out[k] = deflectionAt(map, eta, k);
   return out;
+}
+
+// The largest |deflection| on the grid [m] of the coordinates `eta` (nothing allocated: the
+// page takes it of every frame it receives, for the face view's fixed colour scale).
+function largestDeflection(run, eta) {
+  const { map } = run.map;
+  let largest = 0;
+  for (let k = 0, points = map.length / eta.length; k < points; k++) {
+    largest = Math.max(largest, Math.abs(deflectionAt(map, eta, k)));
+  }
+  return largest;
 }
 
 // The plate's coordinates at the time cursor (the nearest kept frame; the last point when the

@@ -212,9 +212,7 @@ impl<'a> Scap<'a> {
 
 /// Runs SCAP on a structurally valid graph.
 pub(crate) fn assign(g: &BondGraph) -> Result<Causality, BondGraphError> {
-    let ports = (0..g.elements.len())
-        .map(|i| g.ports(ElementId(i)))
-        .collect::<Vec<_>>();
+    let ports = g.port_table();
     let mut s = Scap {
         g,
         ports,

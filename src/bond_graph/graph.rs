@@ -555,4 +555,18 @@ impl BondGraph {
         }
         v
     }
+
+    /// Every element's [`Self::ports`], indexed by element, in one pass over the bonds.
+    pub fn port_table(&self) -> Vec<Vec<(BondId, f64)>> {
+        let mut table = vec![Vec::new(); self.elements.len()];
+        for (i, b) in self.bonds.iter().enumerate() {
+            if let Some(t) = table.get_mut(b.to.0) {
+                t.push((BondId(i), 1.0));
+            }
+            if let Some(t) = table.get_mut(b.from.0) {
+                t.push((BondId(i), -1.0));
+            }
+        }
+        table
+    }
 }

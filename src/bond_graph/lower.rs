@@ -154,10 +154,10 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     // --- element equations
     let mut storages = Vec::new();
     let mut power_terms = Vec::new();
-    for (i, el) in g.elements.iter().enumerate() {
+    let port_table = g.port_table();
+    for (i, (el, ports)) in g.elements.iter().zip(port_table).enumerate() {
         let id = ElementId(i);
         let name = el.name.as_str();
-        let ports = g.ports(id);
         match &el.kind {
             ElementKind::Se(v) => {
                 let (bd, sg) = ports[0];

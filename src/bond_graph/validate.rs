@@ -108,9 +108,8 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
             ));
         }
     }
-    for (i, el) in g.elements.iter().enumerate() {
+    for (el, ports) in g.elements.iter().zip(g.port_table()) {
         let name = el.name.as_str();
-        let ports = g.ports(ElementId(i));
         let one_port = |kind: &str| -> Result<(), BondGraphError> {
             if ports.len() != 1 {
                 Err(structure(

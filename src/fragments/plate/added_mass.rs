@@ -76,16 +76,20 @@ pub fn strip(
         .iter()
         .map(|psi| 12.0 * (moment_integral(psi, 1) - 0.5 * moment_integral(psi, 0)) / b)
         .collect();
+    // each along-arm function's int phi^2 and int xi phi, computed once
+    let squares: Vec<f64> = phis
+        .iter()
+        .map(|phi| product_integral(phi, 0, phi, 0))
+        .collect();
+    let moments: Vec<f64> = phis.iter().map(|phi| moment_integral(phi, 1)).collect();
     let n = phis.len();
     let count = n * psis.len();
     let modes = DVector::from_fn(count, |j, _| {
-        let (phi, m) = (&phis[j % n], j / n);
-        arms * a
-            * product_integral(phi, 0, phi, 0)
-            * (m_h * heave[m] * heave[m] + m_alpha * twist[m] * twist[m])
+        let m = j / n;
+        arms * a * squares[j % n] * (m_h * heave[m] * heave[m] + m_alpha * twist[m] * twist[m])
     });
     let coupling = DVector::from_fn(count, |j, _| {
-        arms * m_h * a * a * moment_integral(&phis[j % n], 1) * heave[j / n]
+        arms * m_h * a * a * moments[j % n] * heave[j / n]
     });
     Some(AddedMass {
         modes,

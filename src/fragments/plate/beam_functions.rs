@@ -212,6 +212,24 @@ pub fn product_integral(fi: &BeamFunction, ki: u32, fj: &BeamFunction, kj: u32) 
     integrate(|x| fi.derivative(ki, x) * fj.derivative(kj, x))
 }
 
+/// A function's values at the nodes of [`integrate`]'s rule, in its order: tables of many
+/// functions make their products' integrals ([`integrate_product`]) cost a dot product each
+/// instead of two function evaluations per node (the Ritz matrices need every pair).
+pub fn tabulate(f: impl Fn(f64) -> f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(PANELS * NODES);
+    composite(|_, x| {
+        out.push(f(x));
+        0.0
+    });
+    out
+}
+
+/// `int_0^1 f g dxi` of two functions tabulated by [`tabulate`]: the same sum as [`integrate`]
+/// of the product, to the bit.
+pub fn integrate_product(f: &[f64], g: &[f64]) -> f64 {
+    composite(|k, _| f[k] * g[k])
+}
+
 /// `int_0^1 xi^power phi(xi) dxi`.
 pub fn moment_integral(f: &BeamFunction, power: i32) -> f64 {
     integrate(|x| x.powi(power) * f.value(x))
@@ -255,14 +273,20 @@ pub fn gauss_legendre_rule(n: usize) -> Vec<(f64, f64)> {
 
 /// `int_0^1 f(xi) dxi` by composite Gauss-Legendre quadrature.
 pub fn integrate(f: impl Fn(f64) -> f64) -> f64 {
+    composite(|_, x| f(x))
+}
+
+/// The composite rule: `PANELS` panels of the `NODES`-point rule, `f(k, xi)` at node `k`
+/// (counted over all panels) and abscissa `xi`.
+fn composite(mut f: impl FnMut(usize, f64) -> f64) -> f64 {
     let gl = gauss_legendre();
     let h = 1.0 / PANELS as f64;
     let mut sum = 0.0;
     for p in 0..PANELS {
         let mid = (p as f64 + 0.5) * h;
         let mut s = 0.0;
-        for &(x, w) in gl {
-            s += w * f(mid + 0.5 * h * x);
+        for (k, &(x, w)) in gl.iter().enumerate() {
+            s += w * f(p * NODES + k, mid + 0.5 * h * x);
         }
         sum += 0.5 * h * s;
     }

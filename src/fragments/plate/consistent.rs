@@ -26,7 +26,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::beam_functions::{moment_integral, product_integral, BeamFunction, BeamKind};
+use super::beam_functions::{integrate_product, moment_integral, tabulate, BeamFunction, BeamKind};
 use super::{added_mass, PlateModel, PlateParameters, Root};
 
 /// Number of arms described by the coordinates (antisymmetric motion of the symmetric plate).
@@ -38,22 +38,29 @@ pub fn ritz_matrices(p: &PlateParameters) -> (DMatrix<f64>, DMatrix<f64>) {
     let phis = BeamFunction::family(BeamKind::ClampedFree, p.n);
     let psis = BeamFunction::family(BeamKind::FreeFree, p.m);
     let (a, b, d, nu) = (p.a, p.b, p.rigidity(), p.nu);
-    let table = |f: &[BeamFunction], len: f64, i: u32, j: u32| {
+    // Each function's derivatives 0, 1, 2 at the quadrature's nodes, evaluated once.
+    let nodes = |f: &[BeamFunction]| -> Vec<[Vec<f64>; 3]> {
+        f.iter()
+            .map(|f| [0, 1, 2].map(|k| tabulate(|x| f.derivative(k, x))))
+            .collect()
+    };
+    let (phi_nodes, psi_nodes) = (nodes(&phis), nodes(&psis));
+    let table = |f: &[[Vec<f64>; 3]], len: f64, i: usize, j: usize| {
         DMatrix::from_fn(f.len(), f.len(), |r, c| {
-            product_integral(&f[r], i, &f[c], j) * len.powi(1 - i as i32 - j as i32)
+            integrate_product(&f[r][i], &f[c][j]) * len.powi(1 - i as i32 - j as i32)
         })
     };
     let (x00, x11, x20, x22) = (
-        table(&phis, a, 0, 0),
-        table(&phis, a, 1, 1),
-        table(&phis, a, 2, 0),
-        table(&phis, a, 2, 2),
+        table(&phi_nodes, a, 0, 0),
+        table(&phi_nodes, a, 1, 1),
+        table(&phi_nodes, a, 2, 0),
+        table(&phi_nodes, a, 2, 2),
     );
     let (y00, y11, y20, y22) = (
-        table(&psis, b, 0, 0),
-        table(&psis, b, 1, 1),
-        table(&psis, b, 2, 0),
-        table(&psis, b, 2, 2),
+        table(&psi_nodes, b, 0, 0),
+        table(&psi_nodes, b, 1, 1),
+        table(&psi_nodes, b, 2, 0),
+        table(&psi_nodes, b, 2, 2),
     );
     let nm = p.n * p.m;
     let idx = |j: usize| (j % p.n, j / p.n);
@@ -148,13 +155,10 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
     if hub {
         mass[(0, 0)] = p.i_h + ARMS * p.i_p() + air.as_ref().map_or(0.0, |air| air.hub);
         // int int m x phi_n psi_m dx dy, both arms, and the air's
+        let along: Vec<f64> = phis.iter().map(|phi| moment_integral(phi, 1)).collect();
+        let across: Vec<f64> = psis.iter().map(|psi| moment_integral(psi, 0)).collect();
         let mut coupling = DVector::from_fn(nm, |j, _| {
-            ARMS * mu
-                * a
-                * a
-                * moment_integral(&phis[j % p.n], 1)
-                * b
-                * moment_integral(&psis[j / p.n], 0)
+            ARMS * mu * a * a * along[j % p.n] * b * across[j / p.n]
         });
         if let Some(air) = &air {
             coupling += &air.coupling;
