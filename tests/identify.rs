@@ -38,19 +38,18 @@ const TRUTH: [(&str, f64); 3] = [
 /// Points per response, log-spaced over 0.5 to 120 Hz (the band of the paper's Fig. 9b).
 const POINTS: usize = 200;
 
+#[path = "../tools/splitmix64.rs"]
+mod splitmix64;
+
 /// Standard normal numbers from a seed: splitmix64 and the Box–Muller transform.
-struct Normal(u64);
+struct Normal(splitmix64::SplitMix64);
 
 impl Normal {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    fn new(seed: u64) -> Normal {
+        Normal(splitmix64::SplitMix64(seed))
     }
     fn next(&mut self) -> f64 {
-        let (u, v) = (1.0 - self.uniform(), self.uniform());
+        let (u, v) = (1.0 - self.0.uniform(), self.0.uniform());
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
 }
@@ -80,7 +79,7 @@ fn synthetic(dir: &Path, sets: &[(&str, f64)], outputs: &[&str], seed: Option<u6
         .compiled()
         .linearize(&system.initial_state(), system.inputs());
     let input = lin.input_names.iter().position(|n| n == "r").unwrap();
-    let mut noise = seed.map(Normal);
+    let mut noise = seed.map(Normal::new);
     outputs
         .iter()
         .map(|output| {
@@ -435,7 +434,7 @@ fn the_report_page_shows_the_fit_and_each_response() {
 /// G_est)` at [`POINTS`] log-spaced frequencies, with 1 % complex noise from `seed` (none for
 /// `None`), written as `dir/g_est.csv`; the `--frf` argument for it.
 fn g_est_closed_loop(dir: &Path, seed: Option<u64>) -> String {
-    let mut noise = seed.map(Normal);
+    let mut noise = seed.map(Normal::new);
     let mut csv = String::from("f_Hz,re,im\n");
     for k in 0..POINTS {
         let f = 0.5 * (120.0f64 / 0.5).powf(k as f64 / (POINTS - 1) as f64);
@@ -648,7 +647,7 @@ fn series_of_the_fmu(dir: &Path, seed: u64) -> PathBuf {
             assert_eq!(fmu.step(t, h), Fmi2Status::Ok, "{}", fmu.last());
         }
     }
-    let mut noise = Normal(seed);
+    let mut noise = Normal::new(seed);
     let rms: Vec<f64> = (2..4)
         .map(|c| (rows.iter().map(|r| r[c] * r[c]).sum::<f64>() / rows.len() as f64).sqrt())
         .collect();
@@ -706,4 +705,51 @@ fn a_time_series_gives_the_parameters_of_the_frf_fit() {
             value(&frf).exp()
         );
     }
+}
+
+/// A fit that is not convex: the plate's modulus started 2.9x too high, where the response's
+/// plate resonances sit on other measured peaks. One start ends away from the truth (on a local
+/// minimum, or unconverged in its iterations); `--starts 6` (the start and 5 drawn in the box)
+/// finds the truth within its interval, and lists the minima it saw.
+#[test]
+fn multi_start_finds_the_modulus_a_single_start_misses() {
+    let dir = folder("starts");
+    // the truth: the FMU's start value (the data are generated with no setting)
+    let start = Values::from_start(&VARIABLES);
+    let i = VARIABLES.iter().position(|v| v.name == "plate.E").unwrap();
+    let truth = start.real(i);
+    let frfs = synthetic(&dir, &[], &["acc_tip"], Some(3));
+    let common = ["--set", "plate.E=2e11", "--max-iterations", "60"];
+    let fit = ["plate.E:1e10:4e11"];
+    let (single, _) = identify(&frfs, &fit, &common);
+    let (multi, stderr) = identify(&frfs, &fit, &[&common[..], &["--starts", "6"]].concat());
+    let value = |j: &Json| j["parameters"]["plate.E"]["value"].as_f64().unwrap();
+    let (lo, hi) = ci95(&multi, "plate.E").expect("an interval");
+    assert!(
+        lo <= truth && truth <= hi,
+        "truth {truth} outside [{lo}, {hi}]: {stderr}"
+    );
+    assert!(
+        !(lo..=hi).contains(&value(&single)),
+        "the single start ended at {} inside the interval: the case is convex",
+        value(&single)
+    );
+    let (c1, c6) = (
+        single["cost"].as_f64().unwrap(),
+        multi["cost"].as_f64().unwrap(),
+    );
+    assert!(c1 > 10.0 * c6, "single-start cost {c1}, multi-start {c6}");
+    // The starts: the configuration's first, each within the box, the best one's end is the fit.
+    let starts = multi["starts"].as_array().unwrap();
+    assert_eq!(starts.len(), 6);
+    assert_eq!(starts[0]["start"]["plate.E"].as_f64(), Some(2e11));
+    for s in starts {
+        let e = s["start"]["plate.E"].as_f64().unwrap();
+        assert!((1e10..=4e11).contains(&e), "{s}");
+    }
+    let minima = multi["minima"].as_array().unwrap();
+    assert!(minima.len() >= 2, "one minimum only: {minima:?}");
+    let best = &starts[minima[0]["start"].as_u64().unwrap() as usize];
+    assert_eq!(best["value"]["plate.E"].as_f64(), Some(value(&multi)));
+    assert_eq!(minima[0]["cost"].as_f64(), Some(c6));
 }

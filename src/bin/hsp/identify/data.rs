@@ -232,7 +232,7 @@ impl Fitted {
     }
 
     /// The bounds in `z`.
-    fn z_bounds(&self) -> Option<(f64, f64)> {
+    pub fn z_bounds(&self) -> Option<(f64, f64)> {
         self.bounds.map(|(lo, hi)| (self.z_of(lo), self.z_of(hi)))
     }
 

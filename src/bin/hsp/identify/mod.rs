@@ -8,11 +8,12 @@
 //! - [`series`]: measured time series (`--series`) and the FMU's simulation of them;
 //! - [`residuals`]: the weighted residuals and their sensitivities;
 //! - [`optimiser`]: the Levenberg–Marquardt solver;
+//! - [`starts`]: multi-start (`--starts`), its points and the minima they reach;
 //! - [`intervals`]: the intervals, correlations and identifiability warnings;
 //! - [`report`]: the JSON, the text table and the `.ssv`;
 //! - [`page`]: the markdown page with its Bode plots (`--report DIR`).
 //!
-//! Multi-start and exact sensitivities are a later step.
+//! Exact sensitivities are a later step (docs/identify.md, Known limits).
 
 mod data;
 mod intervals;
@@ -22,6 +23,7 @@ mod peaks;
 mod report;
 mod residuals;
 mod series;
+mod starts;
 
 use std::path::Path;
 
@@ -69,9 +71,20 @@ pub struct IdentifyArgs {
     /// "iterations", "correlations" (rows in the order of "fitted"), "fitted", "warnings", ...}
     #[arg(long)]
     json: bool,
-    /// The most Levenberg–Marquardt iterations
+    /// The most Levenberg–Marquardt iterations (per start)
     #[arg(long, default_value_t = 200)]
     max_iterations: usize,
+    /// Fit from N starting points and keep the lowest cost: the configuration's start and N - 1
+    /// drawn in the --fit boxes (a Latin hypercube, log-uniform for positive parameters; every
+    /// fitted parameter needs its box)
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    starts: u32,
+    /// The seed of the drawn starting points (--starts)
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The starts run on this many threads [default: the machine's processors]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    jobs: Option<u32>,
     /// The starting configuration: the FMU's start values, --preset, then --set
     #[command(flatten)]
     model: crate::ModelArgs,
@@ -116,12 +129,21 @@ pub struct Fit {
     pub rms: Vec<(f64, f64)>,
     /// Per `--peaks`, the model's peaks taken for the measured ones at the start and fitted.
     pub model_peaks: Vec<(Vec<f64>, Vec<f64>)>,
+    /// With `--starts N > 1`: every start and where it ended (the fit is the best one's), and
+    /// the distinct minima, lowest first.
+    pub starts: Vec<starts::Start>,
+    pub minima: Vec<starts::Minimum>,
 }
 
 impl Fit {
     /// The fitted values.
     pub fn values(&self) -> Vec<f64> {
         self.problem.p_of_z(&self.z)
+    }
+
+    /// `z` of the optimiser's coordinates `t`.
+    pub fn z_of_t(&self, t: &[f64]) -> Vec<f64> {
+        Unconstrained(&self.problem).z(t)
     }
 }
 
@@ -149,17 +171,40 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         .map(|s| Fitted::parse(s, &base))
         .collect::<Result<_, _>>()?;
     let problem = Problem::new(base, frfs, peaks, series, fitted)?;
-    let t0: Vec<f64> = problem
-        .fitted
-        .iter()
-        .map(|f| f.t_of_z(f.z_of(f.start)))
-        .collect();
     let tolerances = Tolerances {
         iterations: args.max_iterations,
         ..Tolerances::default()
     };
     let unconstrained = Unconstrained(&problem);
-    let out = levenberg_marquardt(&unconstrained, &t0, tolerances)?;
+    let (out, all_starts, minima) = if args.starts > 1 {
+        let z0s = starts::points(&problem.fitted, args.starts as usize, args.seed)?;
+        let jobs = args.jobs.map_or_else(
+            || std::thread::available_parallelism().map_or(1, |n| n.get()),
+            |n| n as usize,
+        );
+        let all = starts::run(&unconstrained, z0s, tolerances, jobs);
+        let best = starts::best(&all).ok_or_else(|| {
+            let why = all.iter().find_map(|s| s.end.as_ref().err());
+            format!(
+                "the model failed at every start{}",
+                why.map_or(String::new(), |w| format!(" (the first: {w})"))
+            )
+        })?;
+        let minima = starts::minima(&all, |t| unconstrained.z(t));
+        let out = all[best].end.clone()?;
+        (out, all, minima)
+    } else {
+        let t0: Vec<f64> = problem
+            .fitted
+            .iter()
+            .map(|f| f.t_of_z(f.z_of(f.start)))
+            .collect();
+        (
+            levenberg_marquardt(&unconstrained, &t0, tolerances)?,
+            Vec::new(),
+            Vec::new(),
+        )
+    };
     let z = unconstrained.z(&out.t);
     let jac = problem.jacobian_z(&z)?;
     let mut statistics = intervals::statistics(
@@ -178,6 +223,23 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
                 out.iterations
             ),
         );
+    }
+    if let Some(best) = minima.first() {
+        let failed = all_starts.iter().filter(|s| s.end.is_err()).count();
+        if best.reached == 1 && all_starts.len() > 1 {
+            statistics.warnings.push(format!(
+                "the lowest cost was reached from 1 of {} starts ({} distinct minima): a lower \
+                 one may exist; more --starts or a narrower box would tell",
+                all_starts.len(),
+                minima.len()
+            ));
+        }
+        if failed > 0 {
+            statistics.warnings.push(format!(
+                "the model failed at {failed} of {} starting points (listed in the starts)",
+                all_starts.len()
+            ));
+        }
     }
     let start: Vec<f64> = problem.fitted.iter().map(|f| f.start).collect();
     let fitted_values = problem.p_of_z(&z);
@@ -204,6 +266,8 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         statistics,
         rms,
         model_peaks,
+        starts: all_starts,
+        minima,
     })
 }
 

@@ -2,6 +2,7 @@
 //! configuration as an SSP 1.0 parameter set (`--out FILE.ssv`, by the writer of `hsp ssp`).
 
 use std::fmt::Write as _;
+use std::sync::atomic::Ordering;
 
 use hydraulic_slewing_plate::fmu::{Causality, Value, Variability};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
@@ -19,7 +20,10 @@ use crate::ecosystem::ssp::parameter_set_of;
 /// model's linearisations; `sensitivities` says how they were computed; `responses` gives, per
 /// `--frf` in order, the RMS of the weighted relative error `|e_k|` at the start and fitted;
 /// `peaks`, per `--peaks` in order, the measured peaks, their uncertainties and the model's peaks
-/// taken for them at the start and fitted.
+/// taken for them at the start and fitted. With `--starts N > 1`, also `starts` (each start's
+/// `start` and `value` by parameter, `cost`, `iterations`, `stop`, or its `error`) and `minima`
+/// (the distinct minima, lowest cost first: the index of the best start that reached each,
+/// `reached`, the number of starts that did, and `cost`).
 pub fn json(fit: &Fit) -> serde_json::Value {
     let values = fit.values();
     let mut parameters = serde_json::Map::new();
@@ -33,7 +37,7 @@ pub fn json(fit: &Fit) -> serde_json::Value {
             }),
         );
     }
-    json!({
+    let mut out = json!({
         "parameters": parameters,
         "cost": fit.cost,
         "iterations": fit.iterations,
@@ -42,7 +46,7 @@ pub fn json(fit: &Fit) -> serde_json::Value {
         "warnings": fit.statistics.warnings,
         "residuals": fit.problem.len(),
         "variance": fit.statistics.variance,
-        "evaluations": fit.problem.evaluations.get(),
+        "evaluations": fit.problem.evaluations.load(Ordering::Relaxed),
         "stop": format!("{:?}", fit.stop).to_lowercase(),
         "sensitivities": sensitivities(fit),
         "responses": fit.problem.frfs.iter().zip(&fit.rms).map(|(d, (before, after))| json!({
@@ -62,7 +66,46 @@ pub fn json(fit: &Fit) -> serde_json::Value {
             "start_Hz": before,
             "fitted_Hz": after,
         })).collect::<Vec<_>>(),
-    })
+    });
+    if !fit.starts.is_empty() {
+        out["starts"] = fit
+            .starts
+            .iter()
+            .map(|s| {
+                let by_name = |z: &[f64]| -> serde_json::Map<String, serde_json::Value> {
+                    let p = fit.problem.p_of_z(z);
+                    fit.problem
+                        .fitted
+                        .iter()
+                        .zip(p)
+                        .map(|(f, v)| (f.name.clone(), json!(v)))
+                        .collect()
+                };
+                match &s.end {
+                    Ok(end) => json!({
+                        "start": by_name(&s.z0),
+                        "value": by_name(&fit.z_of_t(&end.t)),
+                        "cost": end.cost,
+                        "iterations": end.iterations,
+                        "stop": format!("{:?}", end.stop).to_lowercase(),
+                    }),
+                    Err(e) => json!({"start": by_name(&s.z0), "error": e}),
+                }
+            })
+            .collect();
+        out["minima"] = fit
+            .minima
+            .iter()
+            .map(|m| {
+                json!({
+                    "start": m.start,
+                    "reached": m.reached,
+                    "cost": fit.starts[m.start].end.as_ref().map_or(f64::NAN, |e| e.cost),
+                })
+            })
+            .collect();
+    }
+    out
 }
 
 /// How the sensitivities were computed, in words.
@@ -84,7 +127,7 @@ pub fn text(fit: &Fit) -> String {
         fit.problem.len(),
         fit.cost,
         fit.iterations,
-        fit.problem.evaluations.get(),
+        fit.problem.evaluations.load(Ordering::Relaxed),
         "parameter",
         "start",
         "fitted",
@@ -115,6 +158,45 @@ pub fn text(fit: &Fit) -> String {
                 d.f_hz[k], d.sigma_hz[k], before[k], after[k]
             )
             .unwrap();
+        }
+    }
+    if !fit.minima.is_empty() {
+        writeln!(
+            s,
+            "{} starts ended in {} distinct minima (lowest cost first):",
+            fit.starts.len(),
+            fit.minima.len()
+        )
+        .unwrap();
+        let names: Vec<&str> = fit.problem.fitted.iter().map(|f| f.name.as_str()).collect();
+        writeln!(
+            s,
+            "{:>14} {:>8} {:>10} {}",
+            "cost",
+            "reached",
+            "stop",
+            names.join("  ")
+        )
+        .unwrap();
+        for m in &fit.minima {
+            if let Ok(end) = &fit.starts[m.start].end {
+                let p = fit.problem.p_of_z(&fit.z_of_t(&end.t));
+                let p: Vec<String> = p.iter().map(|v| format!("{v:.6e}")).collect();
+                let stop = format!("{:?}", end.stop).to_lowercase();
+                writeln!(
+                    s,
+                    "{:>14.6e} {:>8} {stop:>10} {}",
+                    end.cost,
+                    m.reached,
+                    p.join("  ")
+                )
+                .unwrap();
+            }
+        }
+        for st in &fit.starts {
+            if let Err(e) = &st.end {
+                writeln!(s, "a start failed: {e}").unwrap();
+            }
         }
     }
     for w in &fit.statistics.warnings {

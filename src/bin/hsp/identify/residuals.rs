@@ -24,6 +24,7 @@
 //! scalar type; that is left for a later step (docs/identify.md).
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use hydraulic_slewing_plate::bond_graph::Linearization;
 use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
@@ -51,7 +52,7 @@ pub struct Problem {
     /// Per response: the index of its input and its output in the linearisation.
     ports: Vec<(usize, usize)>,
     /// Model evaluations so far (one linearisation and its responses each).
-    pub evaluations: std::cell::Cell<usize>,
+    pub evaluations: AtomicUsize,
 }
 
 impl Problem {
@@ -109,7 +110,7 @@ impl Problem {
             series,
             fitted,
             ports,
-            evaluations: std::cell::Cell::new(0),
+            evaluations: AtomicUsize::new(0),
         })
     }
 
@@ -141,7 +142,7 @@ impl Problem {
 
     /// The model's linearisation at `p` (one model evaluation).
     fn evaluate(&self, p: &[f64]) -> Result<Linearization, String> {
-        self.evaluations.set(self.evaluations.get() + 1);
+        self.evaluations.fetch_add(1, Ordering::Relaxed);
         linearization(&self.values_at(p)?)
     }
 
