@@ -56,6 +56,9 @@ pub struct NonlinearLaw {
     /// operations for the value, so the same bits as `f`'s first result.
     pub(crate) value: Arc<dyn Fn(f64, f64) -> f64 + Send + Sync>,
     pub(crate) energy: Option<Arc<dyn Fn(f64) -> f64 + Send + Sync>>,
+    /// `(k, c)` with `|E(x)| <= k x^2 + c` for every finite `x`, if the law's author shows one
+    /// ([`NonlinearLaw::with_energy_bound`]).
+    pub(crate) energy_bound: Option<(f64, f64)>,
 }
 
 impl NonlinearLaw {
@@ -74,6 +77,7 @@ impl NonlinearLaw {
             }),
             value: Arc::new(move |x, _m| value(x).0),
             energy: None,
+            energy_bound: None,
         }
     }
 
@@ -89,6 +93,7 @@ impl NonlinearLaw {
             f: phi,
             value: Arc::new(move |x, m| value(x, m).0),
             energy: None,
+            energy_bound: None,
         }
     }
 
@@ -100,6 +105,15 @@ impl NonlinearLaw {
         F: Fn(f64) -> f64 + Send + Sync + 'static,
     {
         self.energy = Some(Arc::new(energy));
+        self
+    }
+
+    /// Declares `|E(x)| <= k x^2 + c` for every finite `x` (`E` the stored energy, from 0): with
+    /// it, [`super::CompiledModel::stored_energy_bound`] shows the stored energy finite at a
+    /// state without computing it, so that a communication point need not (the FMU computes it
+    /// when it is read). The law's author proves the bound; a test samples it.
+    pub fn with_energy_bound(mut self, k: f64, c: f64) -> Self {
+        self.energy_bound = Some((k, c));
         self
     }
 

@@ -84,21 +84,27 @@ impl CompiledModel {
         self.storages.iter().map(|st| storage_energy(st, x)).sum()
     }
 
-    /// A constant K with |H(x)| ≤ K max_i |x_i|² for every x, when every storage is linear (a
-    /// one-port with a linear law, or a field); None when one is not. Shows the stored energy
-    /// finite at x without computing it: K max|x|² is finite.
-    pub fn stored_energy_bound(&self) -> Option<f64> {
+    /// Constants `(K, C)` with |H(x)| ≤ K max_i |x_i|² + C for every x, when every storage is
+    /// linear (a one-port with a linear law, or a field: C = 0) or has a law that declares such a
+    /// bound ([`super::NonlinearLaw::with_energy_bound`]); None when one does not. Shows the
+    /// stored energy finite at x without computing it: K max|x|² + C is finite.
+    pub fn stored_energy_bound(&self) -> Option<(f64, f64)> {
         self.storages
             .iter()
             .map(|st| match st {
                 Storage::One {
                     law: Law::Linear(k),
                     ..
-                } => Some(0.5 / k.abs()),
-                Storage::One { .. } => None,
-                Storage::Field { w, .. } => Some(0.5 * w.iter().map(|v| v.abs()).sum::<f64>()),
+                } => Some((0.5 / k.abs(), 0.0)),
+                Storage::One {
+                    law: Law::Nonlinear(l) | Law::Conductance(l),
+                    ..
+                } => l.energy_bound,
+                Storage::Field { w, .. } => {
+                    Some((0.5 * w.iter().map(|v| v.abs()).sum::<f64>(), 0.0))
+                }
             })
-            .sum()
+            .try_fold((0.0, 0.0), |(k, c), b| b.map(|(kb, cb)| (k + kb, c + cb)))
     }
 
     /// Stored energy per storage element, in creation order.

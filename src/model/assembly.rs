@@ -66,9 +66,9 @@ pub struct Assembled {
     /// For each of the FMU's variables, how it is computed on its own when it is read after a
     /// step ([`Assembled::write_at_point`]); empty when nothing is.
     on_demand: Vec<OnDemand>,
-    /// K with |stored energy| ≤ K max|x|² when every storage is linear (the energy is then
-    /// left until read too).
-    energy_bound: Option<f64>,
+    /// `(K, C)` with |stored energy| ≤ K max|x|² + C when every storage is linear or declares a
+    /// bound (`CompiledModel::stored_energy_bound`; the energy is then left until read too).
+    energy_bound: Option<(f64, f64)>,
 }
 
 /// How one of the FMU's variables is computed on its own, from the state, when it is read.

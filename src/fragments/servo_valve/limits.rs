@@ -55,6 +55,10 @@ pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
         (k * delta * (sp_hi - sp_lo), k * (s_hi + s_lo))
     })
     .with_energy(move |x| e_side(x) + e_side(-x) - e0)
+    .with_energy_bound(
+        2.0 * k.abs(),
+        2.0 * k.abs() * (x_max * x_max + delta * delta * DILOG_BOUND) + e0.abs(),
+    )
 }
 
 /// The spool end stops' contact damping: `e = c(x) v` with `c(x) = c_0 (sp'(z₊) + sp'(z₋))`
@@ -108,9 +112,24 @@ pub fn chamber(volume: f64, beta: f64) -> Law {
             let (sp, sig) = softplus((k * q - pc) / s);
             (pc + s * sp, k * sig)
         })
-        .with_energy(move |q| 0.5 * k * q * q + (s * s / k) * (tail(q) - tail0)),
+        .with_energy(move |q| 0.5 * k * q * q + (s * s / k) * (tail(q) - tail0))
+        .with_energy_bound(
+            1.5 * k.abs(),
+            (pc * pc + s * s * (DILOG_BOUND + tail0.abs())) / k.abs(),
+        ),
     )
 }
+
+/// `|Li₂(-e^w)| <= w²/2 + DILOG_BOUND` for every real `w`: `Li₂(-e^w)` lies in `[-π²/12, 0)` for
+/// `w <= 0`, and for `w > 0` the inversion `Li₂(-e^w) = -π²/6 - w²/2 - Li₂(-e^-w)` with
+/// `-Li₂(-e^-w)` in `(0, π²/12]`. It bounds the stored energy of the laws above by a quadratic:
+/// with `(a - b)² <= 2 a² + 2 b²`,
+/// - the chamber, `w = (p_c - k q)/s`: `(s²/k) |Li₂| <= p_c²/k + k q² + s² DILOG_BOUND / k`, so
+///   `|E(q)| <= 1.5 k q² + (p_c² + s² (DILOG_BOUND + |Li₂(-e^-z₀)|)) / k`;
+/// - a stop side, `w = (x - x_max)/delta`: `k delta² |Li₂| <= k (x² + x_max²) + k delta²
+///   DILOG_BOUND`, two sides and `e0`: `|E(x)| <= 2 k x² + 2 k (x_max² + delta² DILOG_BOUND) +
+///   |e0|`.
+const DILOG_BOUND: f64 = std::f64::consts::PI * std::f64::consts::PI / 6.0;
 
 /// `Li₂(-e^w)`, the dilogarithm `Li₂(y) = -∫₀^y ln(1 - t)/t dt` at `y = -e^w`.
 ///
@@ -156,6 +175,29 @@ fn dilog_of_minus_exp(w: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The declared bounds `|E(x)| <= K x² + C` hold from the operating point to far beyond
+    /// the limits, on both sides (each law's own energy function, sampled).
+    #[test]
+    fn the_stored_energies_stay_within_their_declared_bounds() {
+        let Law::Nonlinear(chamber) = chamber(1.2e-6, 1.4e9) else {
+            panic!("the chamber law is nonlinear")
+        };
+        let stop = spool_stop_spring(5e-4, stop_stiffness(2.8e-5, 2.1e7, 5e-4));
+        for (law, scale) in [(&chamber, 1.2e-6 * 2.1e7 / 1.4e9), (&stop, 5e-4)] {
+            let (k, c) = law.energy_bound.expect("a declared bound");
+            let energy = law.energy.as_ref().expect("an energy function");
+            for i in -4000..=4000 {
+                let x = scale * (i as f64 / 100.0).powi(3);
+                let e = energy(x);
+                assert!(
+                    e.is_finite() && e.abs() <= k * x * x + c,
+                    "{}: E({x}) = {e}",
+                    law.label
+                );
+            }
+        }
+    }
 
     #[test]
     fn softplus_skips_libm_only_where_its_answer_is_known() {

@@ -100,7 +100,7 @@ impl Assembled {
         let x_max = max_abs(x, |_| true);
         let energy_finite = self
             .energy_bound
-            .is_none_or(|k| k * x_max * x_max < FINITE_BOUND);
+            .is_none_or(|(k, c)| k * x_max * x_max + c < FINITE_BOUND);
         if self.on_demand.is_empty() || !affine.finite_within(x_max) || !energy_finite {
             return false;
         }
