@@ -65,12 +65,12 @@ impl<T: Scalar> Factorisation<T> {
         let nb = p.starts[p.blocks()];
         let m = n - nb;
         let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
-        resize(&mut self.lu, p.lu_len);
-        resize(&mut self.x, p.x_len);
-        resize(&mut self.c, p.x_len);
-        self.piv.resize(n, 0);
-        resize(&mut self.schur, m * m);
-        self.schur_piv.resize(m, 0);
+        grow(&mut self.lu, p.lu_len, T::ZERO);
+        grow(&mut self.x, p.x_len, T::ZERO);
+        grow(&mut self.c, p.x_len, T::ZERO);
+        grow(&mut self.piv, n, 0);
+        grow(&mut self.schur, m * m, T::ZERO);
+        grow(&mut self.schur_piv, m, 0);
         // The blocks' LUs first, at the offsets the solves read them from: a block with a small
         // pivot fails the factorisation before any of the couplings' work is done (a model whose
         // structured elimination fails then pays only its small blocks before the dense LU).
@@ -134,7 +134,7 @@ impl<T: Scalar> Factorisation<T> {
                 }
             }
         }
-        lu_in_place(&mut self.schur, m, &mut self.schur_piv, floor)
+        lu_in_place(&mut self.schur[..m * m], m, &mut self.schur_piv[..m], floor)
     }
 
     /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
@@ -198,7 +198,8 @@ impl<T: Scalar> Factorisation<T> {
                 }
             }
         }
-        lu_solve(&self.schur, p.n - nb, &self.schur_piv, border);
+        let m = p.n - nb;
+        lu_solve(&self.schur[..m * m], m, &self.schur_piv[..m], border);
         // x_b = y_b - X_b x_B.
         for at in &p.linked {
             let (st, k) = (at.start, at.size);
@@ -263,8 +264,15 @@ impl<T: Scalar> Factorisation<T> {
     }
 }
 
-fn resize<T: Scalar>(v: &mut Vec<T>, len: usize) {
-    v.resize(len, T::ZERO);
+/// Makes `v` at least `len` long, never shorter: the buffers serve partitions of different
+/// sizes in turn (a structured one and its dense fallback, when the structured elimination fails
+/// at every step), and a buffer resized down and up again at every factorisation had its grown
+/// part zeroed each time, to be overwritten (every entry a factorisation or a solve reads is
+/// written by the factorisation first, within the partition's lengths).
+fn grow<V: Copy>(v: &mut Vec<V>, len: usize, zero: V) {
+    if v.len() < len {
+        v.resize(len, zero);
+    }
 }
 
 /// Factorises `entry` with `part`, or with the dense partition if the structured elimination
@@ -328,7 +336,7 @@ mod tests {
             lo += k * k;
             xo += k * links.len();
         }
-        lu_solve(&f.schur, m, &f.schur_piv, border);
+        lu_solve(&f.schur[..m * m], m, &f.schur_piv[..m], border);
         // x_b = y_b - X_b x_B.
         let mut xo = 0;
         for b in 0..p.blocks() {
