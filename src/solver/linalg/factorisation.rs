@@ -3,6 +3,8 @@
 
 use std::sync::Arc;
 
+use nalgebra::DMatrix;
+
 use super::lu::{lu_in_place, lu_solve, solve_2x2};
 use super::partition::Partition;
 use super::scalar::Scalar;
@@ -10,6 +12,57 @@ use super::scalar::Scalar;
 /// A block whose smallest pivot is below this share of its largest entry is left to the dense
 /// LU: elimination inside blocks does not pivot across them.
 const PIVOT_FLOOR: f64 = 1e-10;
+
+/// The entries of a matrix to factorise: a closure `|i, j| M_ij`, or a type that also gives a
+/// whole leading column at once ([`Shifted`]), which the dense partition's one block fills from.
+pub trait Entries<T> {
+    /// M_ij.
+    fn entry(&self, i: usize, j: usize) -> T;
+    /// M_rj for the rows r in 0..out.len() of column j, into `out`: by default entry by entry.
+    fn leading_column(&self, j: usize, out: &mut [T]) {
+        for (r, v) in out.iter_mut().enumerate() {
+            *v = self.entry(r, j);
+        }
+    }
+}
+
+impl<T, F: Fn(usize, usize) -> T> Entries<T> for F {
+    fn entry(&self, i: usize, j: usize) -> T {
+        self(i, j)
+    }
+}
+
+/// M = c I − J for a Jacobian J: the iteration matrix W = I/(h γ) − J of the Rosenbrock methods
+/// (c = 1/(h γ)). A column comes as J's column negated with c added on the diagonal, the same
+/// operations as entry by entry (so the same bits), without indexing each entry.
+pub struct Shifted<'a> {
+    /// The shift c.
+    pub c: f64,
+    /// J, square.
+    pub jac: &'a DMatrix<f64>,
+}
+
+impl Entries<f64> for Shifted<'_> {
+    fn entry(&self, i: usize, j: usize) -> f64 {
+        let v = self.jac[(i, j)];
+        if i == j {
+            self.c - v
+        } else {
+            -v
+        }
+    }
+
+    fn leading_column(&self, j: usize, out: &mut [f64]) {
+        let n = self.jac.nrows();
+        let column = &self.jac.as_slice()[j * n..j * n + out.len()];
+        for (o, &v) in out.iter_mut().zip(column) {
+            *o = -v;
+        }
+        if let Some(d) = out.get_mut(j) {
+            *d = self.c - column[j];
+        }
+    }
+}
 
 /// LU factors of M for a [`Partition`] (see the [module documentation](super)).
 #[derive(Clone, Debug)]
@@ -56,7 +109,12 @@ impl<T: Scalar> Factorisation<T> {
     /// Factorises the matrix with entries `entry(i, j)` for the partition `part` (reusing this
     /// factorisation's memory). False if a pivot is zero, or, for a structured partition, small
     /// against its block (below 1e-10 of its largest entry); the factors are then unusable.
-    pub fn factor(&mut self, part: &Arc<Partition>, entry: impl Fn(usize, usize) -> T) -> bool {
+    pub fn factor(&mut self, part: &Arc<Partition>, entry: impl Entries<T>) -> bool {
+        self.factor_by(part, &entry)
+    }
+
+    /// [`Factorisation::factor`] with the entries by reference.
+    fn factor_by<E: Entries<T>>(&mut self, part: &Arc<Partition>, entry: &E) -> bool {
         if !Arc::ptr_eq(&self.part, part) {
             self.part = Arc::clone(part);
         }
@@ -65,12 +123,12 @@ impl<T: Scalar> Factorisation<T> {
         let nb = p.starts[p.blocks()];
         let m = n - nb;
         let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
-        resize(&mut self.lu, p.lu_len);
-        resize(&mut self.x, p.x_len);
-        resize(&mut self.c, p.x_len);
-        self.piv.resize(n, 0);
-        resize(&mut self.schur, m * m);
-        self.schur_piv.resize(m, 0);
+        grow(&mut self.lu, p.lu_len, T::ZERO);
+        grow(&mut self.x, p.x_len, T::ZERO);
+        grow(&mut self.c, p.x_len, T::ZERO);
+        grow(&mut self.piv, n, 0);
+        grow(&mut self.schur, m * m, T::ZERO);
+        grow(&mut self.schur_piv, m, 0);
         // The blocks' LUs first, at the offsets the solves read them from: a block with a small
         // pivot fails the factorisation before any of the couplings' work is done (a model whose
         // structured elimination fails then pays only its small blocks before the dense LU).
@@ -82,14 +140,12 @@ impl<T: Scalar> Factorisation<T> {
                 // A block of the first k states in natural order (`Partition::dense`'s one
                 // block): no indirection.
                 for (cj, column) in a.chunks_exact_mut(k).enumerate() {
-                    for (r, v) in column.iter_mut().enumerate() {
-                        *v = entry(r, cj);
-                    }
+                    entry.leading_column(cj, column);
                 }
             } else {
                 for cj in 0..k {
                     for r in 0..k {
-                        a[r + cj * k] = entry(idx[r], idx[cj]);
+                        a[r + cj * k] = entry.entry(idx[r], idx[cj]);
                     }
                 }
             }
@@ -100,7 +156,7 @@ impl<T: Scalar> Factorisation<T> {
         let border = &p.perm[nb..];
         for q in 0..m {
             for r in 0..m {
-                self.schur[r + q * m] = entry(border[r], border[q]);
+                self.schur[r + q * m] = entry.entry(border[r], border[q]);
             }
         }
         // The couplings: the Schur complement takes the linked blocks' updates in block order
@@ -116,8 +172,8 @@ impl<T: Scalar> Factorisation<T> {
             for (li, &q) in links.iter().enumerate() {
                 let col = &mut x[li * k..(li + 1) * k];
                 for r in 0..k {
-                    col[r] = entry(idx[r], border[q]);
-                    c[li * k + r] = entry(border[q], idx[r]);
+                    col[r] = entry.entry(idx[r], border[q]);
+                    c[li * k + r] = entry.entry(border[q], idx[r]);
                 }
                 lu_solve(a, k, &self.piv[s..s + k], col);
             }
@@ -134,7 +190,7 @@ impl<T: Scalar> Factorisation<T> {
                 }
             }
         }
-        lu_in_place(&mut self.schur, m, &mut self.schur_piv, floor)
+        lu_in_place(&mut self.schur[..m * m], m, &mut self.schur_piv[..m], floor)
     }
 
     /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
@@ -198,7 +254,8 @@ impl<T: Scalar> Factorisation<T> {
                 }
             }
         }
-        lu_solve(&self.schur, p.n - nb, &self.schur_piv, border);
+        let m = p.n - nb;
+        lu_solve(&self.schur[..m * m], m, &self.schur_piv[..m], border);
         // x_b = y_b - X_b x_B.
         for at in &p.linked {
             let (st, k) = (at.start, at.size);
@@ -263,8 +320,15 @@ impl<T: Scalar> Factorisation<T> {
     }
 }
 
-fn resize<T: Scalar>(v: &mut Vec<T>, len: usize) {
-    v.resize(len, T::ZERO);
+/// Makes `v` at least `len` long, never shorter: the buffers serve partitions of different
+/// sizes in turn (a structured one and its dense fallback, when the structured elimination fails
+/// at every step), and a buffer resized down and up again at every factorisation had its grown
+/// part zeroed each time, to be overwritten (every entry a factorisation or a solve reads is
+/// written by the factorisation first, within the partition's lengths).
+fn grow<V: Copy>(v: &mut Vec<V>, len: usize, zero: V) {
+    if v.len() < len {
+        v.resize(len, zero);
+    }
 }
 
 /// Factorises `entry` with `part`, or with the dense partition if the structured elimination
@@ -272,9 +336,9 @@ fn resize<T: Scalar>(v: &mut Vec<T>, len: usize) {
 pub(crate) fn factor_with_fallback<T: Scalar>(
     f: &mut Factorisation<T>,
     part: &Arc<Partition>,
-    entry: impl Fn(usize, usize) -> T,
+    entry: impl Entries<T>,
 ) -> bool {
-    if f.factor(part, &entry) {
+    if f.factor_by(part, &entry) {
         return true;
     }
     if part.is_dense() {
@@ -288,7 +352,7 @@ pub(crate) fn factor_with_fallback<T: Scalar>(
             d
         }
     };
-    f.factor(&dense, &entry)
+    f.factor_by(&dense, &entry)
 }
 
 #[cfg(test)]
@@ -328,7 +392,7 @@ mod tests {
             lo += k * k;
             xo += k * links.len();
         }
-        lu_solve(&f.schur, m, &f.schur_piv, border);
+        lu_solve(&f.schur[..m * m], m, &f.schur_piv[..m], border);
         // x_b = y_b - X_b x_B.
         let mut xo = 0;
         for b in 0..p.blocks() {
@@ -460,6 +524,71 @@ mod tests {
             let mut x = b.clone();
             f.solve(&mut x, &mut vec![0.0; n]);
             assert!(residual(n, entry, &x, &b) < 1e-9);
+        }
+    }
+
+    /// [`Shifted`]'s columns are its entries, bit for bit, and so is the dense factorisation
+    /// made from them: the same operations (a negation, c − J_jj on the diagonal), only without
+    /// indexing each entry.
+    #[test]
+    fn shifted_columns_are_its_entries_bit_for_bit() {
+        let mut rng = Rng(5);
+        let n = 23;
+        let jac = DMatrix::from_fn(n, n, |_, _| rng.next() - 0.5);
+        let c = 1.0 / (1e-3 * 0.21193756319429014);
+        let shifted = Shifted { c, jac: &jac };
+        let closure = |i: usize, j: usize| {
+            if i == j {
+                c - jac[(i, j)]
+            } else {
+                -jac[(i, j)]
+            }
+        };
+        for j in 0..n {
+            for len in [n, j + 1, j, 1] {
+                let mut column = vec![f64::NAN; len];
+                shifted.leading_column(j, &mut column);
+                for (r, v) in column.iter().enumerate() {
+                    assert_eq!(v.to_bits(), closure(r, j).to_bits(), "({r}, {j}) of {len}");
+                    assert_eq!(v.to_bits(), shifted.entry(r, j).to_bits());
+                }
+            }
+        }
+        let part = Arc::new(Partition::dense(n));
+        let (mut by_columns, mut by_entries) = (
+            Factorisation::new(Arc::clone(&part)),
+            Factorisation::new(Arc::clone(&part)),
+        );
+        assert!(by_columns.factor(&part, Shifted { c, jac: &jac }));
+        assert!(by_entries.factor(&part, closure));
+        let bits = |f: &Factorisation<f64>| f.lu.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&by_columns), bits(&by_entries));
+    }
+
+    /// A factorisation whose memory served a larger partition before (the buffers only grow)
+    /// factorises and solves to the same bits as a fresh one: a structured partition after the
+    /// dense one, and the dense one again after it.
+    #[test]
+    fn reused_memory_of_another_partition_gives_the_same_bits_as_fresh_memory() {
+        let mut rng = Rng(17);
+        let j = arrowhead(&mut rng, 12, 2, 3);
+        let n = j.nrows();
+        let entry = |i: usize, k: usize| j[(i, k)];
+        let structured = Arc::new(Partition::of_matrix(&j));
+        assert!(!structured.is_dense());
+        let dense = Arc::new(Partition::dense(n));
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let solved = |f: &Factorisation<f64>| {
+            let mut x = b.clone();
+            f.solve(&mut x, &mut vec![0.0; n]);
+            x.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        };
+        let mut reused = Factorisation::new(Arc::clone(&dense));
+        for part in [&dense, &structured, &dense, &structured] {
+            let mut fresh = Factorisation::new(Arc::clone(part));
+            assert!(fresh.factor(part, entry));
+            assert!(reused.factor(part, entry));
+            assert_eq!(solved(&reused), solved(&fresh));
         }
     }
 }

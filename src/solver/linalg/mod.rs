@@ -55,7 +55,7 @@ mod testing;
 mod varying_rows;
 
 pub(crate) use factorisation::factor_with_fallback;
-pub use factorisation::Factorisation;
+pub use factorisation::{Entries, Factorisation, Shifted};
 pub use partition::Partition;
 pub(crate) use pattern::PatternCache;
 pub use scalar::Scalar;

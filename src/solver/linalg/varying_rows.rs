@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 
 use super::super::dense::{product, DenseInverse};
 use super::lu::{lu_in_place, lu_solve};
-use super::{Factorisation, Partition};
+use super::{Entries, Factorisation, Partition, Shifted};
 
 /// M = c I − J factorised for varying rows.
 ///
@@ -104,13 +104,8 @@ impl VaryingRows {
             );
             coupling_start.push(couplings.len());
         }
-        let entry = |i: usize, j: usize| {
-            if i == j {
-                c - jac[(i, j)]
-            } else {
-                -jac[(i, j)]
-            }
-        };
+        let shifted = Shifted { c, jac };
+        let entry = |i: usize, j: usize| shifted.entry(i, j);
         let mut q = DenseInverse::default();
         if p > 0 {
             let dense = Arc::new(Partition::dense(p));

@@ -12,7 +12,7 @@ use super::workspace::Work;
 use super::Radau5Options;
 use crate::solver::common::jacobian_here;
 use crate::solver::constant_jacobian::{front_factorisation, SAME_STEP};
-use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition};
+use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition, Shifted};
 use crate::solver::method::Stepper;
 use crate::solver::step_map::StepMap;
 use crate::solver::OdeSystem;
@@ -35,19 +35,14 @@ fn factor_into(lu: &mut Lu, part: &Arc<Partition>, jac: &DMatrix<f64>, h: f64) -
     let (alphn, betan) = (alph / h, beta / h);
     lu.h = h;
     lu.map.clear();
-    factor_with_fallback(&mut lu.real, part, |i, j| {
-        if i == j {
-            fac1 - jac[(i, j)]
-        } else {
-            -jac[(i, j)]
-        }
-    }) && factor_with_fallback(&mut lu.complex, part, |i, j| {
-        if i == j {
-            Complex::new(alphn - jac[(i, j)], betan)
-        } else {
-            Complex::new(-jac[(i, j)], 0.0)
-        }
-    })
+    factor_with_fallback(&mut lu.real, part, Shifted { c: fac1, jac })
+        && factor_with_fallback(&mut lu.complex, part, |i, j| {
+            if i == j {
+                Complex::new(alphn - jac[(i, j)], betan)
+            } else {
+                Complex::new(-jac[(i, j)], 0.0)
+            }
+        })
 }
 
 /// Factorisations of both iteration matrices for step size `h` (in the memory of `old` if

@@ -12,7 +12,7 @@ use super::State;
 use super::{Work, GAMMA};
 use crate::solver::constant_jacobian::front_factorisation;
 use crate::solver::dense::DenseInverse;
-use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition, VaryingRows};
+use crate::solver::linalg::{factor_with_fallback, Factorisation, Partition, Shifted, VaryingRows};
 use crate::solver::method::Stepper;
 use crate::solver::step_map;
 use crate::solver::OdeSystem;
@@ -71,14 +71,8 @@ fn factor_into(
     jac: &DMatrix<f64>,
     h: f64,
 ) -> bool {
-    let fac = 1.0 / (h * GAMMA);
-    factor_with_fallback(lu, part, |i, j| {
-        if i == j {
-            fac - jac[(i, j)]
-        } else {
-            -jac[(i, j)]
-        }
-    })
+    let c = 1.0 / (h * GAMMA);
+    factor_with_fallback(lu, part, Shifted { c, jac })
 }
 
 /// A factorisation of W for step size `h` (in the memory of `old` if given); None if W is

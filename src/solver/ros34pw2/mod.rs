@@ -54,7 +54,7 @@ pub use tableau::{classical_form, A, C, C_NODES, D, E, GAMMA, M, M_HAT, STAGES};
 use super::common::{all_finite, axpy, eval};
 use super::constant_jacobian::SAME_STEP;
 use super::jacobian;
-use super::linalg::{factor_with_fallback, Factorisation, PatternCache};
+use super::linalg::{factor_with_fallback, Factorisation, PatternCache, Shifted};
 use super::method::Stepper;
 use super::rodas5p::{error_norm, Reject, Rodas5POptions};
 use super::{OdeSystem, SolverError, SolverErrorKind};
@@ -276,15 +276,8 @@ fn factorised_w<S: OdeSystem + ?Sized>(
     let part = w.pattern.partition_within(&w.jac, sys.jacobian_pattern());
     let lu =
         w.lu.get_or_insert_with(|| Factorisation::new(Arc::clone(part)));
-    let fac = 1.0 / (h_lu * GAMMA);
-    let jac = &w.jac;
-    let ok = factor_with_fallback(lu, part, |i, j| {
-        if i == j {
-            fac - jac[(i, j)]
-        } else {
-            -jac[(i, j)]
-        }
-    });
+    let c = 1.0 / (h_lu * GAMMA);
+    let ok = factor_with_fallback(lu, part, Shifted { c, jac: &w.jac });
     if ok {
         kept.h_lu = h_lu;
         w.lu_h = Some(h_lu);
