@@ -24,8 +24,8 @@
 //
 // A batch is what the run did since the last one: t, the input r set before each step (inputs),
 // the recorded outputs after each step (values, row by row), the messages logged, the plate's
-// plate's coordinates every plateEvery steps (frames, with their times frameT) and at the last
-// point (eta), the shakers' forces F1, F2 of each step when they drive the run (forces), and the
+// coordinates every plateEvery steps (frames, with their times frameT) and at the last point
+// (eta), the shakers' forces F1, F2 of each step when they drive the run (forces), and the
 // run's state (time, stepMs, done, failed).
 function hspWorker(scope) {
   "use strict";
@@ -125,20 +125,14 @@ function hspWorker(scope) {
     return [s.F1 * wave, s.F2 * wave];
   }
 
-  // The recorded rows of `done` (steps of the run from step k0): the outputs into the batch, the
-  // plate's coordinates every plateEvery steps and at the last.
-  function keep(b, done, k0, times) {
-    const w = run.names.length, n = run.coordinates.length, width = w + n;
-    const values = new Float64Array(done.steps * w);
-    for (let i = 0; i < done.steps; i++) {
-      values.set(done.values.subarray(i * width, i * width + w), i * w);
-      if (n && (k0 + i + 1) % run.plateEvery === 0) {
-        b.frames.push(done.values.slice(i * width + w, (i + 1) * width));
-        b.frameT.push(times[i]);
-      }
+  // The plate's coordinates now into the batch: a kept frame (at time t) or only the latest.
+  function plateNow(b, t) {
+    const eta = sim.get(run.coordinates);
+    if (t !== null) {
+      b.frames.push(eta);
+      b.frameT.push(t);
     }
-    if (n && done.steps) b.eta = done.values.slice((done.steps - 1) * width + w, done.steps * width);
-    b.values.push(values);
+    b.eta = eta;
   }
 
   // Steps until the run's time reaches `until` or `budgetMs` of wall time is spent, CHUNK steps
@@ -148,8 +142,11 @@ function hspWorker(scope) {
     const b = run.batch;
     while (run.k < run.steps && run.k * run.step < until - 1e-12) {
       const wanted = Math.ceil((until - run.k * run.step) / run.step - 1e-9);
-      // With the shakers on, one step per call: their forces are set before each.
-      const n = run.shaker ? 1 : Math.max(1, Math.min(CHUNK, run.steps - run.k, wanted));
+      // A call ends at the next kept frame of the plate (its coordinates are read there alone,
+      // not after every step); with the shakers on, one step per call: their forces are set
+      // before each.
+      const frame = run.coordinates.length ? run.plateEvery - (run.k % run.plateEvery) : CHUNK;
+      const n = run.shaker ? 1 : Math.max(1, Math.min(CHUNK, run.steps - run.k, wanted, frame));
       if (run.shaker) {
         const f = forces(run.time);
         sim.set({ F1: f[0], F2: f[1] });
@@ -167,10 +164,13 @@ function hspWorker(scope) {
       if (done.steps > 0) {
         b.t.push(times.subarray(0, done.steps));
         b.inputs.push(inputs.subarray(0, done.steps));
-        keep(b, done, run.k, times);
+        b.values.push(done.values);
         run.time = times[done.steps - 1];
       }
       run.k += done.steps;
+      if (done.steps > 0 && run.coordinates.length && run.k % run.plateEvery === 0) {
+        plateNow(b, run.time);
+      }
       if (done.warned || done.error) b.messages.push(...sim.messages());
       if (done.error) {
         run.failed = done.error;
@@ -178,6 +178,8 @@ function hspWorker(scope) {
       }
       if (performance.now() - t0 > budgetMs) break;
     }
+    // The plate at the latest point, if that was no kept frame (the live drawing).
+    if (run.coordinates.length && run.k % run.plateEvery !== 0) plateNow(b, null);
     run.stepMs += performance.now() - t0;
     if (run.k >= run.steps || run.failed) {
       run.done = true;
@@ -217,7 +219,8 @@ function hspWorker(scope) {
           ...m, kPot, rStep: m.command === "step" ? kPot * m.angle : 0,
           steps: Math.round(m.stop / m.step), k: 0, time: sim.time, stepMs: 0, paused: 0,
           pausedAt: 0, stepping: false, done: false, failed: null, batch: newBatch(),
-          coordinates: map.coordinates, read: [...m.names, ...map.coordinates],
+          coordinates: map.coordinates,
+          read: m.names.map((name) => model.variable(name).valueReference),
         };
         // The initial point.
         run.batch.t.push(new Float64Array([run.time]));
