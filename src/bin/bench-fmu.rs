@@ -511,13 +511,14 @@ fn reference_run(fmu: &Fmu, sets: &[&str]) -> Result<(Vec<[f64; 2]>, f64), Strin
 }
 
 /// scipy and CVODE on the FMU's Model Exchange interface (`bench/model_exchange_solvers.py`), at
-/// equal accuracy: the table's cells, and the lines of the section on the interface.
+/// equal accuracy: the table's cells, the rows of the section on the interface, and its note
+/// on the reference and the cost of a call.
 fn model_exchange(
     fmu_path: &str,
     cfg: &Config,
     reference: &(Vec<[f64; 2]>, f64),
     fmu_row: (f64, f64),
-) -> Result<(Vec<String>, Vec<String>), String> {
+) -> Result<(Vec<String>, Vec<String>, String), String> {
     let (target, fmu_rtf) = fmu_row;
     let input = serde_json::json!({
         "fmu": fmu_path,
@@ -530,7 +531,21 @@ fn model_exchange(
     });
     let runs = python("bench/model_exchange_solvers.py", &[], &input)?;
     let best = equal_accuracy(&runs, target);
-    let cells = best.iter().map(|r| cell(r, true)).collect();
+    let stopped = |method: &str| {
+        runs["stopped"]
+            .as_array()
+            .is_some_and(|s| s.iter().any(|m| m == method))
+    };
+    let cells = best
+        .iter()
+        .zip(COMPETITORS)
+        .map(|(r, method)| match r {
+            Some((false, _)) if stopped(method) => {
+                format!("stopped by a run over 60 s; {}", cell(r, true))
+            }
+            _ => cell(r, true),
+        })
+        .collect();
     let f_us = num(&runs, "f_us");
     let cs = &runs["cs_fmpy"];
     let mut lines = vec![
@@ -557,10 +572,11 @@ fn model_exchange(
         lines.push(format!(
             "| {} | {method}{} | {:.0e} | {:.1}x | {} | {} | {} | {} | {:.1e} | {:.0} % |",
             cfg.name,
-            if *reached {
-                ""
-            } else {
-                " (target not reached; its most accurate run)"
+            match (*reached, stopped(method)) {
+                (true, _) => "",
+                (false, true) =>
+                    " (stopped by a run over 60 s before the target; its most accurate run)",
+                (false, false) => " (target not reached; its most accurate run)",
             },
             num(r, "rtol"),
             STOP / num(r, "wall"),
@@ -572,13 +588,14 @@ fn model_exchange(
             100.0 * share
         ));
     }
-    lines.push(format!(
-        "\nReference of \"{}\": Radau IIA at rtol {REFERENCE_RTOL:.0e}; Rodas5P at the same rtol \
-         differs from it by {:.1e}. One right-hand side through fmpy (fmi2SetTime, \
-         fmi2SetContinuousStates, fmi2GetDerivatives from Python) took {f_us:.1} µs.\n",
+    let note = format!(
+        "- \"{}\": the reference, Radau IIA at rtol {REFERENCE_RTOL:.0e}, and Rodas5P at the same \
+         rtol differ by {:.1e}; one right-hand side through fmpy (`fmi2SetTime`, \
+         `fmi2SetContinuousStates`, `fmi2GetDerivatives` from Python) took {f_us:.1} µs (the \
+         least of 10 batches of 200 calls).",
         cfg.name, reference.1
-    ));
-    Ok((cells, lines))
+    );
+    Ok((cells, lines, note))
 }
 
 fn main() {
@@ -623,18 +640,9 @@ fn main() {
         .map_or("fmu-speed".into(), |s| {
             s.to_string_lossy().replace('_', "-")
         });
-    let command = std::iter::once("cargo run --release --bin bench-fmu".to_string())
-        .chain(std::env::args().nth(1).map(|_| "--".to_string()))
-        .chain(std::env::args().skip(1).map(|a| {
-            if a.contains(' ') {
-                format!("\"{a}\"")
-            } else {
-                a
-            }
-        }))
-        .collect::<Vec<_>>()
-        .join(" ");
+    let command = machine::command("bench-fmu");
     let mut me_lines: Vec<String> = Vec::new();
+    let mut me_notes: Vec<String> = Vec::new();
     let mut md = String::new();
     writeln!(
         md,
@@ -720,9 +728,10 @@ fn main() {
                 },
                 (1, Some(e), Scipy::ModelExchange, Some(me)) => {
                     match model_exchange(&fmu_path, cfg, me, (e, STOP / r.wall)) {
-                        Ok((cells, lines)) => {
+                        Ok((cells, lines, note)) => {
                             scipy_cells = cells;
                             me_lines.extend(lines);
+                            me_notes.push(note);
                         }
                         Err(e) => eprintln!("Model Exchange: {e}"),
                     }
@@ -759,7 +768,8 @@ fn main() {
              Jacobians from `fmi2GetDirectionalDerivative`, LU factorisations; CVODE: \
              difference-quotient Jacobians, whose right-hand sides are in its f evals, and \
              linear-solver setups). \"f share\": the f evals times the cost of one right-hand \
-             side through fmpy, over the run's time: what the calls through Python take of it.\n\n\
+             side through fmpy, over the run's time: about what the calls through Python take of it \
+             (the cost measured apart, under the load of its moment).\n\n\
              | configuration | solver | rtol | RTF | steps | f evals | Jacobians | LU | error | f share |\n\
              | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
         )
@@ -767,10 +777,14 @@ fn main() {
         for line in &me_lines {
             writeln!(md, "{line}").unwrap();
         }
+        writeln!(md).unwrap();
+        for note in &me_notes {
+            writeln!(md, "{note}").unwrap();
+        }
     }
     writeln!(
         md,
-        "Load at the end: {} (`/proc/loadavg`, the 1-minute average).\n<!-- /hsp timing: {label} -->",
+        "\nLoad at the end: {} (`/proc/loadavg`, the 1-minute average).\n<!-- /hsp timing: {label} -->",
         machine::load()
     )
     .unwrap();

@@ -20,3 +20,24 @@ pub fn today() -> String {
         .filter(|d| !d.is_empty())
         .unwrap_or_else(|| "unknown".into())
 }
+
+/// The command that runs this binary with the arguments it was given, as `cargo run` would
+/// (an argument with a space quoted): the "Made by" of a timing block.
+pub fn command(bin: &str) -> String {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .map(|a| {
+            if a.contains(' ') {
+                format!("\"{a}\"")
+            } else {
+                a
+            }
+        })
+        .collect();
+    let mut command = format!("cargo run --release --bin {bin}");
+    if !args.is_empty() {
+        command.push_str(" -- ");
+        command.push_str(&args.join(" "));
+    }
+    command
+}

@@ -14,10 +14,14 @@ pub fn multiply_adds(n: u64) -> f64 {
     x
 }
 
-/// The chain length whose run takes about `ns` nanoseconds of thread CPU time here (the median
-/// of 21 timed runs of a long chain).
+/// The chain length whose run, timed by [`crate::timed`], takes about `ns` nanoseconds of
+/// thread CPU time here: the median of 21 timed runs of a long chain gives the time of one
+/// multiply-add, the median of 21 timings of nothing the clocks' own cost, which the timed
+/// run includes.
 pub fn calibrate(ns: f64) -> u64 {
     const N: u64 = 200_000;
+    let mut clocks: Vec<u64> = (0..21).map(|_| crate::timed(|| {}).0).collect();
+    clocks.sort_unstable();
     let mut t: Vec<u64> = (0..21)
         .map(|_| {
             crate::timed(|| {
@@ -27,5 +31,7 @@ pub fn calibrate(ns: f64) -> u64 {
         })
         .collect();
     t.sort_unstable();
-    (ns / (t[10] as f64 / N as f64)).round().max(1.0) as u64
+    ((ns - clocks[10] as f64) / (t[10] as f64 / N as f64))
+        .round()
+        .max(1.0) as u64
 }

@@ -27,7 +27,7 @@
 //!
 //! Beside every configuration runs a control ([`control`]): a chain of multiply-adds of a fixed
 //! length, calibrated before the rounds to the configuration's p50 in a pilot run of a twentieth
-//! of the steps, and timed by the same two clocks right after every one of its steps, in the same
+//! of the steps (and after every round scaled by the ratio of the two p50s of the round), and timed by the same two clocks right after every one of its steps, in the same
 //! run ([`closed_loop`]). The control's work never varies, so its tails are the machine's; the
 //! table "Tails against the control" gives the FMU's p99.9/p50 and max/p50 (thread CPU time and
 //! wall) beside the control's, with the ratio FMU/control of each round. The report's timing
@@ -568,7 +568,7 @@ fn main() {
     }
     // Each configuration's control: calibrated to the p50 of a pilot run of the configuration.
     let pilot = (a.steps / 20).max(1_000);
-    let lengths: Vec<u64> = configs
+    let mut lengths: Vec<u64> = configs
         .iter()
         .map(|c| match run(&fmu, c, pilot, None, None) {
             Ok(record) => control::calibrate(figures(record).p50),
@@ -608,6 +608,8 @@ fn main() {
                         f.slow_spacing / 1e6,
                         f.timer_rate
                     );
+                    // The next round's control: its length scaled to this round's p50s.
+                    lengths[k] = ((lengths[k] as f64) * f.p50 / g.p50).round().max(1.0) as u64;
                     results[k].push(f);
                     controls[k].push(g);
                 }
@@ -635,19 +637,20 @@ fn main() {
          Beside each configuration, a control ([`control.rs`](../src/bin/bench-latency/control.rs)): \
          a dependent chain of multiply-adds, work of a fixed operation count that touches no \
          memory, its length calibrated to the configuration's p50 (of a pilot run of {pilot} \
-         steps), timed by the same clocks right after every step of the configuration, in the \
+         steps, then scaled by the ratio of the two p50s after every round), timed by the same clocks right after every step of the configuration, in the \
          same run. Its steps do the same work every time: the spread of their times is the \
          machine's. The table \"Tails against the control\" sets the FMU's p99.9/p50 and \
          max/p50 beside the control's, and their ratio FMU/control (per round, then the median \
          and range over the rounds); the goal is a ratio of at most 1.2, tails the machine's.\n\n\
          <!-- hsp timing: latency -->\n\
-         Made by `cargo run --release --bin bench-latency` on {}, load {load_start} at the start \
+         Made by `{}` on {}, load {load_start} at the start \
          and {load_end} at the end (`/proc/loadavg`, the 1-minute average; each round's is in \
          the run's log).\n",
         cpu_model(),
         std::thread::available_parallelism().map_or(0, |n| n.get()),
         a.steps,
         a.rounds,
+        machine::command("bench-latency"),
         machine::today()
     );
     let _ = writeln!(
