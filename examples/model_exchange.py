@@ -89,17 +89,31 @@ def dopri5_r(z):
     return 1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24 + z ** 5 / 120 + z ** 6 / 600
 
 
+def set_values(fmu, md, values):
+    """Sets variables by name: a Real, an Integer or Enumeration, a Boolean (True/False or
+    "true"/"false"); the values may be text."""
+    variables = {v.name: v for v in md.modelVariables}
+    for name, value in values.items():
+        v = variables[name]
+        if v.type == "Real":
+            fmu.setReal([v.valueReference], [float(value)])
+        elif v.type == "Boolean":
+            fmu.setBoolean([v.valueReference], [value in (True, "true", "1")])
+        else:  # Integer, Enumeration
+            fmu.setInteger([v.valueReference], [int(value)])
+
+
 class MEInstance:
     """A Model Exchange instance in continuous-time mode, with its states as numpy arrays."""
 
     def __init__(self, md, unzipped, inputs=None):
+        """`inputs`: values set before the initialisation, by name (inputs or parameters; a
+        Boolean as True/False or "true"/"false")."""
         self.fmu = FMU2Model(guid=md.guid, unzipDirectory=unzipped,
                              modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
         self.fmu.instantiate()
         self.fmu.setupExperiment(startTime=0.0)
-        vr = {v.name: v.valueReference for v in md.modelVariables}
-        for name, value in (inputs or {}).items():
-            self.fmu.setReal([vr[name]], [value])
+        set_values(self.fmu, md, inputs or {})
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
         while self.fmu.newDiscreteStates()[0]:

@@ -35,6 +35,8 @@
 #[allow(dead_code)]
 #[path = "hsp/loader.rs"]
 mod loader;
+#[path = "bench-common/machine.rs"]
+mod machine;
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -53,15 +55,32 @@ const RTOL: f64 = 1e-6;
 /// The project's virtual environment (made by `tests/setup.sh`), which has scipy.
 const PYTHON: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/.venv/bin/python");
 
-/// A benchmark configuration: a name, `--set` assignments, whether the model is linear, and
-/// whether scipy runs it too (not for a configuration that differs from another only in how
-/// the FMU steps: scipy's runs would be the same).
+/// A benchmark configuration: a name, `--set` assignments (after `r` = 1, so a set of `r`
+/// wins), whether the model is linear, and how scipy runs it too (not for a configuration that
+/// differs from another only in how the FMU steps: scipy's runs would be the same).
 struct Config {
     name: &'static str,
     sets: &'static [&'static str],
     linear: bool,
-    scipy: bool,
+    scipy: Scipy,
 }
+
+/// How the competitors run a configuration.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Scipy {
+    /// Not at all.
+    No,
+    /// scipy on the exported linear model (`bench/scipy_reference.py --linear`), the error
+    /// against the exact discretisation.
+    Linear,
+    /// scipy and CVODE on the FMU's Model Exchange interface
+    /// (`bench/model_exchange_solvers.py`), the error against the FMU at rtol [`REFERENCE_RTOL`].
+    ModelExchange,
+}
+
+/// The rtol of the reference runs of the nonlinear configurations: Radau IIA (the reference)
+/// and Rodas5P (its check).
+const REFERENCE_RTOL: f64 = 1e-10;
 
 const CONFIGS: &[Config] = &[
     Config {
@@ -76,7 +95,7 @@ const CONFIGS: &[Config] = &[
             "hydraulics.motor_coupled=false",
         ],
         linear: true,
-        scipy: true,
+        scipy: Scipy::Linear,
     },
     Config {
         name: "LOES coupled 3x5",
@@ -90,7 +109,7 @@ const CONFIGS: &[Config] = &[
             "hydraulics.motor_coupled=true",
         ],
         linear: true,
-        scipy: true,
+        scipy: Scipy::Linear,
     },
     Config {
         name: "LOES coupled 3x5, steps ending on every point",
@@ -105,7 +124,7 @@ const CONFIGS: &[Config] = &[
             "solver.dense_output=false",
         ],
         linear: true,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "servo valve uncoupled",
@@ -118,19 +137,19 @@ const CONFIGS: &[Config] = &[
             "plate.zeta=0.01",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "servo valve coupled (defaults)",
         sets: &["hydraulics.model=2", "hydraulics.motor_coupled=true"],
         linear: false,
-        scipy: false,
+        scipy: Scipy::ModelExchange,
     },
     Config {
-        name: "servo valve coupled, the default experiment (r = 0)",
+        name: "defaults, the default experiment's input (r = 0)",
         sets: &["hydraulics.model=2", "hydraulics.motor_coupled=true", "r=0"],
         linear: false,
-        scipy: false,
+        scipy: Scipy::ModelExchange,
     },
     Config {
         name: "servo valve coupled, no drag",
@@ -140,7 +159,7 @@ const CONFIGS: &[Config] = &[
             "plate.Cd=0",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "servo valve coupled, paper plate, no move, no drag",
@@ -153,7 +172,7 @@ const CONFIGS: &[Config] = &[
             "plate.zeta=0.01",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "servo valve coupled, identified motor (D_m 8.04e-5)",
@@ -170,7 +189,7 @@ const CONFIGS: &[Config] = &[
             "servo_valve.I_m=0.0025",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "servo valve coupled, consistent plate, no move, no drag",
@@ -181,7 +200,7 @@ const CONFIGS: &[Config] = &[
             "plate.Cd=0",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "servo valve coupled, steps ending on every point",
@@ -195,7 +214,7 @@ const CONFIGS: &[Config] = &[
             "solver.dense_output=false",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
     Config {
         name: "LOES coupled 6x6",
@@ -211,7 +230,7 @@ const CONFIGS: &[Config] = &[
             "plate.M=6",
         ],
         linear: true,
-        scipy: true,
+        scipy: Scipy::Linear,
     },
     Config {
         name: "LOES coupled 12x12",
@@ -227,7 +246,7 @@ const CONFIGS: &[Config] = &[
             "plate.M=12",
         ],
         linear: true,
-        scipy: true,
+        scipy: Scipy::Linear,
     },
     Config {
         name: "LOES coupled 20x20",
@@ -243,7 +262,7 @@ const CONFIGS: &[Config] = &[
             "plate.M=20",
         ],
         linear: true,
-        scipy: true,
+        scipy: Scipy::Linear,
     },
     Config {
         name: "LOES coupled 20x20 with drag",
@@ -259,7 +278,7 @@ const CONFIGS: &[Config] = &[
             "plate.M=20",
         ],
         linear: false,
-        scipy: false,
+        scipy: Scipy::No,
     },
 ];
 
@@ -273,9 +292,9 @@ struct Run {
     y: Vec<[f64; 2]>,
 }
 
-fn run_once(fmu: &Fmu, method: i32, sets: &[&str]) -> Result<Run, String> {
+fn run_once(fmu: &Fmu, method: i32, sets: &[&str], rtol: f64) -> Result<Run, String> {
     let inst = fmu.instantiate("bench-fmu")?;
-    inst.setup(Some(RTOL), 0.0, STOP)?;
+    inst.setup(Some(rtol), 0.0, STOP)?;
     inst.set_integer(vr::SOLVER_METHOD, method)?;
     // The unit step of r first, so that a configuration's `r=0` takes it back.
     inst.set_real(vr::R, 1.0)?;
@@ -306,14 +325,14 @@ fn run_once(fmu: &Fmu, method: i32, sets: &[&str]) -> Result<Run, String> {
 
 /// The median run (3 runs if one takes under 2 s, else 1).
 fn measure(fmu: &Fmu, method: i32, sets: &[&str]) -> Result<Run, String> {
-    let first = run_once(fmu, method, sets)?;
+    let first = run_once(fmu, method, sets, RTOL)?;
     if first.wall > 2.0 {
         return Ok(first);
     }
     let mut runs = vec![
         first,
-        run_once(fmu, method, sets)?,
-        run_once(fmu, method, sets)?,
+        run_once(fmu, method, sets, RTOL)?,
+        run_once(fmu, method, sets, RTOL)?,
     ];
     runs.sort_by(|a, b| a.wall.total_cmp(&b.wall));
     Ok(runs.swap_remove(1))
@@ -398,56 +417,187 @@ fn delivered_error(y: &[[f64; 2]], reference: &[[f64; 2]]) -> f64 {
     worst
 }
 
-/// scipy's runs at equal accuracy: per method, the fastest run with error <= `target`.
-fn scipy(linear: &Linear, target: f64) -> Result<Vec<(String, String)>, String> {
+/// The competitors' methods, in the table's order (CVODE on Model Exchange only).
+const COMPETITORS: [&str; 4] = ["Radau", "BDF", "LSODA", "CVODE"];
+
+/// Runs `script` (with `flags` before the input file) on `input`, written to a temporary file,
+/// and returns what it prints: the runs of each method (rtol, err, wall, ...).
+fn python(
+    script: &str,
+    flags: &[&str],
+    input: &serde_json::Value,
+) -> Result<serde_json::Value, String> {
+    let path = std::env::temp_dir().join(format!("bench-fmu-{}.json", std::process::id()));
+    std::fs::write(&path, input.to_string()).map_err(|e| e.to_string())?;
+    let out = std::process::Command::new(PYTHON)
+        .arg(script)
+        .args(flags)
+        .arg(&path)
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .map_err(|e| format!("{PYTHON}: {e}"))?;
+    let _ = std::fs::remove_file(&path);
+    if !out.status.success() {
+        return Err(format!("{script} failed"));
+    }
+    serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())
+}
+
+fn num(r: &serde_json::Value, k: &str) -> f64 {
+    r[k].as_f64().unwrap_or(f64::NAN)
+}
+
+/// Per method of [`COMPETITORS`], the fastest of its `runs` with error <= `target` ("equal
+/// accuracy"), or where none reached it (at any rtol down to 1e-10) the most accurate, marked;
+/// `None` for a method that did not run.
+fn equal_accuracy(runs: &serde_json::Value, target: f64) -> Vec<Option<(bool, serde_json::Value)>> {
+    COMPETITORS
+        .iter()
+        .map(|method| {
+            let all: Vec<&serde_json::Value> = runs.get(method)?.as_array()?.iter().collect();
+            let fastest = all
+                .iter()
+                .filter(|r| num(r, "err") <= target)
+                .min_by(|a, b| num(a, "wall").total_cmp(&num(b, "wall")));
+            match fastest {
+                Some(r) => Some((true, (*r).clone())),
+                None => all
+                    .iter()
+                    .min_by(|a, b| num(a, "err").total_cmp(&num(b, "err")))
+                    .map(|r| (false, (*r).clone())),
+            }
+        })
+        .collect()
+}
+
+/// The table's cell of a competitor's run: "12.3x (rtol 1e-7, err 2.1e-8, 1234 steps)".
+fn cell(run: &Option<(bool, serde_json::Value)>, ran: bool) -> String {
+    let Some((reached, r)) = run else {
+        return if ran { "failed".into() } else { String::new() };
+    };
+    let steps = r["steps"]
+        .as_u64()
+        .map_or(String::new(), |s| format!(", {s} steps"));
+    format!(
+        "{}{:.1}x (rtol {:.0e}, err {:.1e}{steps})",
+        if *reached { "" } else { "not reached; best " },
+        STOP / num(r, "wall"),
+        num(r, "rtol"),
+        num(r, "err")
+    )
+}
+
+/// scipy's runs of a linear configuration (its exported matrices), at equal accuracy.
+fn scipy_linear(linear: &Linear, target: f64) -> Result<Vec<String>, String> {
     // The linearisation's own layout (`hsp linearize`'s), and what the run adds.
     let mut input = linear.lin.to_json();
     input["u"] = serde_json::json!(linear.u);
     input["nominal"] = serde_json::json!(linear.nominal);
     input["stop"] = serde_json::json!(STOP);
     input["step"] = serde_json::json!(STEP);
-    let path = std::env::temp_dir().join(format!("bench-fmu-{}.json", std::process::id()));
-    std::fs::write(&path, input.to_string()).map_err(|e| e.to_string())?;
-    let out = std::process::Command::new(PYTHON)
-        .args(["bench/scipy_reference.py", "--linear"])
-        .arg(&path)
-        .output()
-        .map_err(|e| format!("{PYTHON}: {e}"))?;
-    let _ = std::fs::remove_file(&path);
-    if !out.status.success() {
-        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
-    }
-    let runs: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())?;
-    let num = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or(f64::NAN);
-    let cell = |r: &serde_json::Value| {
-        format!(
-            "{:.1}x (rtol {:.0e}, err {:.1e})",
-            STOP / num(r, "wall"),
-            num(r, "rtol"),
-            num(r, "err")
-        )
+    let runs = python("bench/scipy_reference.py", &["--linear"], &input)?;
+    Ok(equal_accuracy(&runs, target)
+        .iter()
+        .zip(COMPETITORS)
+        .map(|(r, m)| cell(r, m != "CVODE"))
+        .collect())
+}
+
+/// A nonlinear configuration's reference: the outputs of Radau IIA at [`REFERENCE_RTOL`], and
+/// the error of Rodas5P's run at the same rtol against it (the reference's own uncertainty).
+fn reference_run(fmu: &Fmu, sets: &[&str]) -> Result<(Vec<[f64; 2]>, f64), String> {
+    let reference = run_once(fmu, 2, sets, REFERENCE_RTOL)?.y;
+    let check = run_once(fmu, 1, sets, REFERENCE_RTOL)?.y;
+    let uncertainty = delivered_error(&check, &reference);
+    Ok((reference, uncertainty))
+}
+
+/// scipy and CVODE on the FMU's Model Exchange interface (`bench/model_exchange_solvers.py`), at
+/// equal accuracy: the table's cells, the rows of the section on the interface, and its note
+/// on the reference and the cost of a call.
+fn model_exchange(
+    fmu_path: &str,
+    cfg: &Config,
+    reference: &(Vec<[f64; 2]>, f64),
+    fmu_row: (f64, f64),
+) -> Result<(Vec<String>, Vec<String>, String), String> {
+    let (target, fmu_rtf) = fmu_row;
+    let input = serde_json::json!({
+        "fmu": fmu_path,
+        "sets": cfg.sets,
+        "stop": STOP,
+        "step": STEP,
+        "outputs": ERR_OUTPUTS.map(|(name, _)| name),
+        "reference": reference.0,
+        "target": target,
+    });
+    let runs = python("bench/model_exchange_solvers.py", &[], &input)?;
+    let best = equal_accuracy(&runs, target);
+    let stopped = |method: &str| {
+        runs["stopped"]
+            .as_array()
+            .is_some_and(|s| s.iter().any(|m| m == method))
     };
-    let mut best = Vec::new();
-    for method in ["Radau", "BDF", "LSODA"] {
-        let all: Vec<&serde_json::Value> = runs[method].as_array().into_iter().flatten().collect();
-        let fastest = all
-            .iter()
-            .filter(|r| num(r, "err") <= target)
-            .min_by(|a, b| num(a, "wall").total_cmp(&num(b, "wall")));
-        let text = match fastest {
-            Some(r) => cell(r),
-            // Not reached at any rtol down to 1e-10: the most accurate run, marked.
-            None => match all
-                .iter()
-                .min_by(|a, b| num(a, "err").total_cmp(&num(b, "err")))
-            {
-                Some(r) => format!("not reached; best {}", cell(r)),
-                None => "failed".to_string(),
-            },
+    let cells = best
+        .iter()
+        .zip(COMPETITORS)
+        .map(|(r, method)| match r {
+            Some((false, _)) if stopped(method) => {
+                format!("stopped by a run over 60 s; {}", cell(r, true))
+            }
+            _ => cell(r, true),
+        })
+        .collect();
+    let f_us = num(&runs, "f_us");
+    let cs = &runs["cs_fmpy"];
+    let mut lines = vec![
+        format!(
+            "| {} | FMU, Rodas5P through the C ABI (the table's row) | {RTOL:.0e} | {fmu_rtf:.1}x | | | | | {target:.1e} | |",
+            cfg.name
+        ),
+        format!(
+            "| {} | FMU, Rodas5P driven from Python through fmpy | {RTOL:.0e} | {:.1}x | | | | | {:.1e} | |",
+            cfg.name,
+            STOP / num(cs, "wall"),
+            num(cs, "err")
+        ),
+    ];
+    for (method, run) in COMPETITORS.iter().zip(&best) {
+        let Some((reached, r)) = run else {
+            lines.push(format!(
+                "| {} | {method} | failed | | | | | | | |",
+                cfg.name
+            ));
+            continue;
         };
-        best.push((method.to_string(), text));
+        let share = num(r, "nfev") * f_us * 1e-6 / num(r, "wall");
+        lines.push(format!(
+            "| {} | {method}{} | {:.0e} | {:.1}x | {} | {} | {} | {} | {:.1e} | {:.0} % |",
+            cfg.name,
+            match (*reached, stopped(method)) {
+                (true, _) => "",
+                (false, true) =>
+                    " (stopped by a run over 60 s before the target; its most accurate run)",
+                (false, false) => " (target not reached; its most accurate run)",
+            },
+            num(r, "rtol"),
+            STOP / num(r, "wall"),
+            r["steps"],
+            r["nfev"],
+            r["njev"],
+            r["nlu"],
+            num(r, "err"),
+            100.0 * share
+        ));
     }
-    Ok(best)
+    let note = format!(
+        "- \"{}\": the reference, Radau IIA at rtol {REFERENCE_RTOL:.0e}, and Rodas5P at the same \
+         rtol differ by {:.1e}; one right-hand side through fmpy (`fmi2SetTime`, \
+         `fmi2SetContinuousStates`, `fmi2GetDerivatives` from Python) took {f_us:.1} µs (the \
+         least of 10 batches of 200 calls).",
+        cfg.name, reference.1
+    );
+    Ok((cells, lines, note))
 }
 
 fn main() {
@@ -487,6 +637,14 @@ fn main() {
         std::process::exit(1)
     });
     let n = (STOP / STEP).round() as usize;
+    let label = std::path::Path::new(&out)
+        .file_stem()
+        .map_or("fmu-speed".into(), |s| {
+            s.to_string_lossy().replace('_', "-")
+        });
+    let command = machine::command("bench-fmu");
+    let mut me_lines: Vec<String> = Vec::new();
+    let mut me_notes: Vec<String> = Vec::new();
     let mut md = String::new();
     writeln!(
         md,
@@ -497,22 +655,34 @@ fn main() {
          `fmi2GetReal` of `y_pot` and `w_tip` after it; error = \
          largest deviation of `y_pot` and `w_tip` from the exact discretisation, relative to the \
          output's largest magnitude (linear configurations only); exact = RTF of the exact \
-         discretisation itself (one dense mat-vec per step). scipy: one `solve_ivp` call, the \
-         fastest run with error at most Rodas5P's. Shared 2-core machine.\n\n\
+         discretisation itself (one dense mat-vec per step). scipy: one `solve_ivp` call on the \
+         linear configurations, the fastest run with error at most Rodas5P's. Shared 2-core machine.\n\n\
          By default (`solver.dense_output = true`) Rodas5P's steps run past the communication \
          points while the inputs are held and the points are read from its dense output; the \
          rows \"steps ending on every point\" set `solver.dense_output = false`, as every run \
-         did before. Radau5 always ends its steps on the points.\n"
+         did before. Radau5 always ends its steps on the points.\n\n\
+         The complete default plant (\"servo valve coupled (defaults)\", and the same with the \
+         default experiment's input, r = 0) is nonlinear: its error is against Radau IIA at \
+         rtol {REFERENCE_RTOL:.0e}, and its competitors are scipy's `solve_ivp` methods and \
+         SUNDIALS CVODE (fmpy's) on the FMU's Model Exchange interface \
+         (`bench/model_exchange_solvers.py`, whose header gives the method), with the same \
+         error and the same rule (the fastest run at most the FMU's error). The section \"On \
+         the Model Exchange interface\" gives their counts and what Python costs them.\n\n\
+         <!-- hsp timing: {label} -->\n\
+         Made by `{command}` on {}, load {} at the start (`/proc/loadavg`, the 1-minute \
+         average; the end's is below the tables).\n",
+        machine::today(),
+        machine::load()
     )
     .unwrap();
     writeln!(
         md,
-        "| configuration | states | method | RTF | steps | f evals | Jacobians | LU | µs/step | error | exact RTF | scipy Radau | scipy BDF | scipy LSODA |"
+        "| configuration | states | method | RTF | steps | f evals | Jacobians | LU | µs/step | error | exact RTF | scipy Radau | scipy BDF | scipy LSODA | CVODE (fmpy) |"
     )
     .unwrap();
     writeln!(
         md,
-        "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |"
+        "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- | --- |"
     )
     .unwrap();
     for cfg in CONFIGS {
@@ -529,6 +699,16 @@ fn main() {
         };
         let states = lin.lin.a.nrows();
         let reference = cfg.linear.then(|| exact(&lin, n));
+        let me_reference = match (cfg.scipy, with_scipy) {
+            (Scipy::ModelExchange, true) => match reference_run(&fmu, cfg.sets) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    eprintln!("{}: the reference run failed: {e}", cfg.name);
+                    None
+                }
+            },
+            _ => None,
+        };
         for &(method, name) in &methods {
             let r = match measure(&fmu, method, cfg.sets) {
                 Ok(r) => r,
@@ -538,17 +718,28 @@ fn main() {
                     continue;
                 }
             };
-            let err = reference.as_ref().map(|(y, _)| delivered_error(&r.y, y));
-            let scipy_cells = match (method, err, with_scipy && cfg.scipy) {
-                (1, Some(e), true) => match scipy(&lin, e) {
-                    Ok(cells) => cells.into_iter().map(|c| c.1).collect::<Vec<_>>(),
-                    Err(e) => {
-                        eprintln!("scipy: {e}");
-                        vec!["failed".into(); 3]
-                    }
+            let err = reference
+                .as_ref()
+                .or(me_reference.as_ref())
+                .map(|(y, _)| delivered_error(&r.y, y));
+            let mut scipy_cells = vec![String::new(); COMPETITORS.len()];
+            match (method, err, cfg.scipy, &me_reference) {
+                (1, Some(e), Scipy::Linear, _) if with_scipy => match scipy_linear(&lin, e) {
+                    Ok(cells) => scipy_cells = cells,
+                    Err(e) => eprintln!("scipy: {e}"),
                 },
-                _ => vec!["".into(); 3],
-            };
+                (1, Some(e), Scipy::ModelExchange, Some(me)) => {
+                    match model_exchange(&fmu_path, cfg, me, (e, STOP / r.wall)) {
+                        Ok((cells, lines, note)) => {
+                            scipy_cells = cells;
+                            me_lines.extend(lines);
+                            me_notes.push(note);
+                        }
+                        Err(e) => eprintln!("Model Exchange: {e}"),
+                    }
+                }
+                _ => {}
+            }
             let line = format!(
                 "| {} | {states} | {name} | {:.1} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
                 cfg.name,
@@ -569,6 +760,36 @@ fn main() {
             writeln!(md, "{line}").unwrap();
         }
     }
+    if !me_lines.is_empty() {
+        writeln!(
+            md,
+            "\n## On the Model Exchange interface\n\n\
+             The FMU's row of the table, the FMU at the same rtol driven from Python (fmpy's \
+             `FMU2Slave`: `fmi2DoStep` and `fmi2GetReal` at every point), and the competitors' \
+             runs of the table (the fastest at most the FMU's error), with their counts (scipy: \
+             Jacobians from `fmi2GetDirectionalDerivative`, LU factorisations; CVODE: \
+             difference-quotient Jacobians, whose right-hand sides are in its f evals, and \
+             linear-solver setups). \"f share\": the f evals times the cost of one right-hand \
+             side through fmpy, over the run's time: about what the calls through Python take of it \
+             (the cost measured apart, under the load of its moment).\n\n\
+             | configuration | solver | rtol | RTF | steps | f evals | Jacobians | LU | error | f share |\n\
+             | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        )
+        .unwrap();
+        for line in &me_lines {
+            writeln!(md, "{line}").unwrap();
+        }
+        writeln!(md).unwrap();
+        for note in &me_notes {
+            writeln!(md, "{note}").unwrap();
+        }
+    }
+    writeln!(
+        md,
+        "\nLoad at the end: {} (`/proc/loadavg`, the 1-minute average).\n<!-- /hsp timing: {label} -->",
+        machine::load()
+    )
+    .unwrap();
     if let Some(dir) = std::path::Path::new(&out).parent() {
         std::fs::create_dir_all(dir).expect("create output directory");
     }

@@ -15,6 +15,10 @@
 //! printed are this run's). The machine's load (`/proc/loadavg`, the 1-minute average) is
 //! printed before and after.
 
+#[allow(dead_code)]
+#[path = "bench-common/machine.rs"]
+mod machine;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -80,14 +84,6 @@ fn evaluate(sets: &[(&str, f64)], f_hz: &[f64]) -> Vec<Vec<nalgebra::Complex<f64
     h
 }
 
-/// The 1-minute load average.
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|s| s.split_whitespace().next().map(str::to_string))
-        .unwrap_or_else(|| "unknown".into())
-}
-
 /// Median, lowest and highest of `t`.
 fn summary(t: &mut [f64]) -> (f64, f64, f64) {
     t.sort_by(f64::total_cmp);
@@ -129,7 +125,7 @@ fn main() {
          rounds; load before {}",
         TRUTH.map(|t| t.0).join(", "),
         OUTPUTS.join(", "),
-        load()
+        machine::load()
     );
     let run = |hsp: &Path| -> (f64, serde_json::Value) {
         let mut cmd = Command::new(hsp);
@@ -197,6 +193,6 @@ fn main() {
             2 * TRUTH.len()
         );
     }
-    println!("load after {}", load());
+    println!("load after {}", machine::load());
     let _ = std::fs::remove_dir_all(&dir);
 }

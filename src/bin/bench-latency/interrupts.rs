@@ -156,31 +156,6 @@ fn slow_share(steps: &[u64], p50: f64) -> f64 {
     slow as f64 / steps.len() as f64
 }
 
-/// A dependent chain of `n` multiply-adds: work of a fixed operation count that touches no
-/// memory, the control the FMU's steps are compared with.
-fn multiply_adds(n: u64) -> f64 {
-    let mut x = 1.0f64;
-    for _ in 0..n {
-        x = std::hint::black_box(x) * 0.999_999_9 + 1e-7;
-    }
-    x
-}
-
-/// The chain length whose run takes about `ns` nanoseconds of thread CPU time here (the median
-/// of 21 timed runs of a long chain).
-fn calibrate(ns: f64) -> u64 {
-    const N: u64 = 200_000;
-    let mut t: Vec<u64> = (0..21)
-        .map(|_| {
-            let t0 = crate::now(libc::CLOCK_THREAD_CPUTIME_ID);
-            std::hint::black_box(multiply_adds(N));
-            crate::now(libc::CLOCK_THREAD_CPUTIME_ID) - t0
-        })
-        .collect();
-    t.sort_unstable();
-    (ns / (t[10] as f64 / N as f64)).round().max(1.0) as u64
-}
-
 /// The controls' target lengths \[ns\]: from about the real-time mode's step of the LOES
 /// presets to about the complete system's.
 const CONTROLS: [f64; 4] = [2_000.0, 5_000.0, 10_000.0, 20_000.0];
@@ -194,7 +169,7 @@ pub fn report(
     rounds: usize,
 ) -> Result<String, String> {
     let mut counter = Counter::pinned()?;
-    let controls = CONTROLS.map(calibrate);
+    let controls = CONTROLS.map(crate::control::calibrate);
     let mut labels: Vec<String> = configs.iter().map(crate::name).collect();
     for (n, ns) in controls.iter().zip(CONTROLS) {
         labels.push(format!(
@@ -206,7 +181,7 @@ pub fn report(
     for round in 0..rounds {
         for (k, label) in labels.iter().enumerate() {
             let record = match configs.get(k) {
-                Some(c) => crate::run(fmu, c, steps, Some(&mut counter)),
+                Some(c) => crate::run(fmu, c, steps, Some(&mut counter), None),
                 None => {
                     let n = controls[k - configs.len()];
                     let mut record = crate::Record::default();
@@ -215,9 +190,10 @@ pub fn report(
                         1e-3,
                         &mut record,
                         Some(&mut counter),
+                        None,
                         |_| Ok(()),
                         |_| {
-                            std::hint::black_box(multiply_adds(n));
+                            std::hint::black_box(crate::control::multiply_adds(n));
                             Ok(())
                         },
                     )

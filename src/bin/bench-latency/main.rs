@@ -25,6 +25,14 @@
 //! sustains with a 2× margin, 1 / (2 max), of its thread CPU time; a configuration sustains its
 //! own period when that rate is at least 1 / period.
 //!
+//! Beside every configuration runs a control ([`control`]): a chain of multiply-adds of a fixed
+//! length, calibrated before the rounds to the configuration's p50 in a pilot run of a twentieth
+//! of the steps (and after every round scaled by the ratio of the two p50s of the round), and timed by the same two clocks right after every one of its steps, in the same
+//! run ([`closed_loop`]). The control's work never varies, so its tails are the machine's; the
+//! table "Tails against the control" gives the FMU's p99.9/p50 and max/p50 (thread CPU time and
+//! wall) beside the control's, with the ratio FMU/control of each round. The report's timing
+//! block names the command, the date and the load average at the start and the end.
+//!
 //! With `--interrupts` it instead counts, step by step, the interrupts that reach the
 //! processor while a step runs, and times the steps without any apart; it writes
 //! `bench/latency_interrupts.md` (see [`interrupts`]).
@@ -45,8 +53,11 @@
 #[allow(dead_code)]
 #[path = "../hsp/loader.rs"]
 mod loader;
+#[path = "../bench-common/machine.rs"]
+mod machine;
 
 mod accuracy;
+mod control;
 mod fmi3;
 mod interrupts;
 
@@ -210,15 +221,33 @@ struct Record {
     interrupts: Vec<u32>,
 }
 
+/// The thread CPU time and the wall time of `work` \[ns\]: the one way every step here is
+/// timed (the FMU's and the control's).
+fn timed(work: impl FnOnce()) -> (u64, u64) {
+    let (c0, w0) = (
+        now(libc::CLOCK_THREAD_CPUTIME_ID),
+        now(libc::CLOCK_MONOTONIC),
+    );
+    work();
+    let (c1, w1) = (
+        now(libc::CLOCK_THREAD_CPUTIME_ID),
+        now(libc::CLOCK_MONOTONIC),
+    );
+    (c1 - c0, w1 - w0)
+}
+
 /// `n` communication steps of size `h`: `input(t)` sets the inputs (untimed), then `step(t)`
-/// takes the step, timed by the thread CPU clock and the wall clock, and with a `counter`
-/// enclosed by two reads of the processor's interrupt count; the steps after the warm-up go
-/// into `record`.
+/// takes the step, timed by [`timed`], and with a `counter` enclosed by two reads of the
+/// processor's interrupt count; the steps after the warm-up go into `record`. With a
+/// `control`, a chain of that many multiply-adds ([`control::multiply_adds`]) is timed the same
+/// way right after every step, into the control's record: the FMU's steps and the control's
+/// alternate, so that both meet the machine at the same moments.
 fn closed_loop(
     n: usize,
     h: f64,
     record: &mut Record,
     mut counter: Option<&mut interrupts::Counter>,
+    mut control: Option<(u64, &mut Record)>,
     mut input: impl FnMut(f64) -> Result<(), String>,
     mut step: impl FnMut(f64) -> Result<(), String>,
 ) -> Result<(), String> {
@@ -241,25 +270,29 @@ fn closed_loop(
             Some(c) => c.read()?,
             None => 0,
         };
-        let (c0, w0) = (
-            now(libc::CLOCK_THREAD_CPUTIME_ID),
-            now(libc::CLOCK_MONOTONIC),
-        );
-        let result = step(t);
-        let (c1, w1) = (
-            now(libc::CLOCK_THREAD_CPUTIME_ID),
-            now(libc::CLOCK_MONOTONIC),
-        );
+        let mut result = Ok(());
+        let (c, w) = timed(|| result = step(t));
         let i1 = match counter.as_deref_mut() {
             Some(c) => c.read()?,
             None => 0,
         };
         result?;
+        let controlled = control.as_mut().map(|(length, record)| {
+            let length = *length;
+            let spent = timed(|| {
+                std::hint::black_box(control::multiply_adds(length));
+            });
+            (spent, record)
+        });
         if k >= WARM_UP {
-            cpu.push(c1 - c0);
-            wall.push(w1 - w0);
+            cpu.push(c);
+            wall.push(w);
             if counter.is_some() {
                 interrupts.push(u32::try_from(i1 - i0).unwrap_or(u32::MAX));
+            }
+            if let Some(((c, w), record)) = controlled {
+                record.cpu.push(c);
+                record.wall.push(w);
             }
         }
     }
@@ -272,12 +305,14 @@ fn closed_loop(
 }
 
 /// Runs one configuration: `steps` timed steps after the warm-up, with a `counter` also
-/// counting the interrupts of each.
+/// counting the interrupts of each, and with a `control` (a chain length and its record) the
+/// control timed after each (see [`closed_loop`]).
 fn run(
     fmu: &Fmu,
     config: &Config,
     steps: usize,
     mut counter: Option<&mut interrupts::Counter>,
+    control: Option<(u64, &mut Record)>,
 ) -> Result<Record, String> {
     let n = WARM_UP + steps;
     let h = config.step;
@@ -307,7 +342,15 @@ fn run(
                 s if s <= Fmi2Status::Warning => Ok(()),
                 s => Err(format!("fmi2DoStep returned {s:?} at t = {t}")),
             };
-            closed_loop(n, h, &mut record, counter.as_deref_mut(), input, step)?;
+            closed_loop(
+                n,
+                h,
+                &mut record,
+                counter.as_deref_mut(),
+                control,
+                input,
+                step,
+            )?;
             inst.terminate()?;
         }
         Version::Fmi3 => {
@@ -329,7 +372,7 @@ fn run(
                 s if s <= Fmi3Status::Warning => Ok(()),
                 s => Err(format!("fmi3DoStep returned {s:?} at t = {t}")),
             };
-            closed_loop(n, h, &mut record, counter, input, step)?;
+            closed_loop(n, h, &mut record, counter, control, input, step)?;
         }
     }
     Ok(record)
@@ -523,24 +566,52 @@ fn main() {
         }
         return;
     }
+    // Each configuration's control: calibrated to the p50 of a pilot run of the configuration.
+    let pilot = (a.steps / 20).max(1_000);
+    let mut lengths: Vec<u64> = configs
+        .iter()
+        .map(|c| match run(&fmu, c, pilot, None, None) {
+            Ok(record) => control::calibrate(figures(record).p50),
+            Err(e) => {
+                eprintln!("{}: {e}", name(c));
+                std::process::exit(1);
+            }
+        })
+        .collect();
+    let load_start = machine::load();
     let mut results: Vec<Vec<Figures>> = vec![Vec::new(); configs.len()];
+    let mut controls: Vec<Vec<Figures>> = vec![Vec::new(); configs.len()];
     for round in 0..a.rounds {
+        eprintln!("round {}: load {}", round + 1, machine::load());
         for (k, c) in configs.iter().enumerate() {
-            match run(&fmu, c, a.steps, None).map(figures) {
+            let mut control = Record {
+                cpu: Vec::with_capacity(a.steps),
+                wall: Vec::with_capacity(a.steps),
+                ..Record::default()
+            };
+            match run(&fmu, c, a.steps, None, Some((lengths[k], &mut control))).map(figures) {
                 Ok(f) => {
+                    let g = figures(control);
                     eprintln!(
-                        "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs; slow steps \
-                         {:.2} % every {:.1} ms of CPU, {:.0} timer interrupts/s",
+                        "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs (control: \
+                         p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs); slow steps {:.2} % every \
+                         {:.1} ms of CPU, {:.0} timer interrupts/s",
                         round + 1,
                         name(c),
                         f.p50 / 1e3,
                         f.p999 / 1e3,
                         f.max / 1e3,
+                        g.p50 / 1e3,
+                        g.p999 / 1e3,
+                        g.max / 1e3,
                         100.0 * f.slow_share,
                         f.slow_spacing / 1e6,
                         f.timer_rate
                     );
+                    // The next round's control: its length scaled to this round's p50s.
+                    lengths[k] = ((lengths[k] as f64) * f.p50 / g.p50).round().max(1.0) as u64;
                     results[k].push(f);
+                    controls[k].push(g);
                 }
                 Err(e) => {
                     eprintln!("{}: {e}", name(c));
@@ -549,6 +620,7 @@ fn main() {
             }
         }
     }
+    let load_end = machine::load();
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -561,11 +633,25 @@ fn main() {
          thread's CPU time of one `DoStep` in µs; \"wall\" is the wall-clock time of the same \
          calls. \"rate\" is the largest communication-step rate with a 2× margin on the \
          maximum, 1 / (2 max); \"fits\" says whether that is at least the configuration's own \
-         rate. The adaptive solvers run at rtol {RTOL:e}.\n",
+         rate. The adaptive solvers run at rtol {RTOL:e}.\n\n\
+         Beside each configuration, a control ([`control.rs`](../src/bin/bench-latency/control.rs)): \
+         a dependent chain of multiply-adds, work of a fixed operation count that touches no \
+         memory, its length calibrated to the configuration's p50 (of a pilot run of {pilot} \
+         steps, then scaled by the ratio of the two p50s after every round), timed by the same clocks right after every step of the configuration, in the \
+         same run. Its steps do the same work every time: the spread of their times is the \
+         machine's. The table \"Tails against the control\" sets the FMU's p99.9/p50 and \
+         max/p50 beside the control's, and their ratio FMU/control (per round, then the median \
+         and range over the rounds); the goal is a ratio of at most 1.2, tails the machine's.\n\n\
+         <!-- hsp timing: latency -->\n\
+         Made by `{}` on {}, load {load_start} at the start \
+         and {load_end} at the end (`/proc/loadavg`, the 1-minute average; each round's is in \
+         the run's log).\n",
         cpu_model(),
         std::thread::available_parallelism().map_or(0, |n| n.get()),
         a.steps,
-        a.rounds
+        a.rounds,
+        machine::command("bench-latency"),
+        machine::today()
     );
     let _ = writeln!(
         md,
@@ -599,6 +685,55 @@ fn main() {
     }
     let _ = writeln!(
         md,
+        "\n## Tails against the control\n\n\
+         The FMU's (\"FMU\") and its control's (\"ctl\") p50 in µs, their p99.9/p50 and \
+         max/p50, by thread CPU time and by wall time, and the ratio FMU/ctl of each; \"≤ 1.2\" \
+         says whether the thread CPU time's ratios (p99.9, max) are at most 1.2.\n\n\
+         | plant | step | solver | call | p50 FMU | p50 ctl | p99.9/p50 FMU | ctl | FMU/ctl | max/p50 FMU | ctl | FMU/ctl | wall p99.9/p50 FMU | ctl | FMU/ctl | wall max/p50 FMU | ctl | FMU/ctl | ≤ 1.2 (p99.9, max) |\n\
+         | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"
+    );
+    for ((c, fmu), ctl) in configs.iter().zip(&results).zip(&controls) {
+        let pick =
+            |runs: &[Figures], f: fn(&Figures) -> f64| runs.iter().map(f).collect::<Vec<_>>();
+        let mut cells = vec![us(&pick(fmu, |f| f.p50)), us(&pick(ctl, |f| f.p50))];
+        let mut within = Vec::new();
+        let tails: [fn(&Figures) -> f64; 4] = [
+            |f| f.p999 / f.p50,
+            |f| f.max / f.p50,
+            |f| f.wall_p999 / f.wall_p50,
+            |f| f.wall_max / f.wall_p50,
+        ];
+        for (k, tail) in tails.into_iter().enumerate() {
+            let of_fmu = pick(fmu, tail);
+            let of_ctl = pick(ctl, tail);
+            let ratios: Vec<f64> = of_fmu.iter().zip(&of_ctl).map(|(a, b)| a / b).collect();
+            if k < 2 {
+                within.push(if median_range(&ratios).0 <= 1.2 {
+                    "yes"
+                } else {
+                    "no"
+                });
+            }
+            let (m, lo, hi) = median_range(&ratios);
+            cells.extend([
+                ratio(&of_fmu),
+                ratio(&of_ctl),
+                format!("{m:.2} ({lo:.2}–{hi:.2})"),
+            ]);
+        }
+        let _ = writeln!(
+            md,
+            "| {} | {} ms | {} | {} | {} | {} |",
+            c.plant.0,
+            c.step * 1e3,
+            c.solver.0,
+            c.version.name(),
+            cells.join(" | "),
+            within.join(", ")
+        );
+    }
+    let _ = writeln!(
+        md,
         "\n## The slow steps\n\n\
          The steps slower than {SLOW} × p50 of the same run: their share of the timed steps, the \
          median thread CPU time of the timed steps from one to the next (ms), and the rate of \
@@ -627,6 +762,7 @@ fn main() {
             timer
         );
     }
+    md.push_str("<!-- /hsp timing: latency -->\n");
     print!("{md}");
     if let Some(out) = a.out {
         std::fs::write(&out, &md).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
