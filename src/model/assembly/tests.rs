@@ -61,7 +61,9 @@ fn values_computed_when_read_are_those_written_at_once() {
         } else {
             assert!(waiting_outputs > 0 && waiting_outputs < outputs);
         }
-        assert!(a.on_demand(idx::ENERGY) == (c == 0), "configuration {c}");
+        // The stored energy waits in both: the LOES's storages are linear, and the valve's
+        // nonlinear ones (its chambers, its spool stops) declare a bound on their energy.
+        assert!(a.on_demand(idx::ENERGY), "configuration {c}");
         for &i in &waiting {
             a.write_on_demand(&x, i, &mut lazy);
         }
