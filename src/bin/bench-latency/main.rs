@@ -5,6 +5,8 @@
 //! cargo run --release --bin hsp -- package            # build fmu/HydraulicSlewingPlate.fmu
 //! cargo run --release --bin bench-latency             # writes bench/latency.md
 //! cargo run --release --bin bench-latency -- --steps 20000 --rounds 1 --only complete
+//! cargo run --release --bin bench-latency -- --steps 3000 --rounds 1 \
+//!     --only "complete system | 1 ms | Rodas5P" --set servo_valve.drive=1
 //! ```
 //!
 //! Loads the packaged FMU's Linux library as an importer does and closes a loop around it, as a
@@ -17,6 +19,11 @@
 //! thread's CPU clock (`CLOCK_THREAD_CPUTIME_ID`: what the step costs, without the time the
 //! thread waits while the operating system runs others) and by the wall clock
 //! (`CLOCK_MONOTONIC`).
+//!
+//! `--set NAME=VALUE` (repeatable) sets a parameter in every configuration after its preset, to
+//! see what a parameter costs (the tolerance comes from `fmi2SetupExperiment`, so
+//! `solver.rtol` has no effect here). Each round's line also gives the solver's steps (with the
+//! rejected ones) per communication step, the work behind the figures.
 //!
 //! For every configuration (a preset, a communication step, a solver) the run is repeated
 //! `--rounds` times (default 3), the rounds of all configurations interleaved, and each figure is
@@ -129,6 +136,8 @@ struct Config {
     solver: (&'static str, i32, i32),
     step: f64,
     version: Version,
+    /// `--set NAME=VALUE`s, applied after the preset and the configuration's own settings.
+    sets: Vec<(String, String)>,
 }
 
 /// The figures of one run, in nanoseconds.
@@ -149,6 +158,9 @@ struct Figures {
     /// Local timer interrupts per second of wall time over the timed steps, all processors
     /// (`/proc/interrupts`, `LOC`; NaN where it cannot be read).
     timer_rate: f64,
+    /// The solver's steps (accepted and rejected) per communication step over the whole run,
+    /// warm-up included (the FMU's `solver.steps` and `solver.rejected`; NaN through FMI 3.0).
+    solver_steps: f64,
 }
 
 /// A step slower than this multiple of the median counts as slow in [`Figures::slow_share`].
@@ -207,6 +219,7 @@ fn settings(config: &Config) -> Result<Vec<(String, String)>, String> {
     sets.push(("controller.external".into(), "true".into()));
     sets.push(("solver.method".into(), config.solver.1.to_string()));
     sets.push(("solver.substeps".into(), config.solver.2.to_string()));
+    sets.extend(config.sets.iter().cloned());
     Ok(sets)
 }
 
@@ -219,6 +232,8 @@ struct Record {
     wall: Vec<u64>,
     timer_rate: f64,
     interrupts: Vec<u32>,
+    /// See [`Figures::solver_steps`].
+    solver_steps: f64,
 }
 
 /// The thread CPU time and the wall time of `work` \[ns\]: the one way every step here is
@@ -256,6 +271,7 @@ fn closed_loop(
         wall,
         timer_rate: timer,
         interrupts,
+        ..
     } = record;
     let mut timer_start = None;
     let mut wall_start = 0;
@@ -322,6 +338,7 @@ fn run(
         wall: Vec::with_capacity(steps),
         timer_rate: f64::NAN,
         interrupts: Vec::with_capacity(if counter.is_some() { steps } else { 0 }),
+        solver_steps: f64::NAN,
     };
     let sets = settings(config)?;
     match config.version {
@@ -351,6 +368,8 @@ fn run(
                 input,
                 step,
             )?;
+            let stats = inst.solver_stats()?;
+            record.solver_steps = f64::from(stats[0] + stats[1]) / n as f64;
             inst.terminate()?;
         }
         Version::Fmi3 => {
@@ -384,6 +403,7 @@ fn figures(record: Record) -> Figures {
         cpu,
         mut wall,
         timer_rate,
+        solver_steps,
         ..
     } = record;
     let mut sorted = cpu.clone();
@@ -395,6 +415,7 @@ fn figures(record: Record) -> Figures {
         slow_share,
         slow_spacing,
         timer_rate,
+        solver_steps,
         p50: quantile(&cpu, 0.5),
         p99: quantile(&cpu, 0.99),
         p999: quantile(&cpu, 0.999),
@@ -463,6 +484,7 @@ struct Args {
     steps: usize,
     rounds: usize,
     only: Option<String>,
+    sets: Vec<(String, String)>,
     out: Option<PathBuf>,
     accuracy: bool,
     interrupts: bool,
@@ -473,6 +495,7 @@ fn args() -> Args {
         steps: DEFAULT_STEPS,
         rounds: DEFAULT_ROUNDS,
         only: None,
+        sets: Vec::new(),
         accuracy: false,
         interrupts: false,
         out: Some(PathBuf::from(concat!(
@@ -487,17 +510,28 @@ fn args() -> Args {
             "--steps" => a.steps = value("a number").parse().expect("--steps N"),
             "--rounds" => a.rounds = value("a number").parse().expect("--rounds N"),
             "--only" => a.only = Some(value("a name")),
+            "--set" => {
+                let set = value("NAME=VALUE");
+                let (name, v) = set
+                    .split_once('=')
+                    .unwrap_or_else(|| panic!("--set {set}: expected NAME=VALUE"));
+                a.sets.push((name.into(), v.into()));
+            }
             "--print" => a.out = None,
             "--accuracy" => a.accuracy = true,
             "--interrupts" => a.interrupts = true,
             _ => panic!(
-                "unknown argument {arg}; expected --steps N, --rounds N, --only TEXT, --print, \
-                 --interrupts or --accuracy"
+                "unknown argument {arg}; expected --steps N, --rounds N, --only TEXT, \
+                 --set NAME=VALUE, --print, --interrupts or --accuracy"
             ),
         }
     }
     // A partial run is printed, not written over the committed table.
-    if a.only.is_some() || a.steps != DEFAULT_STEPS || a.rounds != DEFAULT_ROUNDS {
+    if a.only.is_some()
+        || !a.sets.is_empty()
+        || a.steps != DEFAULT_STEPS
+        || a.rounds != DEFAULT_ROUNDS
+    {
         a.out = None;
     }
     a
@@ -542,6 +576,7 @@ fn main() {
                         solver,
                         step,
                         version,
+                        sets: a.sets.clone(),
                     });
                 }
             }
@@ -595,7 +630,8 @@ fn main() {
                     eprintln!(
                         "round {}: {}: p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs (control: \
                          p50 {:.1} µs, p99.9 {:.1} µs, max {:.1} µs); slow steps {:.2} % every \
-                         {:.1} ms of CPU, {:.0} timer interrupts/s",
+                         {:.1} ms of CPU, {:.0} timer interrupts/s; {:.2} solver steps (with the \
+                         rejected) per communication step",
                         round + 1,
                         name(c),
                         f.p50 / 1e3,
@@ -606,7 +642,8 @@ fn main() {
                         g.max / 1e3,
                         100.0 * f.slow_share,
                         f.slow_spacing / 1e6,
-                        f.timer_rate
+                        f.timer_rate,
+                        f.solver_steps
                     );
                     // The next round's control: its length scaled to this round's p50s.
                     lengths[k] = ((lengths[k] as f64) * f.p50 / g.p50).round().max(1.0) as u64;
