@@ -31,7 +31,7 @@ use clap::Args;
 use nalgebra::{DMatrix, DVector};
 
 use data::{Fitted, Frf};
-use optimiser::{levenberg_marquardt, LeastSquares, Stop, Tolerances};
+use optimiser::{LeastSquares, Stop, Tolerances};
 use peaks::Peaks;
 use residuals::Problem;
 use series::Series;
@@ -194,16 +194,10 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         let out = all[best].end.clone()?;
         (out, all, minima)
     } else {
-        let t0: Vec<f64> = problem
-            .fitted
-            .iter()
-            .map(|f| f.t_of_z(f.z_of(f.start)))
-            .collect();
-        (
-            levenberg_marquardt(&unconstrained, &t0, tolerances)?,
-            Vec::new(),
-            Vec::new(),
-        )
+        // One start, the configuration's: the same run, without the list of starts and minima.
+        let z0 = problem.fitted.iter().map(|f| f.z_of(f.start)).collect();
+        let mut one = starts::run(&unconstrained, vec![z0], tolerances, 1);
+        (one.remove(0).end?, Vec::new(), Vec::new())
     };
     let z = unconstrained.z(&out.t);
     let jac = problem.jacobian_z(&z)?;
