@@ -315,7 +315,11 @@ mod tests {
                 &tabulate(|x| f.derivative(i, x)),
                 &tabulate(|x| g.derivative(j, x)),
             );
-            assert_eq!(direct.to_bits(), tables.to_bits(), "derivatives {i} and {j}");
+            assert_eq!(
+                direct.to_bits(),
+                tables.to_bits(),
+                "derivatives {i} and {j}"
+            );
         }
         assert_eq!(tabulate(|x| x).len(), PANELS * NODES);
     }

@@ -85,6 +85,15 @@ pub struct IdentifyArgs {
     /// The starts run on this many threads [default: the machine's processors]
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     jobs: Option<u32>,
+    /// Run start K (0 to N - 1) of --starts N alone and print where it ended as one JSON line,
+    /// exact to the bit, for --ends (what tools/identify_dask.py runs on each Dask worker)
+    #[arg(long, value_name = "K", conflicts_with_all = ["ends", "out", "report"])]
+    start: Option<u32>,
+    /// Take the ends of the --starts N from FILE (the JSON lines of --start K, one per start, in
+    /// any order) instead of running them: the fit, its report and its minima are then those of
+    /// the same starts run here
+    #[arg(long, value_name = "FILE")]
+    ends: Option<String>,
     /// The starting configuration: the FMU's start values, --preset, then --set
     #[command(flatten)]
     model: crate::ModelArgs,
@@ -147,8 +156,8 @@ impl Fit {
     }
 }
 
-/// Reads the data and fits.
-fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
+/// Reads the data and the fitted parameters: the problem on the starting configuration.
+fn problem(args: &IdentifyArgs) -> Result<Problem, String> {
     let base = args.model.values()?;
     let frfs = args
         .frf
@@ -170,11 +179,18 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
         .iter()
         .map(|s| Fitted::parse(s, &base))
         .collect::<Result<_, _>>()?;
-    let problem = Problem::new(base, frfs, peaks, series, fitted)?;
-    let tolerances = Tolerances {
-        iterations: args.max_iterations,
-        ..Tolerances::default()
-    };
+    if (args.start.is_some() || args.ends.is_some()) && args.starts < 2 {
+        return Err(
+            "--start and --ends split the starts of --starts N (N > 1): give --starts".into(),
+        );
+    }
+    Problem::new(base, frfs, peaks, series, fitted)
+}
+
+/// Reads the data and fits.
+fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
+    let problem = problem(args)?;
+    let tolerances = tolerances(args);
     let unconstrained = Unconstrained(&problem);
     let (out, all_starts, minima) = if args.starts > 1 {
         let z0s = starts::points(&problem.fitted, args.starts as usize, args.seed)?;
@@ -182,7 +198,10 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
             || std::thread::available_parallelism().map_or(1, |n| n.get()),
             |n| n as usize,
         );
-        let all = starts::run(&unconstrained, z0s, tolerances, jobs);
+        let all = match &args.ends {
+            Some(file) => starts::read_ends(file, z0s)?,
+            None => starts::run(&unconstrained, z0s, tolerances, jobs),
+        };
         let best = starts::best(&all).ok_or_else(|| {
             let why = all.iter().find_map(|s| s.end.as_ref().err());
             format!(
@@ -265,6 +284,28 @@ fn fit(args: &IdentifyArgs) -> Result<Fit, String> {
     })
 }
 
+/// The optimiser's tolerances of the command.
+fn tolerances(args: &IdentifyArgs) -> Tolerances {
+    Tolerances {
+        iterations: args.max_iterations,
+        ..Tolerances::default()
+    }
+}
+
+/// `--start K`: runs start K of `--starts N` alone and prints where it ended as one JSON line
+/// ([`starts::end_line`]).
+fn run_start(args: &IdentifyArgs, k: usize) -> Result<(), String> {
+    let problem = problem(args)?;
+    let z0s = starts::points(&problem.fitted, args.starts as usize, args.seed)?;
+    let z0 = z0s
+        .get(k)
+        .cloned()
+        .ok_or_else(|| format!("--start {k}: the starts are 0 to {}", z0s.len() - 1))?;
+    let mut one = starts::run(&Unconstrained(&problem), vec![z0], tolerances(args), 1);
+    println!("{}", starts::end_line(k, &one.remove(0).end));
+    Ok(())
+}
+
 /// The starting configuration in words, for the report page.
 fn starting(model: &crate::ModelArgs) -> String {
     let mut s = match &model.preset {
@@ -278,6 +319,9 @@ fn starting(model: &crate::ModelArgs) -> String {
 }
 
 pub fn main(args: &IdentifyArgs) -> Result<(), String> {
+    if let Some(k) = args.start {
+        return run_start(args, k as usize);
+    }
     let fit = fit(args)?;
     if args.json {
         // The text table ends with them; the JSON holds them, and a reader of the terminal sees

@@ -13,6 +13,11 @@
 //! whose model fails at its starting point is reported with the model's message and takes no
 //! further part.
 //!
+//! Across machines (`tools/identify_dask.py`): `--start K` runs start K alone and prints where it
+//! ended as one JSON line ([`end_line`]: the end's coordinates and cost as the bits of their
+//! doubles, so nothing is lost in decimal); `--ends FILE` takes the N ends from such lines
+//! ([`read_ends`]) instead of running them, and the report follows as from the threads.
+//!
 //! The minima: two starts that end within [`SAME_MINIMUM`] of each other in every `z` reached the
 //! same minimum (their costs then agree too). The report lists each distinct minimum with the number of starts
 //! that reached it; when the best one was reached from a single start, a warning says so (more
@@ -22,7 +27,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use super::data::Fitted;
-use super::optimiser::{levenberg_marquardt, Outcome, Tolerances};
+use super::optimiser::{levenberg_marquardt, Outcome, Stop, Tolerances};
 use super::Unconstrained;
 
 /// Two ends closer than this in every coordinate `z` (a relative 1e-4 of a log-scaled
@@ -133,6 +138,102 @@ pub fn run(
         .collect()
 }
 
+/// Where start `k` ended, as one JSON line: `{"start": k, "t": [bits], "cost": bits,
+/// "iterations": n, "stop": name}` (the doubles as the hexadecimal of their bits), or
+/// `{"start": k, "error": message}`.
+pub fn end_line(k: usize, end: &Result<Outcome, String>) -> String {
+    let bits = |v: f64| format!("{:016x}", v.to_bits());
+    let line = match end {
+        Ok(o) => serde_json::json!({
+            "start": k,
+            "t": o.t.iter().map(|&v| bits(v)).collect::<Vec<_>>(),
+            "cost": bits(o.cost),
+            "iterations": o.iterations,
+            "stop": format!("{:?}", o.stop),
+        }),
+        Err(e) => serde_json::json!({"start": k, "error": e}),
+    };
+    line.to_string()
+}
+
+/// The ends of the starts `z0s` from `file`, lines of [`end_line`] in any order (blank lines
+/// skipped); an error names the file and the line, a start given twice, or the starts missing.
+pub fn read_ends(file: &str, z0s: Vec<Vec<f64>>) -> Result<Vec<Start>, String> {
+    let text = std::fs::read_to_string(file).map_err(|e| format!("--ends {file}: {e}"))?;
+    let mut ends: Vec<Option<Result<Outcome, String>>> = z0s.iter().map(|_| None).collect();
+    for (i, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let at = |what: &str| format!("--ends {file}, line {}: {what}", i + 1);
+        let v: serde_json::Value =
+            serde_json::from_str(line).map_err(|e| at(&format!("not JSON ({e})")))?;
+        let k = v["start"].as_u64().ok_or_else(|| at("no \"start\""))? as usize;
+        let slot = ends.get_mut(k).ok_or_else(|| {
+            at(&format!(
+                "start {k}, but the starts are 0 to {}",
+                z0s.len() - 1
+            ))
+        })?;
+        if slot.is_some() {
+            return Err(at(&format!("start {k} given twice")));
+        }
+        let double = |v: &serde_json::Value| {
+            v.as_str()
+                .and_then(|h| u64::from_str_radix(h, 16).ok())
+                .map(f64::from_bits)
+                .ok_or_else(|| at("a double that is not 16 hexadecimal digits"))
+        };
+        *slot = Some(match v["error"].as_str() {
+            Some(e) => Err(e.to_string()),
+            None => {
+                let t = v["t"]
+                    .as_array()
+                    .ok_or_else(|| at("no \"t\""))?
+                    .iter()
+                    .map(double)
+                    .collect::<Result<Vec<_>, _>>()?;
+                if t.len() != z0s[k].len() {
+                    return Err(at(&format!(
+                        "{} coordinates for {} fitted parameters",
+                        t.len(),
+                        z0s[k].len()
+                    )));
+                }
+                let stop = match v["stop"].as_str() {
+                    Some("Cost") => Stop::Cost,
+                    Some("Step") => Stop::Step,
+                    Some("Gradient") => Stop::Gradient,
+                    Some("Iterations") => Stop::Iterations,
+                    _ => return Err(at("no known \"stop\"")),
+                };
+                Ok(Outcome {
+                    t,
+                    cost: double(&v["cost"])?,
+                    iterations: v["iterations"]
+                        .as_u64()
+                        .ok_or_else(|| at("no \"iterations\""))?
+                        as usize,
+                    stop,
+                })
+            }
+        });
+    }
+    let missing: Vec<usize> = (0..ends.len()).filter(|&k| ends[k].is_none()).collect();
+    if !missing.is_empty() {
+        return Err(format!("--ends {file}: no end of the starts {missing:?}"));
+    }
+    Ok(z0s
+        .into_iter()
+        .zip(ends)
+        .map(|(z0, end)| Start {
+            z0,
+            end: end.unwrap_or_else(|| Err("the start was not run".into())),
+        })
+        .collect())
+}
+
 /// The index of the start with the lowest cost (the first of equals), if any ended.
 pub fn best(starts: &[Start]) -> Option<usize> {
     starts
@@ -205,6 +306,49 @@ mod tests {
         }
         assert_eq!(z, points(&f, n, 7).unwrap(), "the seed sets the points");
         assert_ne!(z, points(&f, n, 8).unwrap());
+    }
+
+    /// `--start K`'s lines give back the same ends to the bit through `--ends`, in any order;
+    /// a start given twice or missing is refused by name.
+    #[test]
+    fn the_ends_of_the_starts_come_back_to_the_bit() {
+        let ends = [
+            Ok(Outcome {
+                t: vec![0.1 + 0.2, -1e-300, f64::MIN_POSITIVE / 3.0],
+                cost: 2.625e-21,
+                iterations: 7,
+                stop: Stop::Gradient,
+            }),
+            Err("the model refused it".to_string()),
+        ];
+        let z0s = vec![vec![1.0, 2.0, 3.0], vec![4.0, 5.0, 6.0]];
+        let dir = std::env::temp_dir().join(format!("hsp-ends-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("ends.jsonl");
+        let lines = format!("{}\n\n{}\n", end_line(1, &ends[1]), end_line(0, &ends[0]));
+        std::fs::write(&file, &lines).unwrap();
+        let back = read_ends(file.to_str().unwrap(), z0s.clone()).unwrap();
+        let o = back[0].end.as_ref().unwrap();
+        let e = ends[0].as_ref().unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&o.t), bits(&e.t));
+        assert_eq!(o.cost.to_bits(), e.cost.to_bits());
+        assert_eq!((o.iterations, o.stop), (e.iterations, e.stop));
+        assert_eq!(back[1].end.as_ref().err().unwrap(), "the model refused it");
+        assert_eq!(back[1].z0, z0s[1]);
+
+        std::fs::write(&file, format!("{lines}{}\n", end_line(0, &ends[0]))).unwrap();
+        let e = read_ends(file.to_str().unwrap(), z0s.clone())
+            .err()
+            .unwrap();
+        assert!(
+            e.contains("line 4") && e.contains("start 0 given twice"),
+            "{e}"
+        );
+        std::fs::write(&file, end_line(1, &ends[1])).unwrap();
+        let e = read_ends(file.to_str().unwrap(), z0s).err().unwrap();
+        assert!(e.contains("no end of the starts [0]"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
