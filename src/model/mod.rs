@@ -86,6 +86,9 @@ struct OnDemandValues {
     all: bool,
     step: u64,
     fresh: Vec<u64>,
+    /// The nonlinear results computed so far at the point of `step`, shared by the values that
+    /// are not affine ([`crate::bond_graph::PointCache`]).
+    point: crate::bond_graph::PointCache,
 }
 
 /// The model's part of an FMU state.
@@ -450,7 +453,7 @@ impl FmuModel for HydraulicSlewingPlate {
         };
         let d = &mut self.on_demand;
         if d.fresh[index] != d.step && system.on_demand(index) {
-            system.write_on_demand(integrator.x(), index, values);
+            system.write_on_demand(integrator.x(), index, values, (&mut d.point, d.step));
             d.fresh[index] = d.step;
         }
     }
