@@ -387,6 +387,17 @@ impl CompiledModel {
         })
     }
 
+    /// The nonlinear laws the plan's `Law` operations call, in their order.
+    pub fn laws(&self) -> &[NonlinearLaw] {
+        &self.laws
+    }
+
+    /// The laws, to change one in a test (a law without its declared bound, say).
+    #[cfg(test)]
+    pub(crate) fn laws_mut(&mut self) -> &mut [NonlinearLaw] {
+        &mut self.laws
+    }
+
     /// The outputs and rows of [`CompiledModel::for_each_nonaffine_output_and_derivative`] as
     /// sparse linear forms ([`super::PointForms`]): the same values to rounding, with a few dot
     /// products instead of a pass through the plan.

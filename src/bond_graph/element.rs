@@ -59,7 +59,17 @@ pub struct NonlinearLaw {
     /// `(k, c)` with `|E(x)| <= k x^2 + c` for every finite `x`, if the law's author shows one
     /// ([`NonlinearLaw::with_energy_bound`]).
     pub(crate) energy_bound: Option<(f64, f64)>,
+    /// `(k, c)` with `|phi(v, m)| <= k s^2 + c`, `s = max(|v|, |m|)`, wherever
+    /// `s <= VALUE_BOUND_RANGE`, if the law's author shows one
+    /// ([`NonlinearLaw::with_value_bound`]).
+    pub(crate) value_bound: Option<(f64, f64)>,
 }
+
+/// How far a law's declared value bound ([`NonlinearLaw::with_value_bound`]) must hold: for
+/// every argument and modulator up to 2^500 in magnitude, well below where a square of them
+/// overflows (2^512), so that a law may square its argument (`v^2 + c^2`, `|v| v`) without its
+/// author having to reason about overflow; beyond, no bound is promised.
+pub const VALUE_BOUND_RANGE: f64 = 3.273_390_607_896_142e150; // 2^500, exactly
 
 impl NonlinearLaw {
     /// An unmodulated law: `phi` returns `(y, dy/dx)`.
@@ -78,6 +88,7 @@ impl NonlinearLaw {
             value: Arc::new(move |x, _m| value(x).0),
             energy: None,
             energy_bound: None,
+            value_bound: None,
         }
     }
 
@@ -94,6 +105,7 @@ impl NonlinearLaw {
             value: Arc::new(move |x, m| value(x, m).0),
             energy: None,
             energy_bound: None,
+            value_bound: None,
         }
     }
 
@@ -115,6 +127,31 @@ impl NonlinearLaw {
     pub fn with_energy_bound(mut self, k: f64, c: f64) -> Self {
         self.energy_bound = Some((k, c));
         self
+    }
+
+    /// Declares `|phi(v, m)| <= k s^2 + c` with `s = max(|v|, |m|)`, the value finite, for every
+    /// `v`, `m` with `s <= VALUE_BOUND_RANGE` (`m` = 0 for a law without modulator), as
+    /// computed (rounding included). With it, the FMU shows the outputs and rows of `f` that go
+    /// through the law finite at a state without computing them (`PointForms::finite_radius`),
+    /// so that a communication point need not: they are computed when read. The law's author
+    /// proves the bound in the law's documentation; a test samples it.
+    pub fn with_value_bound(mut self, k: f64, c: f64) -> Self {
+        self.value_bound = Some((k, c));
+        self
+    }
+
+    /// [`NonlinearLaw::with_value_bound`] when `bound` is some: for a law whose bound holds
+    /// only for some of its parameters (a positive width, say).
+    pub fn with_value_bound_if(self, bound: Option<(f64, f64)>) -> Self {
+        match bound {
+            Some((k, c)) => self.with_value_bound(k, c),
+            None => self,
+        }
+    }
+
+    /// The bound declared by [`NonlinearLaw::with_value_bound`], if any.
+    pub fn value_bound(&self) -> Option<(f64, f64)> {
+        self.value_bound
     }
 
     /// Evaluates `(phi, dphi/dx, dphi/dm)`.

@@ -202,6 +202,27 @@ impl NonaffineForms {
         self.evaluate_each(m, x, u, |i, v| out[i as usize] = v);
     }
 
+    /// `c + Σ a_v w_v` of `f` (the same sum, in the same order, wherever it is evaluated).
+    #[inline]
+    fn dot(&self, w: &[f64], f: &Form) -> f64 {
+        self.entries[f.start as usize..f.end as usize]
+            .iter()
+            .fold(f.c, |acc, &(v, a)| acc + a * w[v as usize])
+    }
+
+    /// The `c`-th nonlinear result from the variables before it in `w`.
+    #[inline]
+    fn nonlinear_value(&self, m: &CompiledModel, w: &[f64], c: usize) -> f64 {
+        let op = &self.nonlinear[c];
+        let a = self.dot(w, &op.a);
+        let b = op.b.as_ref().map_or(0.0, |b| self.dot(w, b));
+        match op.kind {
+            Kind::Law { law, ki, ko } => (m.laws[law as usize].value)(a * ki, b) * ko,
+            Kind::Mul { k } => (a * b) * k,
+            Kind::Div { k } => (a / b) * k,
+        }
+    }
+
     /// [`NonaffineForms::evaluate`], each target's value given to `each(index, value)`.
     fn evaluate_each(
         &self,
@@ -223,39 +244,52 @@ impl NonaffineForms {
                 None => w[..n].fill(0.0),
             }
             w[n..self.known].copy_from_slice(u);
-            let entries = &self.entries;
-            let dot = |w: &[f64], f: &Form| {
-                entries[f.start as usize..f.end as usize]
-                    .iter()
-                    .fold(f.c, |acc, &(v, a)| acc + a * w[v as usize])
-            };
-            for (c, op) in self.nonlinear.iter().enumerate() {
-                let a = dot(w, &op.a);
-                let b = op.b.as_ref().map_or(0.0, |b| dot(w, b));
-                w[self.known + c] = match op.kind {
-                    Kind::Law { law, ki, ko } => (m.laws[law as usize].value)(a * ki, b) * ko,
-                    Kind::Mul { k } => (a * b) * k,
-                    Kind::Div { k } => (a / b) * k,
-                };
+            for c in 0..self.nonlinear.len() {
+                w[self.known + c] = self.nonlinear_value(m, w, c);
             }
             for (i, f) in &self.rows {
-                each(*i, dot(w, f));
+                each(*i, self.dot(w, f));
             }
         })
     }
 }
 
 /// The outputs and the rows of `f` that are not affine in x, as forms (see the module
-/// documentation): what a communication point computes at once when the rest is affine.
+/// documentation): what a communication point computes at once when the rest is affine, or
+/// leaves until read when it can show them finite ([`PointForms::finite_radius`]).
 /// [`PointForms::for_each`] gives the values of
 /// [`CompiledModel::for_each_nonaffine_output_and_derivative`] to rounding, with a few dot
-/// products per nonlinear operation instead of a pass through the operations they need.
+/// products per nonlinear operation instead of a pass through the operations they need;
+/// [`PointForms::output`] and [`PointForms::derivative`] give one of them, the same bits, with
+/// only the nonlinear operations it needs.
 #[derive(Clone, Debug, Default)]
 pub struct PointForms {
     /// Targets below `outputs` are the outputs; the others the rows, offset by `outputs`.
     forms: NonaffineForms,
     outputs: u32,
+    /// For each target index (output, or `outputs` + row), its place among the forms' rows.
+    place: Vec<Option<u32>>,
+    /// For each of the forms' rows, the range of `needs` listing the nonlinear operations its
+    /// value depends on, in plan order (those its form reads and those they read, and so on).
+    needs_of: Vec<(u32, u32)>,
+    needs: Vec<u32>,
 }
+
+/// The nonlinear results computed so far at one communication point, for
+/// [`PointForms::output`] and [`PointForms::derivative`]: a value read after another reuses
+/// the operations both need. `stamp` names the point (0: none yet): a new one starts afresh.
+#[derive(Clone, Debug, Default)]
+pub struct PointCache {
+    stamp: u64,
+    w: Vec<f64>,
+    done: Vec<bool>,
+}
+
+/// The factor by which every bound of [`PointForms::finite_radius`] is raised to cover the
+/// rounding of what it bounds: a dot product of `n` terms is within `n` units in the last place
+/// (2^-53) of the exact sum of the magnitudes, a few hundred of them at most here; 2^-20 covers
+/// that for forms of up to about 2^32 entries, and the rounding of the bound's own arithmetic.
+const ROUNDING_MARGIN: f64 = 1.0 + 1.0 / (1u64 << 20) as f64;
 
 impl PointForms {
     /// The forms of `m`'s outputs that are not affine (`(output, slot)`) and of its rows that
@@ -272,9 +306,52 @@ impl PointForms {
             .copied()
             .chain(rows.iter().map(|&(i, s)| (n_outputs + i, s)))
             .collect();
+        let forms = NonaffineForms::new(m, ops, &targets);
+        let mut place = vec![None; (n_outputs as usize) + m.n_states()];
+        for (p, &(i, _)) in forms.rows.iter().enumerate() {
+            place[i as usize] = Some(p as u32);
+        }
+        // The operations each nonlinear result needs, then each row: as flags over the
+        // operations before it (a few dozen), in plan order.
+        let known = forms.known;
+        let n_nonlinear = forms.nonlinear.len();
+        let reads = |f: &Form| -> Vec<usize> {
+            forms.entries[f.start as usize..f.end as usize]
+                .iter()
+                .filter(|&&(v, _)| v as usize >= known)
+                .map(|&(v, _)| v as usize - known)
+                .collect()
+        };
+        let mut need: Vec<Vec<bool>> = Vec::with_capacity(n_nonlinear);
+        let closure = |need: &[Vec<bool>], read: Vec<usize>| -> Vec<bool> {
+            let mut flags = vec![false; n_nonlinear];
+            for c in read {
+                flags[c] = true;
+                for (f, &n) in flags.iter_mut().zip(&need[c]) {
+                    *f |= n;
+                }
+            }
+            flags
+        };
+        for op in &forms.nonlinear {
+            let mut read = reads(&op.a);
+            read.extend(op.b.as_ref().map_or(vec![], &reads));
+            let flags = closure(&need, read);
+            need.push(flags);
+        }
+        let (mut needs_of, mut needs) = (Vec::new(), Vec::new());
+        for (_, f) in &forms.rows {
+            let flags = closure(&need, reads(f));
+            let start = needs.len() as u32;
+            needs.extend((0..n_nonlinear as u32).filter(|&c| flags[c as usize]));
+            needs_of.push((start, needs.len() as u32));
+        }
         PointForms {
-            forms: NonaffineForms::new(m, ops, &targets),
+            forms,
             outputs: n_outputs,
+            place,
+            needs_of,
+            needs,
         }
     }
 
@@ -301,5 +378,137 @@ impl PointForms {
                 derivative((i - self.outputs) as usize, v);
             }
         });
+    }
+
+    /// The largest `S` (a power of 2 from 2^-1000 to 2^1000, or 0) such that every value the
+    /// forms of `m` compute (every nonlinear result and every target) is finite, bounded below
+    /// `limit`, whenever
+    /// every state and input is at most `S` in magnitude: shown from bounds, without
+    /// computing them, so that a communication point within it can leave the values until they
+    /// are read (the FMU never returns with a non-finite output it has not checked).
+    ///
+    /// For a bound `S` on the states and inputs, the bound of each form is
+    /// `|c| + Σ |a_v| bound(w_v)`; of a law `ko L(ki a, m)`, `|ko| (k s² + c)` with
+    /// `s = max(|ki| bound(a), bound(m))` and `(k, c)` its declared value bound
+    /// ([`super::NonlinearLaw::with_value_bound`], valid up to
+    /// [`super::VALUE_BOUND_RANGE`]); of a product `k a b`, `|k| bound(a) bound(b)`; each raised
+    /// by a factor 1 + 2^-20 for rounding. A quotient has none (its denominator is not shown
+    /// away from zero), nor has a law without a declared bound: then `S` = 0, nothing is left.
+    /// The bounds grow with `S`, so the largest `S` is found by bisection on its exponent.
+    pub fn finite_radius(&self, m: &CompiledModel, limit: f64) -> f64 {
+        let (mut lo, mut hi) = (-1000_i32, 1000_i32);
+        let within = |e: i32| self.bounded_within(m, 2f64.powi(e), limit);
+        if !within(lo) {
+            return 0.0;
+        }
+        if within(hi) {
+            return 2f64.powi(hi);
+        }
+        // within(lo) and not within(hi)
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if within(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        2f64.powi(lo)
+    }
+
+    /// Are all the forms' values below `limit` in magnitude whenever the states and inputs
+    /// are at most `s` (see [`PointForms::finite_radius`])?
+    pub fn bounded_within(&self, m: &CompiledModel, s: f64, limit: f64) -> bool {
+        let f = &self.forms;
+        let mut b = vec![s; f.known + f.nonlinear.len()];
+        let form_bound = |b: &[f64], form: &Form| -> f64 {
+            f.entries[form.start as usize..form.end as usize]
+                .iter()
+                .fold(form.c.abs(), |acc, &(v, a)| acc + a.abs() * b[v as usize])
+                * ROUNDING_MARGIN
+        };
+        for (c, op) in f.nonlinear.iter().enumerate() {
+            let a = form_bound(&b, &op.a);
+            let v = match op.kind {
+                Kind::Law { law, ki, ko } => {
+                    let modulator = op.b.as_ref().map_or(0.0, |form| form_bound(&b, form));
+                    let arg = (ki.abs() * a * ROUNDING_MARGIN).max(modulator);
+                    match m.laws[law as usize].value_bound {
+                        Some((k, c)) if arg <= super::VALUE_BOUND_RANGE => {
+                            ko.abs() * (k.abs() * arg * arg + c.abs()) * ROUNDING_MARGIN
+                        }
+                        _ => f64::INFINITY,
+                    }
+                }
+                Kind::Mul { k } => {
+                    let bb = op.b.as_ref().map_or(0.0, |form| form_bound(&b, form));
+                    k.abs() * a * bb * ROUNDING_MARGIN
+                }
+                Kind::Div { .. } => f64::INFINITY,
+            };
+            // NaN bounds (0 × inf) fail too.
+            if v.is_nan() || v >= limit {
+                return false;
+            }
+            b[f.known + c] = v;
+        }
+        f.rows.iter().all(|(_, form)| form_bound(&b, form) < limit)
+    }
+
+    /// The output `k` (not affine) at the states `x` and inputs `u`: the value
+    /// [`PointForms::for_each`] gives, to the bit (the same operations on the same operands),
+    /// computing only the nonlinear results it needs and that `cache` does not hold for the
+    /// point `stamp` (not 0). None if `k` is an affine output.
+    pub fn output(
+        &self,
+        m: &CompiledModel,
+        (x, u): (&[f64], &[f64]),
+        k: usize,
+        (cache, stamp): (&mut PointCache, u64),
+    ) -> Option<f64> {
+        (k < self.outputs as usize).then(|| self.target(m, (x, u), k, (cache, stamp)))?
+    }
+
+    /// The row `i` of f (not affine) at the states `x` and inputs `u`, like
+    /// [`PointForms::output`]. None if the row is affine.
+    pub fn derivative(
+        &self,
+        m: &CompiledModel,
+        (x, u): (&[f64], &[f64]),
+        i: usize,
+        (cache, stamp): (&mut PointCache, u64),
+    ) -> Option<f64> {
+        self.target(m, (x, u), self.outputs as usize + i, (cache, stamp))
+    }
+
+    fn target(
+        &self,
+        m: &CompiledModel,
+        (x, u): (&[f64], &[f64]),
+        target: usize,
+        (cache, stamp): (&mut PointCache, u64),
+    ) -> Option<f64> {
+        let p = (*self.place.get(target)?)? as usize;
+        let f = &self.forms;
+        assert_eq!(x.len() + u.len(), f.known, "state and input lengths");
+        assert_ne!(stamp, 0, "a point's stamp is not 0");
+        let len = f.known + f.nonlinear.len();
+        if cache.stamp != stamp || cache.w.len() != len {
+            cache.w.resize(len, 0.0);
+            cache.done.clear();
+            cache.done.resize(f.nonlinear.len(), false);
+            cache.w[..x.len()].copy_from_slice(x);
+            cache.w[x.len()..f.known].copy_from_slice(u);
+            cache.stamp = stamp;
+        }
+        let (start, end) = self.needs_of[p];
+        for &c in &self.needs[start as usize..end as usize] {
+            let c = c as usize;
+            if !cache.done[c] {
+                cache.w[f.known + c] = f.nonlinear_value(m, &cache.w, c);
+                cache.done[c] = true;
+            }
+        }
+        Some(f.dot(&cache.w, &f.rows[p].1))
     }
 }

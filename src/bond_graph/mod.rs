@@ -120,11 +120,11 @@ pub use compiled::{AffineOffsets, CompiledModel};
 pub use discretisation::ExactDiscretisation;
 pub use element::{
     Bond, BondId, Element, ElementId, ElementKind, Law, LawFn, Modulus, NonlinearLaw, OutputDef,
-    OutputSource, Quantity, SignalBlock, SignalId, SignalKind, SourceValue,
+    OutputSource, Quantity, SignalBlock, SignalId, SignalKind, SourceValue, VALUE_BOUND_RANGE,
 };
 pub use energy::PowerBalance;
 pub use error::BondGraphError;
-pub use forms::{NonaffineForms, PointForms};
+pub use forms::{NonaffineForms, PointCache, PointForms};
 pub use graph::BondGraph;
 pub use linearization::Linearization;
 pub use units::{Domain, StateUnits};

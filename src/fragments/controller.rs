@@ -179,6 +179,21 @@ impl AmplifierLimit {
         }
     }
 
+    /// Its value bound as a law ([`NonlinearLaw::with_value_bound`]): `|e| <= 2 |e_max|` for
+    /// the saturating amplifier. Within the linear range `|e| = |u| <= LINEAR_FRACTION |e_max|`;
+    /// beyond, `tanh` lies in `[-1, 1]`, so `|k + w t| <= |k| + |w| = |e_max|`; the factor 2
+    /// covers rounding many times over. For `e_max` finite (`(|u| - k)/w` may be ±inf at
+    /// `e_max` = 0, which `tanh` takes, then `w t` = 0). None for the linear amplifier, which
+    /// is no law.
+    pub fn value_bound(&self) -> Option<(f64, f64)> {
+        match *self {
+            AmplifierLimit::Linear => None,
+            AmplifierLimit::Saturating { e_max } => {
+                e_max.is_finite().then_some((0.0, 2.0 * e_max.abs()))
+            }
+        }
+    }
+
     /// Whether a demanded output `u` is beyond the linear range (the amplifier is limiting).
     pub fn is_limiting(&self, u: f64) -> bool {
         match *self {
@@ -226,7 +241,8 @@ pub fn add_output_limit(
             format!("{prefix}.e_out"),
             NonlinearLaw::new(format!("amplifier limit +-{e_max} V"), move |u| {
                 limit.eval(u)
-            }),
+            })
+            .with_value_bound_if(limit.value_bound()),
             u,
         ),
     }

@@ -84,11 +84,22 @@ pub struct OrificeFluid {
 }
 
 /// A fixed orifice of area `area` as an R law in conductance form (`f = Q(dp)`).
+///
+/// Its value bound ([`NonlinearLaw::with_value_bound`]): with `K = Cd A sqrt(2/rho)`,
+/// `|Q| <= K (dp² + 1)`. Since `(dp² + dp_cr²)^(1/4) >= |dp|^(1/2)`, `|Q| <= K |dp|^(1/2)`,
+/// and `a^(1/2) <= a² + 1` for every `a >= 0` (`a^(1/2) <= 1` below 1, `<= a <= a²` above),
+/// with at least 0.5 to spare (`a^(1/2) - a²` peaks at 0.47), far more than the few roundings
+/// of the law. Declared when `dp_cr²` is a normal double (then `(dp² + dp_cr²)^(1/4)` is never
+/// 0 and the law never 0/0) and `K` is finite; for `|dp| <= VALUE_BOUND_RANGE`, `dp²` does not
+/// overflow.
 pub fn fixed_orifice(label: impl Into<String>, area: f64, fluid: OrificeFluid) -> Law {
     let OrificeFluid { cd, rho, dp_cr } = fluid;
-    Law::Conductance(NonlinearLaw::new(label, move |dp| {
-        orifice_flow(dp, area, cd, rho, dp_cr)
-    }))
+    let k = (cd * area * (2.0 / rho).sqrt()).abs();
+    let bound = (k.is_finite() && (dp_cr * dp_cr).is_normal()).then_some((k, k));
+    Law::Conductance(
+        NonlinearLaw::new(label, move |dp| orifice_flow(dp, area, cd, rho, dp_cr))
+            .with_value_bound_if(bound),
+    )
 }
 
 /// A variable orifice whose area is `width * ramp(offset + sign * m, clearance)`, `m` the
@@ -98,6 +109,15 @@ pub fn fixed_orifice(label: impl Into<String>, area: f64, fluid: OrificeFluid) -
 /// * spool edge opening with `x_v`: `width` = area gradient `w`, `offset` = 0, `sign` = +1 or -1;
 /// * nozzle with flapper `x_f`: `width` = `pi d_n`, `offset` = null gap `x_f0`, `sign` = -1 (the
 ///   nozzle the flapper moves towards) or +1.
+///
+/// Its value bound ([`NonlinearLaw::with_value_bound`]), with `s = max(|dp|, |m|)` and
+/// `K = Cd width sqrt(2/rho)`: `|Q| <= K' (s² + 1)`, `K' = K (|sign| + |offset| +
+/// clearance/2)`. The ramp `(x + sqrt(x² + c²))/2` lies in `[0, |x| + |c|/2]` and
+/// `|x| <= |offset| + |sign| s`; the pressure factor is at most `|dp|^(1/2)` (as for
+/// [`fixed_orifice`]); and `s^(3/2) <= s² + 1`, `s^(1/2) <= s² + 1` for `s >= 0`, each with at
+/// least 0.5 to spare. Declared when `dp_cr²` is normal, `|sign| <= 2^10` and `|offset|`,
+/// `clearance` at most `VALUE_BOUND_RANGE` (so that `x²` cannot overflow: `|x| <= 2^511`) and
+/// `K` is finite.
 pub fn variable_orifice(
     label: impl Into<String>,
     width: f64,
@@ -108,11 +128,22 @@ pub fn variable_orifice(
 ) -> Law {
     let OrificeFluid { cd, rho, dp_cr } = fluid;
     let k = cd * width * (2.0 / rho).sqrt();
-    Law::Conductance(NonlinearLaw::modulated(label, move |dp, m| {
-        let (a, da) = smooth_ramp(offset + sign * m, clearance);
-        let (y, dy) = regularised_sqrt(dp, dp_cr);
-        (k * a * y, k * a * dy, k * sign * da * y)
-    }))
+    let range = crate::bond_graph::VALUE_BOUND_RANGE;
+    let k_bound = k.abs() * (sign.abs() + offset.abs() + 0.5 * clearance.abs());
+    let bound = (k_bound.is_finite()
+        && (dp_cr * dp_cr).is_normal()
+        && sign.abs() <= 1024.0
+        && offset.abs() <= range
+        && clearance.abs() <= range)
+        .then_some((k_bound, k_bound));
+    Law::Conductance(
+        NonlinearLaw::modulated(label, move |dp, m| {
+            let (a, da) = smooth_ramp(offset + sign * m, clearance);
+            let (y, dy) = regularised_sqrt(dp, dp_cr);
+            (k * a * y, k * a * dy, k * sign * da * y)
+        })
+        .with_value_bound_if(bound),
+    )
 }
 
 #[cfg(test)]

@@ -99,6 +99,18 @@ pub fn minimum_jerk(amplitude: f64, t0: f64, duration: f64, t: f64) -> (f64, f64
     }
 }
 
+/// The value bound of the move as a law of the clock ([`NonlinearLaw::with_value_bound`]):
+/// `|k_pot theta(t)| <= 2 |k_pot theta_f|` at every time. The move is 0 before `t_0`,
+/// `theta_f` after `t_0 + T`, and `theta_f s³ (10 - 15 s + 6 s²)` between, a polynomial rising
+/// from 0 to 1 over `s` in `[0, 1]`; the factor 2 covers its rounding many times over.
+/// Declared for `T > 0` (at `T` = 0, `(t - t_0)/T` is 0/0 at `t_0`) and finite `t_0`,
+/// `theta_f`, `k_pot`: `(t - t_0)/T` may overflow to ±inf, which the branches take.
+pub fn move_bound(p: &MoveParameters, k_pot: f64) -> Option<(f64, f64)> {
+    let amplitude = k_pot * p.angle;
+    (p.duration > 0.0 && p.t_start.is_finite() && amplitude.is_finite())
+        .then_some((0.0, 2.0 * amplitude.abs()))
+}
+
 /// Handles into the generator.
 #[derive(Clone, Copy, Debug)]
 pub struct ReferencePorts {
@@ -140,7 +152,8 @@ pub fn add_reference(
                 let (v, dv) = m.profile(t);
                 (k_pot * v, k_pot * dv)
             },
-        ),
+        )
+        .with_value_bound_if(move_bound(p, k_pot)),
         clock,
     );
     let reference = g.add_sum(format!("{prefix}.r"), &[(1.0, r), (1.0, volts)]);

@@ -133,7 +133,8 @@ pub fn add_current_amplifier(
         format!("{prefix}.u_limited"),
         NonlinearLaw::new(format!("compliance limit +-{} V", p.u_c), move |u| {
             limit.eval(u)
-        }),
+        })
+        .with_value_bound_if(limit.value_bound()),
         u,
     )
 }

@@ -117,7 +117,8 @@ pub fn add_vane_motor(
         let law = NonlinearLaw::new(
             format!("seal friction, running {t_c} N m, breakaway {t_s} N m"),
             move |omega| friction(t_c, t_s, omega_s, omega),
-        );
+        )
+        .with_value_bound_if(friction_bound(t_c, t_s, omega_s));
         let r = g.add_r(format!("{prefix}.friction"), Law::Nonlinear(law));
         g.bond(rotor, r);
     }
@@ -152,6 +153,16 @@ pub fn add_vane_motor(
 /// Speed of the regularisation as a fraction of the Stribeck speed: below `omega_s / 10` the
 /// friction torque rises smoothly through zero (`tanh`) instead of jumping from `-T_s` to `T_s`.
 pub const REGULARISATION: f64 = 0.1;
+
+/// The value bound of [`friction`] ([`NonlinearLaw::with_value_bound`]): `|T| <= 2 max(|T_c|,
+/// |T_s|)` whatever the speed. The Stribeck factor `exp(-u²)` lies in `[0, 1]`, so the bracket
+/// lies between `T_c` and `T_s`, and `|tanh| <= 1`; the factor 2 covers rounding many times
+/// over. Declared for `omega_s > 0` (at `omega_s` = 0 the law is 0/0 at rest) and finite
+/// torques: `omega / omega_s` may overflow to ±inf, which `exp` and `tanh` take.
+pub fn friction_bound(t_c: f64, t_s: f64, omega_s: f64) -> Option<(f64, f64)> {
+    (omega_s > 0.0 && t_c.is_finite() && t_s.is_finite())
+        .then_some((0.0, 2.0 * t_c.abs().max(t_s.abs())))
+}
 
 /// The seal friction torque of the rotor at speed `omega` and its derivative, `(T, dT/domega)`:
 ///

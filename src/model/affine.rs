@@ -132,6 +132,11 @@ pub(super) struct Affine {
     nonaffine: NonaffineForms,
     /// The outputs and rows that are not affine, as a communication point computes them.
     pub(super) point: PointForms,
+    /// The largest max(|x_i|, |u_j|) within which every value of `point` is shown finite
+    /// (below [`FINITE_BOUND`]) from the laws' declared value bounds
+    /// ([`PointForms::finite_radius`]): 0 when one of them declares none (or a quotient is
+    /// among them), or when there is nothing to leave.
+    pub(super) point_radius: f64,
     /// The offsets `f(0, u)` and `y(0, u)` as forms over the inputs and nonlinear results.
     offsets: AffineOffsets,
     /// `f(0, u)` at the held inputs.
@@ -209,7 +214,19 @@ impl Affine {
                 .is_err()
         };
         let jac = SparseRows::from_dense(jac, affine_row);
+        let point = if partial {
+            compiled.nonaffine_point_forms()
+        } else {
+            PointForms::default()
+        };
+        let point_radius = if partial {
+            point.finite_radius(compiled, FINITE_BOUND)
+        } else {
+            0.0
+        };
         let mut affine = Affine {
+            point,
+            point_radius,
             jac_row_sum: jac.max_abs_row_sum(),
             jac,
             partial,
@@ -217,11 +234,6 @@ impl Affine {
                 compiled.nonaffine_forms()
             } else {
                 NonaffineForms::default()
-            },
-            point: if partial {
-                compiled.nonaffine_point_forms()
-            } else {
-                PointForms::default()
             },
             offsets: compiled.affine_offset_forms(),
             offset: vec![0.0; jac_rows],

@@ -13,7 +13,7 @@ mod tests;
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{CompiledModel, StateUnits};
+use crate::bond_graph::{CompiledModel, PointCache, StateUnits};
 use crate::fmu::Values;
 use crate::fnv1a;
 use crate::fragments::servo_valve;
@@ -82,8 +82,14 @@ enum OnDemand {
     State(u32),
     /// The affine row `i` of f: `J_i x + f_i(0, u)`.
     Derivative(u32),
-    /// The stored energy, all of whose storages are linear.
+    /// The stored energy, all of whose storages are linear or declare a bound.
     Energy,
+    /// The output `k` of the compiled model that is not affine, from its form
+    /// ([`crate::bond_graph::PointForms::output`]).
+    PointOutput(u32),
+    /// The row `i` of f that is not affine, from its form
+    /// ([`crate::bond_graph::PointForms::derivative`]).
+    PointDerivative(u32),
 }
 
 impl Assembled {

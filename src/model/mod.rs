@@ -86,6 +86,9 @@ struct OnDemandValues {
     all: bool,
     step: u64,
     fresh: Vec<u64>,
+    /// The nonlinear results computed so far at the point of `step`, shared by the values that
+    /// are not affine ([`crate::bond_graph::PointCache`]).
+    point: crate::bond_graph::PointCache,
 }
 
 /// The model's part of an FMU state.
@@ -205,16 +208,22 @@ impl HydraulicSlewingPlate {
     /// In the real-time mode with the full servo valve: the first output outside its physical
     /// bound ([`realtime_guard::check`]); `None` otherwise (the adaptive methods' error control
     /// keeps them inside).
-    fn out_of_bounds(&self, values: &Values) -> Option<String> {
+    fn out_of_bounds(&mut self, values: &mut Values) -> Option<String> {
         let p = self.parameters.as_ref()?;
         let real_time = [
             crate::solver::Method::Rodas5PFixed,
             crate::solver::Method::Ros34pw2Fixed,
         ]
         .contains(&p.method);
-        (real_time && p.hydraulics == variables::HydraulicsModel::ServoValve)
-            .then(|| realtime_guard::check(values, &p.servo_valve))
-            .flatten()
+        if !(real_time && p.hydraulics == variables::HydraulicsModel::ServoValve) {
+            return None;
+        }
+        // The guard's outputs, brought up to date (a point may have left them until read).
+        for i in realtime_guard::CHECKED {
+            self.refresh(values, Some(i));
+        }
+        let p = self.parameters.as_ref()?;
+        realtime_guard::check(values, &p.servo_valve)
     }
 
     fn write_outputs(&mut self, values: &mut Values) {
@@ -450,7 +459,7 @@ impl FmuModel for HydraulicSlewingPlate {
         };
         let d = &mut self.on_demand;
         if d.fresh[index] != d.step && system.on_demand(index) {
-            system.write_on_demand(integrator.x(), index, values);
+            system.write_on_demand(integrator.x(), index, values, (&mut d.point, d.step));
             d.fresh[index] = d.step;
         }
     }

@@ -42,8 +42,18 @@ pub fn spool_bound(p: &ServoValveParameters) -> f64 {
     p.x_v_max + SPOOL_OVERTRAVEL * full_force / p.stop_stiffness()
 }
 
+/// The outputs [`check`] reads: the caller brings them up to date first (a communication point
+/// leaves them until read, `Assembled::write_at_point`).
+pub const CHECKED: [usize; 5] = [
+    idx::SERVO_VALVE_X_V,
+    idx::SERVO_VALVE_P_1,
+    idx::SERVO_VALVE_P_2,
+    idx::SERVO_VALVE_P_A,
+    idx::SERVO_VALVE_P_B,
+];
+
 /// The first servo-valve output in `values` outside its physical bound, as a message naming it,
-/// its value and the bound; `None` when all are inside.
+/// its value and the bound; `None` when all are inside. Reads the outputs of [`CHECKED`].
 pub fn check(values: &Values, p: &ServoValveParameters) -> Option<String> {
     let x_v = values.real(idx::SERVO_VALVE_X_V);
     let bound = spool_bound(p);

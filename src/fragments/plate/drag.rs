@@ -104,6 +104,16 @@ pub fn law(coefficient: f64, f: f64) -> (f64, f64) {
     (coefficient * f.abs() * f, 2.0 * coefficient * f.abs())
 }
 
+/// The value bound of [`law`] ([`crate::bond_graph::NonlinearLaw::with_value_bound`]):
+/// `|c |v| v| <= 2 |c| v² + MIN_POSITIVE`, the factor 2 for the two roundings of the product
+/// (2^-52 each) and the smallest normal double for its underflow. For `|v| <=
+/// VALUE_BOUND_RANGE`, `v²` is finite; declared for a finite coefficient.
+pub fn value_bound(coefficient: f64) -> Option<(f64, f64)> {
+    coefficient
+        .is_finite()
+        .then_some((2.0 * coefficient.abs(), f64::MIN_POSITIVE))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -547,10 +547,10 @@ pub fn add_plate(
         let c = d.coefficient;
         let r = g.add_r(
             format!("{prefix}.drag[{}]", k + 1),
-            Law::Nonlinear(NonlinearLaw::new(
-                format!("air drag {c:.3e} |v| v"),
-                move |f| drag::law(c, f),
-            )),
+            Law::Nonlinear(
+                NonlinearLaw::new(format!("air drag {c:.3e} |v| v"), move |f| drag::law(c, f))
+                    .with_value_bound_if(drag::value_bound(c)),
+            ),
         );
         g.bond(node, r);
         for (i, &cj) in coord.iter().enumerate() {

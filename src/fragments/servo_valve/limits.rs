@@ -44,6 +44,12 @@ pub fn stop_stiffness(a_s: f64, p_supply: f64, x_max: f64) -> f64 {
 /// `E(x) = -k delta² (Li₂(-e^z₊) + Li₂(-e^z₋)) + 2 k delta² Li₂(-e^(-x_max/delta))`,
 /// `z± = (±x - x_max)/delta`, zero at `x = 0` and the exact integral of `F`; so the contact's
 /// energy is in the model's `energy` and it returns what it takes.
+///
+/// Its value bound ([`NonlinearLaw::with_value_bound`]): `|F(x)| <= k x² + k (1/4 + delta)`.
+/// Both softplus terms are nonnegative, so `|F| <= k delta max(sp(z₊), sp(z₋))`, and
+/// `sp(z) <= max(z, 0) + ln 2` with `z± <= |x|/delta`: `|F| <= k |x| + k delta ln 2`; then
+/// `|x| <= x² + 1/4` (`(|x| - 1/2)² >= 0`) and `ln 2 < 1` leaves `0.3 k delta` for rounding.
+/// Declared for `x_max > 0` (a positive `delta`: no 0/0 at the stop) and finite `k`.
 pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
     let delta = x_max / 20.0;
     let e_side =
@@ -59,26 +65,37 @@ pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
         2.0 * k.abs(),
         2.0 * k.abs() * (x_max * x_max + delta * delta * DILOG_BOUND) + e0.abs(),
     )
+    .with_value_bound_if(
+        (x_max > 0.0 && x_max.is_finite() && k.is_finite())
+            .then_some((k.abs(), k.abs() * (0.25 + delta))),
+    )
 }
 
 /// The spool end stops' contact damping: `e = c(x) v` with `c(x) = c_0 (sp'(z₊) + sp'(z₋))`
 /// (`z±` as in [`spool_stop_spring`]), present only at the stops, as an R law in resistance form
 /// on the spool's 1-junction modulated by the spool position `x`; it dissipates `c(x) v² >= 0`.
 /// `c_0 = 2 zeta sqrt(k m_v)` with `zeta` = 0.5: the spool does not bounce.
+///
+/// Its value bound ([`NonlinearLaw::with_value_bound`]): `|e| <= 2 c_0 v² + c_0`, `s = max(|v|,
+/// |x|)`. The logistic `sp'` lies in `[0, 1]`, so `0 <= c(x) <= 2 c_0` and `|e| <= 2 c_0 |v|`;
+/// then `|v| <= v² + 1/4` leaves `c_0 / 2` for rounding. Declared for `x_max > 0` (a positive
+/// `delta`) and a finite `c_0`.
 pub fn spool_stop_damping(x_max: f64, k: f64, m_v: f64) -> Law {
     let delta = x_max / 20.0;
     let c0 = 2.0 * 0.5 * (k * m_v).sqrt();
-    Law::Nonlinear(NonlinearLaw::modulated(
-        "spool stop damping",
-        move |v, x| {
+    let bound =
+        (x_max > 0.0 && x_max.is_finite() && c0.is_finite()).then_some((2.0 * c0.abs(), c0.abs()));
+    Law::Nonlinear(
+        NonlinearLaw::modulated("spool stop damping", move |v, x| {
             let (_, s_hi) = softplus((x - x_max) / delta);
             let (_, s_lo) = softplus((-x - x_max) / delta);
             let c = c0 * (s_hi + s_lo);
             // d sigma/dz = sigma (1 - sigma)
             let dc = c0 * (s_hi * (1.0 - s_hi) - s_lo * (1.0 - s_lo)) / delta;
             (c * v, c, dc * v)
-        },
-    ))
+        })
+        .with_value_bound_if(bound),
+    )
 }
 
 /// Absolute pressure below which the oil releases its dissolved air and the chamber becomes a
@@ -102,6 +119,12 @@ pub const CAVITATION_WIDTH: f64 = 2e3;
 /// and `sp(z) = z + sp(-z)` the law is `p = k q + s sp(-z)`, so
 /// `E(q) = k q²/2 + (s²/k) (Li₂(-e^-z) - Li₂(-e^-z₀))`, `z₀ = z(0)`, since
 /// `d/dz Li₂(-e^-z) = sp(-z)`. Above the floor the second term is below e^-45 of the first.
+///
+/// Its value bound ([`NonlinearLaw::with_value_bound`]): `|p(q)| <= k q² + 2 (|p_c| + s) +
+/// k/4`. With `sp(z) <= max(z, 0) + ln 2` and `z <= (k |q| + |p_c|)/s`,
+/// `|p| <= |p_c| + k |q| + |p_c| + s ln 2`, and `|q| <= q² + 1/4`; `ln 2 < 1` leaves `0.3 s`
+/// (600 Pa) for rounding. For `|q| <= VALUE_BOUND_RANGE`, `k q` stays finite for any `k`
+/// below 2^520 (declared only then).
 pub fn chamber(volume: f64, beta: f64) -> Law {
     let k = beta / volume;
     let (pc, s) = (CAVITATION_PRESSURE, CAVITATION_WIDTH);
@@ -116,6 +139,9 @@ pub fn chamber(volume: f64, beta: f64) -> Law {
         .with_energy_bound(
             1.5 * k.abs(),
             (pc * pc + s * s * (DILOG_BOUND + tail0.abs())) / k.abs(),
+        )
+        .with_value_bound_if(
+            (k.abs() < 2f64.powi(520)).then_some((k.abs(), 2.0 * (pc.abs() + s) + 0.25 * k.abs())),
         ),
     )
 }

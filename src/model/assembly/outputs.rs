@@ -82,17 +82,24 @@ impl Assembled {
     }
 
     /// Writes what a communication point at state `x` needs at once and leaves the rest until it
-    /// is read ([`Assembled::write_on_demand`]): writes the outputs and derivatives that are not
-    /// affine (the servo valve's, as forms: [`crate::bond_graph::PointForms`]) and the stored energy if a
-    /// storage is nonlinear, and returns true, when the affine outputs and derivatives (and the
-    /// energy of linear storages) are shown to be finite at `x` (`Affine::finite_within`,
-    /// `CompiledModel::stored_energy_bound`), so that none of them can turn out infinite when
-    /// read. Otherwise (or when the model has nothing to leave) writes nothing and returns
-    /// false: the caller writes everything with [`Assembled::write_outputs`].
+    /// is read ([`Assembled::write_on_demand`]), and returns true, when the affine outputs and
+    /// derivatives (and the energy of linear storages) are shown to be finite at `x`
+    /// (`Affine::finite_within`, `CompiledModel::stored_energy_bound`), so that none of them can
+    /// turn out infinite when read. Otherwise (or when the model has nothing to leave) writes
+    /// nothing and returns false: the caller writes everything with
+    /// [`Assembled::write_outputs`].
+    ///
+    /// The outputs and derivatives that are not affine (the servo valve's, the plate's air
+    /// drag, the reference move: [`crate::bond_graph::PointForms`]) wait too when every state
+    /// and input is within the radius their laws' declared value bounds show them finite in
+    /// (`Affine::point_radius`, [`crate::bond_graph::PointForms::finite_radius`]); beyond it
+    /// (or when a law declares no bound: radius 0) they are written here, as before, and the
+    /// stored energy too if a storage is nonlinear without a bound.
     ///
     /// An importer reads a few of the 23 to 31 outputs, and the states and their derivatives
     /// rarely in co-simulation: computing all of them at every point cost as much as the steps
-    /// of a linear configuration.
+    /// of a linear configuration, and the servo valve's own forms more than a third of a
+    /// default run.
     pub fn write_at_point(&self, x: &[f64], values: &mut Values) -> bool {
         let Some(affine) = &self.affine else {
             return false;
@@ -104,7 +111,9 @@ impl Assembled {
         if self.on_demand.is_empty() || !affine.finite_within(x_max) || !energy_finite {
             return false;
         }
-        if affine.partial {
+        // Not `<=` on its own: a NaN input fails.
+        let point_waits = x_max.max(max_abs(&self.inputs, |_| true)) <= affine.point_radius;
+        if affine.partial && !point_waits {
             self.write_plan_values(values, |output, derivative| {
                 affine
                     .point
@@ -126,9 +135,25 @@ impl Assembled {
     }
 
     /// Computes the FMU's variable `index` at state `x` into `values`, if it is one that
-    /// [`Assembled::write_at_point`] leaves: the value [`Assembled::write_outputs`] writes.
-    pub fn write_on_demand(&self, x: &[f64], index: usize, values: &mut Values) {
+    /// [`Assembled::write_at_point`] leaves: the value [`Assembled::write_outputs`] writes, to
+    /// the bit. `point` holds the nonlinear results computed so far at the communication point
+    /// its stamp names (not 0; a new stamp for each point), which the outputs and derivatives
+    /// that are not affine share.
+    pub fn write_on_demand(
+        &self,
+        x: &[f64],
+        index: usize,
+        values: &mut Values,
+        point: (&mut PointCache, u64),
+    ) {
+        let xu = (x, self.inputs.as_slice());
         let v = match (self.on_demand.get(index), &self.affine) {
+            (Some(&OnDemand::PointOutput(k)), Some(a)) => {
+                a.point.output(&self.compiled, xu, k as usize, point)
+            }
+            (Some(&OnDemand::PointDerivative(i)), Some(a)) => {
+                a.point.derivative(&self.compiled, xu, i as usize, point)
+            }
             (Some(&OnDemand::Output(k)), Some(a)) => a.output(k as usize, x),
             (Some(&OnDemand::State(i)), _) => Some(x[i as usize]),
             (Some(&OnDemand::Derivative(i)), Some(a)) => Some(a.derivative(i as usize, x)),
@@ -199,7 +224,9 @@ impl Assembled {
 }
 
 /// Which of the FMU's variables can be left until they are read (see [`OnDemand`]): with affine
-/// outputs, those outputs, the declared states and their affine derivatives; none otherwise.
+/// outputs, those outputs, the declared states and their affine derivatives, and the others
+/// when their laws show them finite within a radius (`Affine::point_radius` > 0); none
+/// otherwise.
 pub(super) fn on_demand(
     compiled: &CompiledModel,
     affine: Option<&Affine>,
@@ -211,9 +238,12 @@ pub(super) fn on_demand(
     }
     let mut table = vec![OnDemand::No; VARIABLES.len()];
     let nonaffine = |list: &[u32], i: usize| list.binary_search(&(i as u32)).is_ok();
+    let point = affine.is_some_and(|a| a.partial && a.point_radius > 0.0);
     for (k, target) in output_index.iter().enumerate() {
-        if let (Some(i), false) = (*target, nonaffine(compiled.nonaffine_outputs(), k)) {
-            table[i] = OnDemand::Output(k as u32);
+        match (*target, nonaffine(compiled.nonaffine_outputs(), k)) {
+            (Some(i), false) => table[i] = OnDemand::Output(k as u32),
+            (Some(i), true) if point => table[i] = OnDemand::PointOutput(k as u32),
+            _ => {}
         }
     }
     for (i, slot) in state_slot.iter().enumerate() {
@@ -222,6 +252,8 @@ pub(super) fn on_demand(
             table[state] = OnDemand::State(i as u32);
             if !nonaffine(compiled.nonaffine_rows(), i) {
                 table[derivative] = OnDemand::Derivative(i as u32);
+            } else if point {
+                table[derivative] = OnDemand::PointDerivative(i as u32);
             }
         }
     }

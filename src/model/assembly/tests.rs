@@ -1,6 +1,7 @@
 //! The assembled model's own tests: values left until read, and the affine plans.
 
 use super::*;
+use crate::bond_graph::NonlinearLaw;
 use crate::fmu::Experiment;
 use crate::model::parameters::set_by_name;
 
@@ -15,8 +16,9 @@ fn assembled(sets: &[(&str, &str)]) -> (Assembled, Values) {
 
 /// What a communication point leaves to be computed when read, computed then, is what
 /// `write_outputs` writes, bit for bit (the LOES with the plate, all of whose outputs wait;
-/// the full servo valve, whose own outputs and rows are written at once); and at a state
-/// too large for the bounds to show the waiting values finite, nothing waits.
+/// the full servo valve, whose own outputs and rows wait too: their laws declare value
+/// bounds); and at a state too large for the bounds to show the waiting values finite,
+/// nothing waits.
 #[test]
 fn values_computed_when_read_are_those_written_at_once() {
     let configurations: [&[(&str, &str)]; 2] = [
@@ -56,16 +58,24 @@ fn values_computed_when_read_are_those_written_at_once() {
             .flatten()
             .filter(|&&i| a.on_demand(i))
             .count();
-        if c == 0 {
-            assert_eq!(waiting_outputs, outputs);
-        } else {
-            assert!(waiting_outputs > 0 && waiting_outputs < outputs);
+        assert_eq!(waiting_outputs, outputs, "configuration {c}");
+        // The valve's rows wait too.
+        for &i in a.compiled.nonaffine_rows() {
+            if let Some(k) = a.state_slot[i as usize] {
+                assert!(
+                    a.on_demand(CONTINUOUS_STATES[k].1),
+                    "configuration {c}, row {i}"
+                );
+            }
         }
         // The stored energy waits in both: the LOES's storages are linear, and the valve's
         // nonlinear ones (its chambers, its spool stops) declare a bound on their energy.
         assert!(a.on_demand(idx::ENERGY), "configuration {c}");
-        for &i in &waiting {
-            a.write_on_demand(&x, i, &mut lazy);
+        // Read backwards (the valve's rows before its outputs, each computing what it needs
+        // that an earlier read has not), then a few again at the same point.
+        let mut point = PointCache::default();
+        for &i in waiting.iter().rev().chain(&waiting[..3]) {
+            a.write_on_demand(&x, i, &mut lazy, (&mut point, 1));
         }
         for (i, variable) in VARIABLES.iter().enumerate() {
             if let (crate::fmu::Value::Real(e), crate::fmu::Value::Real(l)) =
@@ -222,4 +232,161 @@ fn affine_derivatives_and_outputs_are_the_plans() {
             }
         }
     }
+}
+
+/// A value that is not affine read on its own after a point is what `write_outputs` writes, to
+/// the bit, whichever is read first: each read computes only the nonlinear results it needs
+/// (`PointForms::output`), at a point and at the next (a new stamp forgets the first's).
+#[test]
+fn each_value_that_is_not_affine_read_first_is_the_one_written() {
+    let (a, values) = assembled(&[]);
+    let affine = a.affine.as_ref().expect("partly affine");
+    assert!(affine.partial && affine.point_radius > 0.0);
+    let point_values: Vec<usize> = (0..VARIABLES.len())
+        .filter(|&i| {
+            matches!(
+                a.on_demand[i],
+                OnDemand::PointOutput(_) | OnDemand::PointDerivative(_)
+            )
+        })
+        .collect();
+    assert!(point_values.len() >= 20, "{point_values:?}");
+    let mut point = PointCache::default();
+    for (stamp, scale) in [(1, 0.3), (2, -0.7)] {
+        let x: Vec<f64> = a
+            .initial_state()
+            .iter()
+            .zip(a.nominal())
+            .enumerate()
+            .map(|(i, (r, s))| r + scale * s * crate::math::sin(1.3 * i as f64 + 0.2))
+            .collect();
+        let mut eager = values.clone();
+        a.write_outputs(&x, &mut eager);
+        for &first in &point_values {
+            // Alone, at a fresh point.
+            let mut lazy = values.clone();
+            assert!(a.write_at_point(&x, &mut lazy));
+            let mut alone = PointCache::default();
+            a.write_on_demand(&x, first, &mut lazy, (&mut alone, 7));
+            // And after the others, sharing their results.
+            a.write_on_demand(&x, first, &mut lazy, (&mut point, stamp));
+            let (e, l) = (eager.real(first), lazy.real(first));
+            assert_eq!(
+                e.to_bits(),
+                l.to_bits(),
+                "{}: {l} read, {e} written",
+                VARIABLES[first].name
+            );
+        }
+    }
+}
+
+/// The radius within which the values that are not affine wait (`Affine::point_radius`): for
+/// the default plant a power of 2, finite and positive, far above the states of a run; a law
+/// of the point's forms without a declared value bound makes it 0 (everything written at the
+/// point, as before the bounds), and so nothing waits.
+#[test]
+fn the_point_radius_is_positive_for_the_default_and_zero_without_a_bound() {
+    let (a, _) = assembled(&[]);
+    let affine = a.affine.as_ref().expect("partly affine");
+    let radius = affine.point_radius;
+    eprintln!("the default plant's point radius: {radius:e}");
+    assert!(radius.is_finite() && radius >= 1e20, "{radius:e}");
+    assert_eq!(radius, 2f64.powi(radius.log2().round() as i32));
+    // Just beyond it the bounds fail, within it they hold.
+    assert!(affine
+        .point
+        .bounded_within(&a.compiled, radius, FINITE_BOUND));
+    assert!(!affine
+        .point
+        .bounded_within(&a.compiled, 2.0 * radius, FINITE_BOUND));
+    // Every law the forms call declares a bound; strip one and the radius is 0.
+    let mut compiled = a.compiled.clone();
+    let law = compiled
+        .laws_mut()
+        .iter_mut()
+        .find(|l| l.label.starts_with("air drag"))
+        .expect("the plate's air drag");
+    assert!(law.value_bound.is_some());
+    law.value_bound = None;
+    assert_eq!(affine.point.finite_radius(&compiled, FINITE_BOUND), 0.0);
+    // A state beyond the radius (but within the affine bounds): the point's values are
+    // written at once, the same bits.
+    let mut x = a.initial_state();
+    x[0] = 4.0 * radius;
+    if affine.finite_within(4.0 * radius) {
+        let (mut eager, mut lazy) = (
+            Values::from_start(&VARIABLES),
+            Values::from_start(&VARIABLES),
+        );
+        a.write_outputs(&x, &mut eager);
+        assert!(a.write_at_point(&x, &mut lazy));
+        for (k, target) in a.output_index.iter().enumerate() {
+            if let (Some(i), true) = (
+                *target,
+                a.compiled.nonaffine_outputs().contains(&(k as u32)),
+            ) {
+                assert_eq!(eager.real(i).to_bits(), lazy.real(i).to_bits());
+            }
+        }
+    }
+}
+
+/// Each law's declared value bound (`NonlinearLaw::with_value_bound`: |L(v, m)| <= k s² + c,
+/// s = max(|v|, |m|), for s up to `VALUE_BOUND_RANGE`) holds for the laws of the default
+/// plant and of the LOES configuration, sampled as the stored-energy bounds are: from
+/// the scales of their operating points (a chamber's 1e-10 m³ to a pressure's 1e7 Pa) out to
+/// 64,000 times beyond, on both sides, and on powers of 2 from 2^-500 to 2^500 and their
+/// neighbours; modulated laws over pairs of them.
+#[test]
+fn the_laws_stay_within_their_declared_value_bounds() {
+    let mut samples: Vec<f64> = vec![0.0];
+    for scale in [1e-10, 1e-6, 1e-3, 1.0, 1e3, 1e7] {
+        samples.extend(
+            (-4000..=4000)
+                .step_by(7)
+                .map(|i| scale * (i as f64 / 100.0).powi(3)),
+        );
+    }
+    for e in -500..=500 {
+        let p = 2f64.powi(e);
+        for v in [p, p * (1.0 + f64::EPSILON), p * 0.75] {
+            if v <= crate::bond_graph::VALUE_BOUND_RANGE {
+                samples.extend([v, -v]);
+            }
+        }
+    }
+    let coarse: Vec<f64> = samples.iter().copied().step_by(41).collect();
+    let check = |law: &NonlinearLaw, v: f64, m: f64| {
+        let (k, c) = law.value_bound.expect("declared");
+        let s = v.abs().max(m.abs());
+        let y = (law.value)(v, m);
+        assert!(
+            y.is_finite() && y.abs() <= k * s * s + c,
+            "{}: L({v:e}, {m:e}) = {y:e} > {k:e} s² + {c:e}",
+            law.label
+        );
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    for sets in [&[][..], &[("hydraulics.model", "1")][..]] {
+        let (a, _) = assembled(sets);
+        for law in a.compiled.laws() {
+            if law.value_bound.is_none() {
+                continue;
+            }
+            seen.insert(law.label.split(' ').next().unwrap_or("").to_string());
+            for &v in &samples {
+                check(law, v, 0.0);
+            }
+            for &v in &coarse {
+                for &m in &coarse {
+                    check(law, v, m);
+                }
+            }
+        }
+    }
+    eprintln!("sampled: {seen:?}");
+    // The default's point forms call them all (the radius is positive only then).
+    let (a, _) = assembled(&[]);
+    assert!(a.affine.as_ref().unwrap().point_radius > 0.0);
 }
