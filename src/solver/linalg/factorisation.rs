@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
-use super::lu::{lu_in_place, lu_solve, solve_2x2};
+use super::lu::{lu_in_place, lu_solve, lu_solve_loops, solve_2x2};
 use super::partition::Partition;
 use super::scalar::Scalar;
 
@@ -23,6 +23,14 @@ pub trait Entries<T> {
         for (r, v) in out.iter_mut().enumerate() {
             *v = self.entry(r, j);
         }
+    }
+    /// M's entries at the positions `at` (i + j n of an n × n matrix stored column-major) into
+    /// `out`, those at the places `diagonal` of `at` being on M's diagonal (and only those);
+    /// false, writing nothing, if M is not stored so (by default: the caller then reads entry
+    /// by entry).
+    fn gather_at(&self, n: usize, at: &[usize], diagonal: &[usize], out: &mut [T]) -> bool {
+        let _ = (n, at, diagonal, out);
+        false
     }
 }
 
@@ -61,6 +69,20 @@ impl Entries<f64> for Shifted<'_> {
         if let Some(d) = out.get_mut(j) {
             *d = self.c - column[j];
         }
+    }
+
+    fn gather_at(&self, n: usize, at: &[usize], diagonal: &[usize], out: &mut [f64]) -> bool {
+        if self.jac.shape() != (n, n) {
+            return false;
+        }
+        let jac = self.jac.as_slice();
+        for (v, &a) in out.iter_mut().zip(at) {
+            *v = -jac[a];
+        }
+        for &d in diagonal {
+            out[d] = self.c - jac[at[d]];
+        }
+        true
     }
 }
 
@@ -132,21 +154,24 @@ impl<T: Scalar> Factorisation<T> {
         // The blocks' LUs first, at the offsets the solves read them from: a block with a small
         // pivot fails the factorisation before any of the couplings' work is done (a model whose
         // structured elimination fails then pays only its small blocks before the dense LU).
+        // A structured partition's entries in one pass per buffer where M is stored column-major
+        // (`Shifted`), else entry by entry, block by block.
+        let g = &p.gather;
+        let flat =
+            !p.is_dense() && entry.gather_at(n, &g.lu, &g.lu_diagonal, &mut self.lu[..p.lu_len]);
         for at in p.linked.iter().chain(&p.free) {
             let (s, k) = (at.start, at.size);
             let idx = &p.perm[s..s + k];
             let a = &mut self.lu[at.lu..at.lu + k * k];
-            if idx.iter().enumerate().all(|(i, &v)| i == v) {
-                // A block of the first k states in natural order (`Partition::dense`'s one
-                // block): no indirection.
-                for (cj, column) in a.chunks_exact_mut(k).enumerate() {
-                    entry.leading_column(cj, column);
-                }
-            } else {
-                for cj in 0..k {
-                    for r in 0..k {
-                        a[r + cj * k] = entry.entry(idx[r], idx[cj]);
+            if !flat {
+                if idx.iter().enumerate().all(|(i, &v)| i == v) {
+                    // A block of the first k states in natural order (`Partition::dense`'s one
+                    // block): no indirection.
+                    for (cj, column) in a.chunks_exact_mut(k).enumerate() {
+                        entry.leading_column(cj, column);
                     }
+                } else {
+                    gather(entry, idx, idx, a);
                 }
             }
             if !lu_in_place(a, k, &mut self.piv[s..s + k], floor) {
@@ -154,40 +179,39 @@ impl<T: Scalar> Factorisation<T> {
             }
         }
         let border = &p.perm[nb..];
-        for q in 0..m {
-            for r in 0..m {
-                self.schur[r + q * m] = entry.entry(border[r], border[q]);
-            }
+        let (x, c) = (&mut self.x[..p.x_len], &mut self.c[..p.x_len]);
+        if flat {
+            entry.gather_at(n, &g.schur, &g.schur_diagonal, &mut self.schur[..m * m]);
+            entry.gather_at(n, &g.x, &[], x);
+            entry.gather_at(n, &g.c, &[], c);
+        } else {
+            gather(entry, border, border, &mut self.schur[..m * m]);
         }
         // The couplings: the Schur complement takes the linked blocks' updates in block order
         // (the free ones have none).
         for at in &p.linked {
             let (s, k) = (at.start, at.size);
-            let links = &p.links[at.links_from..at.links_to];
+            let (links, states) = (
+                &p.links[at.links_from..at.links_to],
+                &p.link_states[at.links_from..at.links_to],
+            );
             let idx = &p.perm[s..s + k];
-            let a = &self.lu[at.lu..at.lu + k * k];
             let l = links.len();
-            let x = &mut self.x[at.x..at.x + k * l];
-            let c = &mut self.c[at.x..at.x + k * l];
-            for (li, &q) in links.iter().enumerate() {
-                let col = &mut x[li * k..(li + 1) * k];
-                for r in 0..k {
-                    col[r] = entry.entry(idx[r], border[q]);
-                    c[li * k + r] = entry.entry(border[q], idx[r]);
-                }
-                lu_solve(a, k, &self.piv[s..s + k], col);
+            let x = &mut x[at.x..at.x + k * l];
+            let c = &mut c[at.x..at.x + k * l];
+            if !flat {
+                gather(entry, idx, states, x);
+                gather_row_major(entry, states, idx, c);
             }
-            // S -= C_b X_b, only where block b touches the border.
-            for (l2, &q) in links.iter().enumerate() {
-                let xc = &x[l2 * k..(l2 + 1) * k];
-                for (l1, &r) in links.iter().enumerate() {
-                    let cr = &c[l1 * k..(l1 + 1) * k];
-                    let mut acc = T::ZERO;
-                    for i in 0..k {
-                        acc = acc + cr[i] * xc[i];
-                    }
-                    self.schur[r + q * m] = self.schur[r + q * m] - acc;
-                }
+            let (a, piv) = (&self.lu[at.lu..at.lu + k * k], &self.piv[s..s + k]);
+            let schur = &mut self.schur[..m * m];
+            // With k known the loops unroll (the plate's modes are blocks of one state).
+            match k {
+                1 => couple(1, a, piv, x, c, links, schur, m),
+                2 => couple(2, a, piv, x, c, links, schur, m),
+                3 => couple(3, a, piv, x, c, links, schur, m),
+                4 => couple(4, a, piv, x, c, links, schur, m),
+                _ => couple(k, a, piv, x, c, links, schur, m),
             }
         }
         lu_in_place(&mut self.schur[..m * m], m, &mut self.schur_piv[..m], floor)
@@ -320,6 +344,69 @@ impl<T: Scalar> Factorisation<T> {
     }
 }
 
+/// M[rows, cols] into `out`, column-major (`out[r + c * rows.len()]` = M_{rows[r], cols[c]}),
+/// entry by entry.
+fn gather<T: Scalar>(entry: &impl Entries<T>, rows: &[usize], cols: &[usize], out: &mut [T]) {
+    for (&j, column) in cols.iter().zip(out.chunks_exact_mut(rows.len().max(1))) {
+        for (v, &i) in column.iter_mut().zip(rows) {
+            *v = entry.entry(i, j);
+        }
+    }
+}
+
+/// M[rows, cols] into `out`, row-major (`out[c + r * cols.len()]` = M_{rows[r], cols[c]}),
+/// entry by entry.
+fn gather_row_major<T: Scalar>(
+    entry: &impl Entries<T>,
+    rows: &[usize],
+    cols: &[usize],
+    out: &mut [T],
+) {
+    for (&i, row) in rows.iter().zip(out.chunks_exact_mut(cols.len().max(1))) {
+        for (v, &j) in row.iter_mut().zip(cols) {
+            *v = entry.entry(i, j);
+        }
+    }
+}
+
+/// Block b's share of the factorisation once its LU (`a`, `piv`) is made: X_b = A_b⁻¹ B_b in
+/// place of B_b in `x` (k × links, column-major), and S -= C_b X_b (C_b in `c`, links × k,
+/// row-major) where the block touches the border: entry (r, q) of S for the links r and q, each
+/// the dot product over the block's k states in order, from zero. Inlined, so that a constant
+/// k unrolls the loops (the same operations in the same order for every k, so the same bits).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn couple<T: Scalar>(
+    k: usize,
+    a: &[T],
+    piv: &[usize],
+    x: &mut [T],
+    c: &[T],
+    links: &[usize],
+    schur: &mut [T],
+    m: usize,
+) {
+    for column in x.chunks_exact_mut(k) {
+        if k <= 4 {
+            // Inlined (for a constant k, unrolled): the bits of `lu_solve`'s written-out and
+            // unrolled solves (`small_block_solves_match_the_loops_bit_for_bit`).
+            lu_solve_loops(a, k, piv, column);
+        } else {
+            lu_solve(a, k, piv, column);
+        }
+    }
+    for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
+        let s = &mut schur[q * m..q * m + m];
+        for (&r, cr) in links.iter().zip(c.chunks_exact(k)) {
+            let mut acc = T::ZERO;
+            for i in 0..k {
+                acc = acc + cr[i] * xc[i];
+            }
+            s[r] = s[r] - acc;
+        }
+    }
+}
+
 /// Makes `v` at least `len` long, never shorter: the buffers serve partitions of different
 /// sizes in turn (a structured one and its dense fallback, when the structured elimination fails
 /// at every step), and a buffer resized down and up again at every factorisation had its grown
@@ -410,6 +497,191 @@ mod tests {
         for (src, &i) in s.iter().zip(&p.perm) {
             rhs[i] = *src;
         }
+    }
+
+    /// The factorisation as it was written before its gathers and its couplings' loops were
+    /// specialised: entry by entry, one solve per column of X_b, and the Schur update pair of
+    /// links by pair. The reference for [`Factorisation::factor`]'s bits.
+    fn factor_entrywise<T: Scalar, E: Entries<T>>(
+        f: &mut Factorisation<T>,
+        part: &Arc<Partition>,
+        entry: &E,
+    ) -> bool {
+        f.part = Arc::clone(part);
+        let p = &*f.part;
+        let n = p.n;
+        let nb = p.starts[p.blocks()];
+        let m = n - nb;
+        let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
+        f.lu = vec![T::ZERO; p.lu_len];
+        f.x = vec![T::ZERO; p.x_len];
+        f.c = vec![T::ZERO; p.x_len];
+        f.piv = vec![0; n];
+        f.schur = vec![T::ZERO; m * m];
+        f.schur_piv = vec![0; m];
+        for at in p.linked.iter().chain(&p.free) {
+            let (s, k) = (at.start, at.size);
+            let idx = &p.perm[s..s + k];
+            let a = &mut f.lu[at.lu..at.lu + k * k];
+            for cj in 0..k {
+                for r in 0..k {
+                    a[r + cj * k] = entry.entry(idx[r], idx[cj]);
+                }
+            }
+            if !super::super::lu::lu_in_place_loops(a, k, &mut f.piv[s..s + k], floor) {
+                return false;
+            }
+        }
+        let border = &p.perm[nb..];
+        for q in 0..m {
+            for r in 0..m {
+                f.schur[r + q * m] = entry.entry(border[r], border[q]);
+            }
+        }
+        for at in &p.linked {
+            let (s, k) = (at.start, at.size);
+            let links = &p.links[at.links_from..at.links_to];
+            let idx = &p.perm[s..s + k];
+            let a = &f.lu[at.lu..at.lu + k * k];
+            let l = links.len();
+            let x = &mut f.x[at.x..at.x + k * l];
+            let c = &mut f.c[at.x..at.x + k * l];
+            for (li, &q) in links.iter().enumerate() {
+                let col = &mut x[li * k..(li + 1) * k];
+                for r in 0..k {
+                    col[r] = entry.entry(idx[r], border[q]);
+                    c[li * k + r] = entry.entry(border[q], idx[r]);
+                }
+                super::super::lu::lu_solve_loops(a, k, &f.piv[s..s + k], col);
+            }
+            for (l2, &q) in links.iter().enumerate() {
+                let xc = &x[l2 * k..(l2 + 1) * k];
+                for (l1, &r) in links.iter().enumerate() {
+                    let cr = &c[l1 * k..(l1 + 1) * k];
+                    let mut acc = T::ZERO;
+                    for i in 0..k {
+                        acc = acc + cr[i] * xc[i];
+                    }
+                    f.schur[r + q * m] = f.schur[r + q * m] - acc;
+                }
+            }
+        }
+        super::super::lu::lu_in_place_loops(&mut f.schur[..m * m], m, &mut f.schur_piv[..m], floor)
+    }
+
+    /// A random arrowhead matrix with blocks of the given sizes (dense inside, each state
+    /// coupled to a random subset of the `m` border states, some blocks to none), states
+    /// shuffled, exact zeros sprinkled among the couplings.
+    fn arrowhead_of_sizes(rng: &mut Rng, sizes: &[usize], m: usize) -> DMatrix<f64> {
+        let nb: usize = sizes.iter().sum();
+        let n = nb + m;
+        let mut a = DMatrix::zeros(n, n);
+        let mut s = 0;
+        for (b, &k) in sizes.iter().enumerate() {
+            for i in s..s + k {
+                for j in s..s + k {
+                    a[(i, j)] = rng.next();
+                }
+                a[(i, i)] += 4.0;
+                for q in nb..n {
+                    if b % 7 != 6 && rng.next() > 0.2 {
+                        a[(i, q)] = if rng.next() > 0.9 { 0.0 } else { rng.next() };
+                        a[(q, i)] = rng.next();
+                    }
+                }
+            }
+            s += k;
+        }
+        for i in nb..n {
+            for j in nb..n {
+                a[(i, j)] = rng.next();
+            }
+        }
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let j = ((rng.next() + 1.0) / 2.0 * (i + 1) as f64) as usize % (i + 1);
+            perm.swap(i, j);
+        }
+        DMatrix::from_fn(n, n, |i, j| a[(perm[i], perm[j])])
+    }
+
+    /// [`Factorisation::factor`] (its gathers, the unrolled couplings of blocks of one to four
+    /// states and the general one, the small blocks' unrolled LUs) gives the bits of the entry
+    /// by entry factorisation, and so do the solves from it: random arrowhead matrices with
+    /// blocks of one to nine states, mostly of one, factorised from [`Shifted`] and from a
+    /// closure, real and complex.
+    #[test]
+    fn the_factorisation_has_the_entrywise_bits() {
+        fn check<T: Scalar, E: Entries<T>>(part: &Arc<Partition>, entry: E, b: &[T]) {
+            let mut reference = Factorisation::new(Arc::clone(part));
+            assert!(factor_entrywise(&mut reference, part, &entry));
+            let mut f = Factorisation::new(Arc::clone(part));
+            assert!(f.factor(part, entry));
+            let factors = |f: &Factorisation<T>| {
+                let p = &*f.part;
+                let m = p.border();
+                format!(
+                    "{:?} {:?} {:?} {:?} {:?} {:?}",
+                    &f.lu[..p.lu_len],
+                    &f.piv[..p.n],
+                    &f.x[..p.x_len],
+                    &f.c[..p.x_len],
+                    &f.schur[..m * m],
+                    &f.schur_piv[..m]
+                )
+            };
+            assert_eq!(factors(&f), factors(&reference));
+            let (mut x, mut x_ref) = (b.to_vec(), b.to_vec());
+            let mut scratch = vec![T::ZERO; b.len()];
+            f.solve(&mut x, &mut scratch);
+            solve_blockwise(&reference, &mut x_ref, &mut scratch);
+            assert_eq!(format!("{x:?}"), format!("{x_ref:?}"));
+        }
+        let mut rng = Rng(0x6a09_e667_f3bc_c909);
+        let mut seen = [false; 6];
+        for sizes in [
+            &[1, 1, 3, 3, 1, 1, 4, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1][..],
+            &[2, 1, 5, 1, 2, 9, 1, 1, 3, 4, 1, 6, 1, 2][..],
+            &[1; 40][..],
+        ] {
+            for m in [3, 9, 17] {
+                let j = arrowhead_of_sizes(&mut rng, sizes, m);
+                let n = j.nrows();
+                let part = Arc::new(Partition::of_matrix(&j));
+                if part.is_dense() {
+                    continue;
+                }
+                for at in &part.linked {
+                    seen[at.size.min(5)] = true;
+                }
+                let b: Vec<f64> = (0..n)
+                    .map(|i| if i % 6 == 0 { 0.0 } else { rng.next() })
+                    .collect();
+                let c = 1.0 / (1e-3 * 0.21193756319429014);
+                check(&part, Shifted { c, jac: &j }, &b);
+                check(
+                    &part,
+                    |i, jj| if i == jj { c } else { 0.0 } - j[(i, jj)],
+                    &b,
+                );
+                let bc: Vec<Complex<f64>> = b.iter().map(|&v| Complex::new(v, 0.5 * v)).collect();
+                let cc = Complex::new(2.0, 1.5);
+                let entry = |i: usize, jj: usize| {
+                    let d = if i == jj {
+                        cc
+                    } else {
+                        <Complex<f64> as Scalar>::ZERO
+                    };
+                    d - Complex::new(j[(i, jj)], 0.0)
+                };
+                check(&part, entry, &bc);
+            }
+        }
+        assert_eq!(
+            seen,
+            [false, true, true, true, true, true],
+            "block sizes covered"
+        );
     }
 
     /// The flat solve gives the bits of the block-by-block one, for blocks of one, two and
@@ -527,7 +799,8 @@ mod tests {
         }
     }
 
-    /// [`Shifted`]'s columns are its entries, bit for bit, and so is the dense factorisation
+    /// [`Shifted`]'s columns and gathered submatrices are its entries, bit for bit, and so is
+    /// the dense factorisation
     /// made from them: the same operations (a negation, c − J_jj on the diagonal), only without
     /// indexing each entry.
     #[test]
@@ -554,6 +827,16 @@ mod tests {
                 }
             }
         }
+        let at: Vec<usize> = (0..60).map(|e| (e * 37 + e / 3) % (n * n)).collect();
+        let diagonal: Vec<usize> = (0..60).filter(|&e| at[e].is_multiple_of(n + 1)).collect();
+        assert!(!diagonal.is_empty());
+        let mut gathered = vec![f64::NAN; at.len()];
+        assert!(shifted.gather_at(n, &at, &diagonal, &mut gathered));
+        for (v, &a) in gathered.iter().zip(&at) {
+            let bits = closure(a % n, a / n).to_bits();
+            assert_eq!(v.to_bits(), bits, "({}, {})", a % n, a / n);
+        }
+        assert!(!shifted.gather_at(n + 1, &at, &diagonal, &mut gathered));
         let part = Arc::new(Partition::dense(n));
         let (mut by_columns, mut by_entries) = (
             Factorisation::new(Arc::clone(&part)),

@@ -25,6 +25,15 @@ const VECTOR_FROM: usize = 9;
 /// Jacobian): a solve then multiplies where it would divide, and a division (a complex one
 /// above all) costs several multiplications' latency on the solve's critical path.
 pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+    // The plate's modes make blocks of one state, the servo valve's three and four: with k
+    // known the loops unroll (the same operations in the same order, so the same bits).
+    match k {
+        1 => return lu_in_place_loops(a, 1, piv, floor),
+        2 => return lu_in_place_loops(a, 2, piv, floor),
+        3 => return lu_in_place_loops(a, 3, piv, floor),
+        4 => return lu_in_place_loops(a, 4, piv, floor),
+        _ => {}
+    }
     #[cfg(target_arch = "x86_64")]
     {
         if k >= VECTOR_FROM && !portable_only() && std::arch::is_x86_feature_detected!("avx2") {
@@ -58,7 +67,12 @@ fn portable_only() -> bool {
 
 /// [`lu_in_place`]'s loops.
 #[inline(always)]
-fn lu_in_place_loops<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+pub(super) fn lu_in_place_loops<T: Scalar>(
+    a: &mut [T],
+    k: usize,
+    piv: &mut [usize],
+    floor: f64,
+) -> bool {
     let a = &mut a[..k * k];
     let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
     let tiny = floor * amax;

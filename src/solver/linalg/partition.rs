@@ -15,6 +15,11 @@ pub struct Partition {
     /// `links[link_starts[b]..link_starts[b + 1]]`.
     pub(super) links: Vec<usize>,
     pub(super) link_starts: Vec<usize>,
+    /// The states of the links, `perm[nb + links[i]]` for each i (the rows of C_b and the
+    /// columns of X_b).
+    pub(super) link_states: Vec<usize>,
+    /// Where the factorisation reads M's entries (see [`Gather`]).
+    pub(super) gather: Gather,
     /// Where each block's data lie, precomputed for the solves (see [`BlockAt`]): the blocks
     /// coupled to the border, and apart the free ones (no link to the border), which a solve
     /// finishes in one go (a plate mode that no force of the hub excites is one).
@@ -24,6 +29,58 @@ pub struct Partition {
     /// [`BlockAt::lu`] and [`BlockAt::x`] lay out one block after the other.
     pub(super) lu_len: usize,
     pub(super) x_len: usize,
+}
+
+/// Where the factorisation of a structured partition reads M's entries: positions i + j n of M
+/// stored column-major (n × n), in the order of the factors' buffers, and the places in those
+/// lists that lie on M's diagonal; a matrix stored so ([`super::Shifted`]) is then read in one
+/// pass per buffer, without the block structure's bookkeeping. Empty for the dense partition,
+/// whose one block is read column by column.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct Gather {
+    /// Every block's k × k entries, column-major, at the blocks' LU offsets.
+    pub(super) lu: Vec<usize>,
+    pub(super) lu_diagonal: Vec<usize>,
+    /// B_b (k × links, column-major) and C_b (links × k, row-major), at the blocks' X offsets.
+    pub(super) x: Vec<usize>,
+    pub(super) c: Vec<usize>,
+    /// The border's m × m entries, column-major.
+    pub(super) schur: Vec<usize>,
+    pub(super) schur_diagonal: Vec<usize>,
+}
+
+impl Gather {
+    fn of(
+        n: usize,
+        perm: &[usize],
+        nb: usize,
+        blocks: &[BlockAt],
+        link_states: &[usize],
+    ) -> Gather {
+        let mut g = Gather::default();
+        let mut blocks = blocks.to_vec();
+        blocks.sort_by_key(|at| at.lu);
+        for at in &blocks {
+            let idx = &perm[at.start..at.start + at.size];
+            let states = &link_states[at.links_from..at.links_to];
+            for (cj, &j) in idx.iter().enumerate() {
+                g.lu_diagonal.push(g.lu.len() + cj);
+                g.lu.extend(idx.iter().map(|&i| i + j * n));
+            }
+            for &j in states {
+                g.x.extend(idx.iter().map(|&i| i + j * n));
+            }
+            for &i in states {
+                g.c.extend(idx.iter().map(|&j| i + j * n));
+            }
+        }
+        let border = &perm[nb..];
+        for (q, &j) in border.iter().enumerate() {
+            g.schur_diagonal.push(g.schur.len() + q);
+            g.schur.extend(border.iter().map(|&i| i + j * n));
+        }
+        g
+    }
 }
 
 /// One block's place in the partition and in the factors: what a solve would otherwise
@@ -73,12 +130,23 @@ impl Partition {
             lu += size * size;
             x += size * (links_to - links_from);
         }
+        let nb = starts[starts.len() - 1];
+        let link_states: Vec<usize> = links.iter().map(|&q| perm[nb + q]).collect();
+        let dense = starts.len() == 2 && nb == n;
+        let gather = if dense {
+            Gather::default()
+        } else {
+            let all: Vec<BlockAt> = linked.iter().chain(&free).copied().collect();
+            Gather::of(n, &perm, nb, &all, &link_states)
+        };
         Partition {
             n,
             perm,
             starts,
             links,
             link_starts,
+            link_states,
+            gather,
             linked,
             free,
             lu_len: lu,
