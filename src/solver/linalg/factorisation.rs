@@ -665,16 +665,7 @@ mod tests {
                     &b,
                 );
                 let bc: Vec<Complex<f64>> = b.iter().map(|&v| Complex::new(v, 0.5 * v)).collect();
-                let cc = Complex::new(2.0, 1.5);
-                let entry = |i: usize, jj: usize| {
-                    let d = if i == jj {
-                        cc
-                    } else {
-                        <Complex<f64> as Scalar>::ZERO
-                    };
-                    d - Complex::new(j[(i, jj)], 0.0)
-                };
-                check(&part, entry, &bc);
+                check(&part, shifted_complex(&j, Complex::new(2.0, 1.5)), &bc);
             }
         }
         assert_eq!(
@@ -682,6 +673,21 @@ mod tests {
             [false, true, true, true, true, true],
             "block sizes covered"
         );
+    }
+
+    /// `c I − J` entry by entry with a complex shift (Radau5's complex matrix).
+    fn shifted_complex(
+        j: &DMatrix<f64>,
+        c: Complex<f64>,
+    ) -> impl Fn(usize, usize) -> Complex<f64> + '_ {
+        move |i, jj| {
+            let d = if i == jj {
+                c
+            } else {
+                <Complex<f64> as Scalar>::ZERO
+            };
+            d - Complex::new(j[(i, jj)], 0.0)
+        }
     }
 
     /// The flat solve gives the bits of the block-by-block one, for blocks of one, two and
@@ -715,16 +721,7 @@ mod tests {
                 &b,
             );
             let bc: Vec<Complex<f64>> = b.iter().map(|&v| Complex::new(v, 0.5 * v)).collect();
-            let c = Complex::new(2.0, 1.5);
-            let entry = |i: usize, jj: usize| {
-                let d = if i == jj {
-                    c
-                } else {
-                    <Complex<f64> as Scalar>::ZERO
-                };
-                d - Complex::new(j[(i, jj)], 0.0)
-            };
-            check(&part, entry, &bc);
+            check(&part, shifted_complex(&j, Complex::new(2.0, 1.5)), &bc);
         }
     }
 
