@@ -429,10 +429,11 @@ impl PointForms {
         };
         for (c, op) in f.nonlinear.iter().enumerate() {
             let a = form_bound(&b, &op.a);
+            // The second operand: a law's modulator, a product's other factor.
+            let second = op.b.as_ref().map_or(0.0, |form| form_bound(&b, form));
             let v = match op.kind {
                 Kind::Law { law, ki, ko } => {
-                    let modulator = op.b.as_ref().map_or(0.0, |form| form_bound(&b, form));
-                    let arg = (ki.abs() * a * ROUNDING_MARGIN).max(modulator);
+                    let arg = (ki.abs() * a * ROUNDING_MARGIN).max(second);
                     match m.laws[law as usize].value_bound {
                         Some((k, c)) if arg <= super::VALUE_BOUND_RANGE => {
                             ko.abs() * (k.abs() * arg * arg + c.abs()) * ROUNDING_MARGIN
@@ -440,10 +441,7 @@ impl PointForms {
                         _ => f64::INFINITY,
                     }
                 }
-                Kind::Mul { k } => {
-                    let bb = op.b.as_ref().map_or(0.0, |form| form_bound(&b, form));
-                    k.abs() * a * bb * ROUNDING_MARGIN
-                }
+                Kind::Mul { k } => k.abs() * a * second * ROUNDING_MARGIN,
                 Kind::Div { .. } => f64::INFINITY,
             };
             // NaN bounds (0 × inf) fail too.

@@ -214,15 +214,12 @@ impl Affine {
                 .is_err()
         };
         let jac = SparseRows::from_dense(jac, affine_row);
-        let point = if partial {
-            compiled.nonaffine_point_forms()
+        let (point, point_radius) = if partial {
+            let point = compiled.nonaffine_point_forms();
+            let radius = point.finite_radius(compiled, FINITE_BOUND);
+            (point, radius)
         } else {
-            PointForms::default()
-        };
-        let point_radius = if partial {
-            point.finite_radius(compiled, FINITE_BOUND)
-        } else {
-            0.0
+            (PointForms::default(), 0.0)
         };
         let mut affine = Affine {
             point,

@@ -27,7 +27,7 @@ use crate::fmu::logging::Short;
 use crate::fmu::Values;
 use crate::fragments::servo_valve::ServoValveParameters;
 
-use super::variables::idx;
+use super::variables::{idx, VARIABLES};
 
 /// How many times the full pilot force's overtravel the spool may be past its stop.
 pub const SPOOL_OVERTRAVEL: f64 = 2.0;
@@ -42,8 +42,9 @@ pub fn spool_bound(p: &ServoValveParameters) -> f64 {
     p.x_v_max + SPOOL_OVERTRAVEL * full_force / p.stop_stiffness()
 }
 
-/// The outputs [`check`] reads: the caller brings them up to date first (a communication point
-/// leaves them until read, `Assembled::write_at_point`).
+/// The outputs [`check`] reads, the spool's position first, then the pressures: the caller
+/// brings them up to date first (a communication point leaves them until read,
+/// `Assembled::write_at_point`).
 pub const CHECKED: [usize; 5] = [
     idx::SERVO_VALVE_X_V,
     idx::SERVO_VALVE_P_1,
@@ -55,7 +56,7 @@ pub const CHECKED: [usize; 5] = [
 /// The first servo-valve output in `values` outside its physical bound, as a message naming it,
 /// its value and the bound; `None` when all are inside. Reads the outputs of [`CHECKED`].
 pub fn check(values: &Values, p: &ServoValveParameters) -> Option<String> {
-    let x_v = values.real(idx::SERVO_VALVE_X_V);
+    let x_v = values.real(CHECKED[0]);
     let bound = spool_bound(p);
     if x_v.abs() > bound {
         return Some(format!(
@@ -66,12 +67,8 @@ pub fn check(values: &Values, p: &ServoValveParameters) -> Option<String> {
         ));
     }
     let ceiling = PRESSURE_FACTOR * (p.p_supply - p.p_tank);
-    for (i, name) in [
-        (idx::SERVO_VALVE_P_1, "servo_valve.p_1"),
-        (idx::SERVO_VALVE_P_2, "servo_valve.p_2"),
-        (idx::SERVO_VALVE_P_A, "servo_valve.p_a"),
-        (idx::SERVO_VALVE_P_B, "servo_valve.p_b"),
-    ] {
+    for &i in &CHECKED[1..] {
+        let name = VARIABLES[i].name;
         let pressure = values.real(i);
         if pressure > ceiling {
             return Some(format!(
