@@ -6,7 +6,9 @@
 //! and solved, on x86-64 processors with AVX2 (detected at run time), by the same loops compiled
 //! for 4-wide vectors. Their multiplications and subtractions stay separate, never fused, and
 //! each entry is updated by the same operations in the same order, so the bits are those of the
-//! portable loops on every processor (`avx2_kernels_have_the_portable_bits`).
+//! portable loops on every processor (`avx2_kernels_have_the_portable_bits`). A block too large
+//! for the first-level cache is factorised in panels of four columns, again with the same bits
+//! (`the_panels_have_the_loops_bits`).
 
 use super::scalar::Scalar;
 
@@ -41,7 +43,127 @@ pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], f
             return unsafe { lu_in_place_avx2(a, k, piv, floor) };
         }
     }
-    lu_in_place_loops(a, k, piv, floor)
+    if k >= PANELS_FROM {
+        lu_in_place_panels(a, k, piv, floor)
+    } else {
+        lu_in_place_loops(a, k, piv, floor)
+    }
+}
+
+/// Blocks of this many states or more are factorised in panels ([`lu_in_place_panels`]): from
+/// about here the matrix (72 kB at 96 states) no longer fits in the processor's first-level
+/// cache, and the loops stream it from further away at every elimination. Measured with AVX2,
+/// dense random matrices, one factorisation at a time (median of many): panels 18 µs against
+/// the loops' 15 µs at 46 states, 0.091 ms against 0.097 ms at 96, 0.60 ms against 0.80 ms at
+/// 200, 24–33 ms against 44–54 ms at 816 (the default plant with a 20 × 20 plate).
+const PANELS_FROM: usize = 96;
+
+/// The number of columns [`lu_in_place_panels`] factorises before it updates the columns after
+/// them: each entry of those is then loaded and stored once for `PANEL` eliminations, not once
+/// for each.
+const PANEL: usize = 4;
+
+/// [`lu_in_place_loops`] in panels of [`PANEL`] columns, with the same bits.
+///
+/// Each panel's columns are brought up to date with the panel's earlier eliminations as they
+/// are reached, pivoted and scaled; then each column after the panel receives the panel's
+/// eliminations, in their order, each entry kept in a register through them. Every entry sees
+/// the same operations on the same operands in the same order as in the loops, step after
+/// step: an elimination delayed past later row interchanges reads the interchanged rows of the
+/// multipliers as well, and a multiplier `a[s, c]` that is zero skips its elimination as there.
+/// A column is loaded and stored once per panel instead of once per elimination, which for a
+/// large block (the dense LU of a system of hundreds of states) is the difference between
+/// streaming the matrix from memory at every elimination and at every fourth.
+#[inline(always)]
+pub(super) fn lu_in_place_panels<T: Scalar>(
+    a: &mut [T],
+    k: usize,
+    piv: &mut [usize],
+    floor: f64,
+) -> bool {
+    let a = &mut a[..k * k];
+    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
+    let tiny = floor * amax;
+    let mut j0 = 0;
+    while j0 < k {
+        let j1 = (j0 + PANEL).min(k);
+        for j in j0..j1 {
+            // The panel's earlier eliminations on column j, then its pivot and scaling.
+            let (left, right) = a.split_at_mut(j * k);
+            let column = &mut right[..k];
+            for s in j0..j {
+                let f = column[s];
+                if f != T::ZERO {
+                    let l = &left[s * k + s + 1..s * k + k];
+                    for (v, &lr) in column[s + 1..].iter_mut().zip(l) {
+                        *v = *v - lr * f;
+                    }
+                }
+            }
+            if !pivot(a, k, j, tiny, piv) {
+                return false;
+            }
+            let column = &mut a[j * k..j * k + k];
+            let d = column[j];
+            for v in &mut column[j + 1..] {
+                *v = *v / d;
+            }
+            column[j] = T::ONE / d;
+        }
+        // The columns after the panel: its eliminations s = j0, ..., j1 - 1 in turn.
+        let (left, right) = a.split_at_mut(j1 * k);
+        let panel = &left[j0 * k..];
+        for col in right.chunks_exact_mut(k) {
+            // Rows j0 + 1 .. j1 (the multipliers of the later eliminations) one elimination
+            // after the other; then the rows below, all eliminations at once.
+            let mut active = [(0usize, T::ZERO); PANEL];
+            let mut n = 0;
+            for s in j0..j1 {
+                let f = col[s];
+                if f != T::ZERO {
+                    let l = &panel[(s - j0) * k..(s - j0 + 1) * k];
+                    for r in s + 1..j1 {
+                        col[r] = col[r] - l[r] * f;
+                    }
+                    active[n] = (s - j0, f);
+                    n += 1;
+                }
+            }
+            let below = &mut col[j1..];
+            let l = |i: usize| &panel[active[i].0 * k + j1..(active[i].0 + 1) * k];
+            match n {
+                0 => {}
+                1 => {
+                    let f0 = active[0].1;
+                    for (v, &l0) in below.iter_mut().zip(l(0)) {
+                        *v = *v - l0 * f0;
+                    }
+                }
+                2 => {
+                    let (f0, f1) = (active[0].1, active[1].1);
+                    for ((v, &l0), &l1) in below.iter_mut().zip(l(0)).zip(l(1)) {
+                        *v = (*v - l0 * f0) - l1 * f1;
+                    }
+                }
+                3 => {
+                    let (f0, f1, f2) = (active[0].1, active[1].1, active[2].1);
+                    for (((v, &l0), &l1), &l2) in below.iter_mut().zip(l(0)).zip(l(1)).zip(l(2)) {
+                        *v = ((*v - l0 * f0) - l1 * f1) - l2 * f2;
+                    }
+                }
+                _ => {
+                    let (f0, f1, f2, f3) = (active[0].1, active[1].1, active[2].1, active[3].1);
+                    for ((((v, &l0), &l1), &l2), &l3) in
+                        below.iter_mut().zip(l(0)).zip(l(1)).zip(l(2)).zip(l(3))
+                    {
+                        *v = (((*v - l0 * f0) - l1 * f1) - l2 * f2) - l3 * f3;
+                    }
+                }
+            }
+        }
+        j0 = j1;
+    }
+    true
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -52,7 +174,11 @@ unsafe fn lu_in_place_avx2<T: Scalar>(
     piv: &mut [usize],
     floor: f64,
 ) -> bool {
-    lu_in_place_loops(a, k, piv, floor)
+    if k >= PANELS_FROM {
+        lu_in_place_panels(a, k, piv, floor)
+    } else {
+        lu_in_place_loops(a, k, piv, floor)
+    }
 }
 
 /// Whether the tests asked for the portable loops only (always false outside the tests).
@@ -312,6 +438,12 @@ mod tests {
                 let (mut piv, mut piv_ref) = (vec![0; k], vec![0; k]);
                 let ok = lu_in_place(&mut lu, k, &mut piv, 1e-10);
                 assert_eq!(ok, lu_indexed(&mut reference, k, &mut piv_ref, 1e-10));
+                if !ok {
+                    // Refused at the same column; the half-eliminated rest is nobody's (the
+                    // panels leave it differently).
+                    assert_eq!(piv, piv_ref, "k = {k}");
+                    continue;
+                }
                 assert_eq!(
                     format!("{lu:?} {piv:?}"),
                     format!("{reference:?} {piv_ref:?}"),
@@ -325,9 +457,75 @@ mod tests {
         }
     }
 
+    /// The factorisation in panels gives the bits of the loops one elimination at a time, real
+    /// and complex, for sizes around and across the panel width, with zeros (whose
+    /// eliminations are skipped, some whole panels' worth) and row interchanges; and a singular
+    /// matrix is refused at the same column.
+    #[test]
+    fn the_panels_have_the_loops_bits() {
+        fn both<T: Scalar + std::fmt::Debug>(a: &[T], k: usize) -> [String; 2] {
+            let mut lu = a.to_vec();
+            let mut piv = vec![usize::MAX; k];
+            let ok = lu_in_place_panels(&mut lu, k, &mut piv, 1e-12);
+            let mut reference = a.to_vec();
+            let mut piv_ref = vec![usize::MAX; k];
+            let ok_ref = lu_in_place_loops(&mut reference, k, &mut piv_ref, 1e-12);
+            // A refused matrix is left half-eliminated, differently: only the refusal and the
+            // column it came at (the pivots chosen up to it) are compared.
+            if !(ok && ok_ref) {
+                return [format!("{ok} {piv:?}"), format!("{ok_ref} {piv_ref:?}")];
+            }
+            [
+                format!("{ok} {lu:?} {piv:?}"),
+                format!("{ok_ref} {reference:?} {piv_ref:?}"),
+            ]
+        }
+        let mut rng = Rng(0x1d8e_4e27_c47d_124f);
+        let mut swaps = 0;
+        for k in [9, 10, 11, 12, 13, 16, 17, 46, 61, 100] {
+            for trial in 0..6 {
+                let a: Vec<f64> = (0..k * k)
+                    .map(|i| {
+                        let (r, c) = (i % k, i / k);
+                        match trial {
+                            // Zeros scattered, and whole rows of zeros right of the diagonal
+                            // (multipliers that skip every elimination of a panel).
+                            1 if r % 5 == 2 && c > r => 0.0,
+                            2 if (i * 7) % 3 == 0 => 0.0,
+                            // Singular: two equal columns.
+                            3 if c == k - 2 => 0.0,
+                            _ => rng.next(),
+                        }
+                    })
+                    .collect();
+                let mut a = a;
+                if trial == 4 {
+                    let (first, rest) = a.split_at_mut(5 * k);
+                    rest[..k].copy_from_slice(&first[2 * k..3 * k]);
+                }
+                let [panels, loops] = both(&a, k);
+                assert_eq!(panels, loops, "real, k = {k}, trial {trial}");
+                let mut piv = vec![0; k];
+                lu_in_place_loops(&mut a.clone(), k, &mut piv, 1e-12);
+                swaps += piv.iter().enumerate().filter(|&(j, &p)| p != j).count();
+                let ac: Vec<Complex<f64>> = a
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &x)| {
+                        Complex::new(x, if x == 0.0 { 0.0 } else { a[(i * 5) % (k * k)] })
+                    })
+                    .collect();
+                let [panels, loops] = both(&ac, k);
+                assert_eq!(panels, loops, "complex, k = {k}, trial {trial}");
+            }
+        }
+        assert!(swaps > 500, "row interchanges exercised: {swaps}");
+    }
+
     /// The factorisation and the solve of a large block compiled for AVX2 give the portable
-    /// loops' bits: random real and complex matrices of 9 to 60 states (with zeros, which the
-    /// loops skip, and row interchanges), factorised and solved both ways, compared bit for bit.
+    /// loops' bits: random real and complex matrices of 9 to 130 states, panels from 96 (with
+    /// zeros, which the loops skip, and row interchanges), factorised and solved both ways,
+    /// compared bit for bit.
     /// (On a processor without AVX2 both ways are the portable loops.)
     #[test]
     fn avx2_kernels_have_the_portable_bits() {
@@ -344,7 +542,7 @@ mod tests {
             })
         }
         let mut rng = Rng(0x5851_f42d_4c95_7f2d);
-        for k in [9, 13, 17, 31, 46, 60] {
+        for k in [9, 13, 17, 31, 46, 60, 97, 130] {
             let a: Vec<f64> = (0..k * k)
                 .map(|i| if i % 7 == 3 { 0.0 } else { rng.next() })
                 .collect();
