@@ -16,10 +16,11 @@ use nalgebra::DMatrix;
 use crate::bond_graph::{CompiledModel, PointCache, StateUnits};
 use crate::fmu::Values;
 use crate::fnv1a;
+use crate::fragments::plate::PlateModel;
 use crate::fragments::servo_valve;
 use crate::solver::OdeSystem;
 
-use super::compose::bond_graph;
+use super::compose::bond_graph_and_plate;
 use ode::stamp;
 use outputs::on_demand;
 
@@ -69,6 +70,8 @@ pub struct Assembled {
     /// `(K, C)` with |stored energy| ≤ K max|x|² + C when every storage is linear or declares a
     /// bound (`CompiledModel::stored_energy_bound`; the energy is then left until read too).
     energy_bound: Option<(f64, f64)>,
+    /// The plate model the bond graph was built from, for the plate's natural frequencies.
+    plate: PlateModel,
 }
 
 /// How one of the FMU's variables is computed on its own, from the state, when it is read.
@@ -94,7 +97,7 @@ enum OnDemand {
 
 impl Assembled {
     pub fn new(p: &Parameters) -> Result<Self, String> {
-        let graph = bond_graph(p)?;
+        let (graph, plate) = bond_graph_and_plate(p)?;
         let mut compiled = graph.compile().map_err(|e| e.to_string())?;
         let position = super::variables::position;
         let input_index = compiled
@@ -174,7 +177,14 @@ impl Assembled {
             state_slot,
             nominal,
             units: graph.state_units(),
+            plate,
         })
+    }
+
+    /// The plate model the bond graph was built from (eq. 4 and 5; its damping as the graph
+    /// has it).
+    pub fn plate(&self) -> &PlateModel {
+        &self.plate
     }
 
     /// For each compiled state, its place among the declared continuous states, if any.
