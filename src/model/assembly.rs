@@ -13,7 +13,7 @@ mod tests;
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{CompiledModel, PointCache, StateUnits};
+use crate::bond_graph::{CompiledModel, Linearization, PointCache, StateUnits};
 use crate::fmu::Values;
 use crate::fnv1a;
 use crate::fragments::plate::PlateModel;
@@ -97,6 +97,21 @@ enum OnDemand {
 
 impl Assembled {
     pub fn new(p: &Parameters) -> Result<Self, String> {
+        Ok(Self::assemble(p)?.0)
+    }
+
+    /// The model and its linearisation at rest (the rest state, zero inputs; `A`, `B`, `C`, `D`
+    /// by dual numbers, [`CompiledModel::linearize`]), which building the model's affine outputs
+    /// computes already: what `hsp identify` compares with the measured responses at each trial.
+    pub fn with_linearization_at_rest(p: &Parameters) -> Result<(Self, Linearization), String> {
+        let (system, at_rest) = Self::assemble(p)?;
+        let at_rest =
+            at_rest.unwrap_or_else(|| system.compiled.linearize(&system.rest, &system.inputs));
+        Ok((system, at_rest))
+    }
+
+    /// The model, and its linearisation at rest if building it computed that.
+    fn assemble(p: &Parameters) -> Result<(Self, Option<Linearization>), String> {
         let (graph, plate) = bond_graph_and_plate(p)?;
         let mut compiled = graph.compile().map_err(|e| e.to_string())?;
         let position = super::variables::position;
@@ -147,10 +162,11 @@ impl Assembled {
         });
         // All rows affine with a constant J; with a varying one the rows that are not affine
         // go through their part of the plan (worth it while they are a minority).
+        let mut at_rest = None;
         let affine = match (&constant_jacobian, compiled.constant_entries()) {
-            (Some((_, jac)), _) => Some(Affine::new(jac, &compiled, &rest, &inputs)),
+            (Some((_, jac)), _) => Some(Affine::new(jac, &compiled, &rest, &inputs, &mut at_rest)),
             (None, Some(fixed)) if 2 * compiled.nonaffine_rows().len() < compiled.n_states() => {
-                Some(Affine::new(fixed, &compiled, &rest, &inputs))
+                Some(Affine::new(fixed, &compiled, &rest, &inputs, &mut at_rest))
             }
             _ => None,
         };
@@ -163,7 +179,7 @@ impl Assembled {
         if energy_bound.is_some() && !on_demand.is_empty() {
             on_demand[idx::ENERGY] = OnDemand::Energy;
         }
-        Ok(Assembled {
+        let system = Assembled {
             energy_bound,
             constant_jacobian,
             constant_part,
@@ -178,7 +194,8 @@ impl Assembled {
             nominal,
             units: graph.state_units(),
             plate,
-        })
+        };
+        Ok((system, at_rest))
     }
 
     /// The plate model the bond graph was built from (eq. 4 and 5; its damping as the graph

@@ -418,3 +418,30 @@ fn plate_modes_of_the_built_model_are_the_plates_own() {
         assert_eq!(bits(&own), bits(&built), "{sets:?}");
     }
 }
+
+/// The linearisation at rest handed out with the model (the one its affine outputs were built
+/// from) is the model's own linearisation at rest, computed afresh, to the bit.
+#[test]
+fn the_linearization_kept_at_rest_is_the_models_own() {
+    let configurations: [&[(&str, &str)]; 2] = [&[], &[("hydraulics.model", "1")]];
+    for sets in configurations {
+        let (_, values) = assembled(sets);
+        let p = Parameters::from_values(&values, &Experiment::default())
+            .unwrap()
+            .sliding();
+        let (system, kept) = Assembled::with_linearization_at_rest(&p).unwrap();
+        let fresh = Assembled::new(&p).unwrap();
+        let afresh = fresh
+            .compiled()
+            .linearize(&fresh.initial_state(), fresh.inputs());
+        let bits = |l: &crate::bond_graph::Linearization| {
+            [&l.a, &l.b, &l.c, &l.d]
+                .iter()
+                .flat_map(|m| m.iter().map(|v| v.to_bits()))
+                .chain(l.x0.iter().chain(&l.u0).map(|v| v.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&kept), bits(&afresh), "{sets:?}");
+        assert_eq!(system.dim(), fresh.dim());
+    }
+}
