@@ -43,7 +43,8 @@ pub struct CompiledModel {
     pub(super) storages: Vec<Storage>,
     pub(super) power_terms: Vec<PowerTerm>,
     pub(super) effort_to_head: Vec<bool>,
-    pub(super) slot_names: Vec<String>,
+    /// What names the slots, for [`CompiledModel::plan_listing`].
+    pub(super) slot_names: super::plan::SlotNames,
     /// The plan before copy elimination, for [`CompiledModel::plan_listing`].
     pub(super) listing_ops: Vec<Op>,
     pub(super) listing_terms: Vec<(f64, u32)>,
@@ -145,7 +146,12 @@ impl CompiledModel {
             &self.listing_ops,
             &self.listing_terms,
             &self.laws,
-            &self.slot_names,
+            &self.slot_names.names(
+                self.n_slots,
+                &self.state_names,
+                &self.input_names,
+                &self.bond_names,
+            ),
         )
     }
     /// Causality per bond: `true` if the causal stroke is at the head (the `to` element receives

@@ -1,5 +1,7 @@
 //! The bond-graph builder.
 
+use std::collections::HashMap;
+
 use nalgebra::DMatrix;
 
 use super::element::*;
@@ -15,6 +17,9 @@ pub struct BondGraph {
     pub(crate) name: String,
     pub(crate) elements: Vec<Element>,
     pub(crate) bonds: Vec<Bond>,
+    /// Each bond's name and the first bond of that name, the index of [`BondGraph::find_bond`]
+    /// and of [`BondGraph::bond`]'s unique names (a graph has hundreds of bonds).
+    bond_index: HashMap<String, BondId>,
     pub(crate) signals: Vec<SignalBlock>,
     pub(crate) outputs: Vec<OutputDef>,
     /// State-bearing items in creation order: this is the order of the model's states.
@@ -47,6 +52,7 @@ impl BondGraph {
             name: name.into(),
             elements: Vec::new(),
             bonds: Vec::new(),
+            bond_index: HashMap::new(),
             signals: Vec::new(),
             outputs: Vec::new(),
             state_order: Vec::new(),
@@ -223,7 +229,7 @@ impl BondGraph {
 
     /// The bond with this name.
     pub fn find_bond(&self, name: &str) -> Option<BondId> {
-        self.bonds.iter().position(|b| b.name == name).map(BondId)
+        self.bond_index.get(name).copied()
     }
 
     /// Name of an element.
@@ -393,15 +399,20 @@ impl BondGraph {
     /// A bond with half arrow (power direction) `from -> to`, named "from->to" (with a "#k"
     /// suffix if that name is taken).
     pub fn bond(&mut self, from: ElementId, to: ElementId) -> BondId {
-        let base = format!(
-            "{}->{}",
-            self.elements[from.0].name, self.elements[to.0].name
-        );
-        let mut name = base.clone();
+        // Joined by hand: a graph has hundreds of bonds, and `format!` costs ten times as much.
+        let (a, b) = (&self.elements[from.0].name, &self.elements[to.0].name);
+        let mut base = String::with_capacity(a.len() + 2 + b.len());
+        base.push_str(a);
+        base.push_str("->");
+        base.push_str(b);
+        if !self.bond_index.contains_key(&base) {
+            return self.bond_named(base, from, to);
+        }
         let mut k = 2;
-        while self.bonds.iter().any(|b| b.name == name) {
-            name = format!("{base}#{k}");
+        let mut name = format!("{base}#{k}");
+        while self.bond_index.contains_key(&name) {
             k += 1;
+            name = format!("{base}#{k}");
         }
         self.bond_named(name, from, to)
     }
@@ -413,12 +424,11 @@ impl BondGraph {
         from: ElementId,
         to: ElementId,
     ) -> BondId {
-        self.bonds.push(Bond {
-            name: name.into(),
-            from,
-            to,
-        });
-        BondId(self.bonds.len() - 1)
+        let name = name.into();
+        let id = BondId(self.bonds.len());
+        self.bond_index.entry(name.clone()).or_insert(id);
+        self.bonds.push(Bond { name, from, to });
+        id
     }
 
     // ---------------------------------------------------------------- signals

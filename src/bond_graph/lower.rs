@@ -19,7 +19,7 @@ use super::element::*;
 use super::energy::{PowerTerm, Storage};
 use super::error::BondGraphError;
 use super::graph::{BondGraph, StateOwner};
-use super::plan::{eliminate_copies, flatten, Equation, Expr};
+use super::plan::{effort_slot, eliminate_copies, flatten, Equation, Expr, SlotNames};
 use super::sort::sort_equations;
 use super::structure::analyse;
 use super::validate::validate;
@@ -41,10 +41,10 @@ impl<'a> Builder<'a> {
         self.next_slot - 1
     }
     fn e(&self, b: BondId) -> usize {
-        self.n_states + self.n_inputs + 2 * b.0
+        effort_slot(self.n_states + self.n_inputs, b.0)
     }
     fn f(&self, b: BondId) -> usize {
-        self.n_states + self.n_inputs + 2 * b.0 + 1
+        self.e(b) + 1
     }
     fn eq(&mut self, dst: usize, expr: Expr, owner: &str) {
         self.eqs.push(Equation {
@@ -466,24 +466,16 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     let n_slots = b.next_slot;
     let order = sort_equations(&b.eqs, n_slots, n + m)?;
 
-    // --- slot names, for the plan listing
-    let mut slot_names = vec![String::new(); n_slots];
-    for (k, nm) in state_names.iter().enumerate() {
-        slot_names[k] = nm.clone();
-        slot_names[deriv_slots[k]] = format!("d({nm})/dt");
-    }
-    for (k, nm) in input_names.iter().enumerate() {
-        slot_names[n + k] = nm.clone();
-    }
-    for (k, bd) in g.bonds.iter().enumerate() {
-        slot_names[b.e(BondId(k))] = format!("e({})", bd.name);
-        slot_names[b.f(BondId(k))] = format!("f({})", bd.name);
-    }
-    for (k, sg) in g.signals.iter().enumerate() {
-        if slot_names[sig_slot[k]].is_empty() {
-            slot_names[sig_slot[k]] = sg.name.clone();
-        }
-    }
+    // --- what names the slots, for the plan listing (the names are written when it is asked for)
+    let slot_names = SlotNames {
+        derivatives: deriv_slots.clone(),
+        signals: g
+            .signals
+            .iter()
+            .enumerate()
+            .map(|(k, sg)| (sig_slot[k] as u32, sg.name.clone()))
+            .collect(),
+    };
 
     // --- flatten, then alias the copies away (the listing shows the plan with its copies)
     let (ops, mut terms) = flatten(&b.eqs, &order);

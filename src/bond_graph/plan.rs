@@ -12,6 +12,12 @@
 
 use super::element::NonlinearLaw;
 
+/// The slot of the effort of bond `b` in the layout above, `first` the number of states and
+/// inputs before the bonds; its flow is the next slot.
+pub(super) fn effort_slot(first: usize, b: usize) -> usize {
+    first + 2 * b
+}
+
 /// "No slot" in an [`Op`] (a law without modulator) and in the structure's tables.
 pub(super) const NONE: u32 = u32::MAX;
 
@@ -196,6 +202,53 @@ pub(super) fn eliminate_copies(
         t.1 = al(t.1);
     }
     (kept, alias)
+}
+
+/// What names the slots of a plan besides the compiled model's states, inputs and bonds: the
+/// slots of the state derivatives (before copy elimination) and of the signal blocks. The names
+/// themselves are written only for the listing ([`SlotNames::names`]), not each time a model is
+/// compiled.
+#[derive(Clone, Debug)]
+pub(super) struct SlotNames {
+    /// The slot of each state's derivative, in state order.
+    pub(super) derivatives: Vec<usize>,
+    /// Each signal block's slot and name, in creation order.
+    pub(super) signals: Vec<(u32, String)>,
+}
+
+impl SlotNames {
+    /// The name of each of the `n_slots` slots: a state `x` and its derivative `d(x)/dt`, an
+    /// input, the effort `e(b)` and flow `f(b)` of each bond `b` ([`effort_slot`]), then a signal
+    /// block's name for a slot none of these names.
+    pub(super) fn names(
+        &self,
+        n_slots: usize,
+        states: &[String],
+        inputs: &[String],
+        bonds: &[String],
+    ) -> Vec<String> {
+        let mut names = vec![String::new(); n_slots];
+        for (k, nm) in states.iter().enumerate() {
+            names[k] = nm.clone();
+            names[self.derivatives[k]] = format!("d({nm})/dt");
+        }
+        let n = states.len();
+        for (k, nm) in inputs.iter().enumerate() {
+            names[n + k] = nm.clone();
+        }
+        for (k, nm) in bonds.iter().enumerate() {
+            let e = effort_slot(n + inputs.len(), k);
+            names[e] = format!("e({nm})");
+            names[e + 1] = format!("f({nm})");
+        }
+        for (slot, nm) in &self.signals {
+            let name = &mut names[*slot as usize];
+            if name.is_empty() {
+                name.clone_from(nm);
+            }
+        }
+        names
+    }
 }
 
 /// The operations as text, one assignment per line, slots by their names (see

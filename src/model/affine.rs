@@ -11,7 +11,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{AffineOffsets, CompiledModel, NonaffineForms, PointForms};
+use crate::bond_graph::{AffineOffsets, CompiledModel, Linearization, NonaffineForms, PointForms};
 
 /// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
 /// as (column, value).
@@ -183,18 +183,24 @@ pub(super) fn max_abs(v: &[f64], keep: impl Fn(usize) -> bool) -> f64 {
 }
 
 impl Affine {
-    /// From the Jacobian's constant entries `jac` (all of J when it is constant).
+    /// From the Jacobian's constant entries `jac` (all of J when it is constant); the output
+    /// matrix `C` from the linearisation at `(rest, inputs)`, `at_rest`, computed there if it
+    /// is not yet.
     pub(super) fn new(
         jac: &DMatrix<f64>,
         compiled: &CompiledModel,
         rest: &[f64],
         inputs: &[f64],
+        at_rest: &mut Option<Linearization>,
     ) -> Self {
         let partial = !compiled.nonaffine_rows().is_empty();
         let jac_rows = jac.nrows();
         let outputs = (compiled.n_outputs() <= MAX_AFFINE_OUTPUTS).then(|| {
             // The affine outputs' rows (the others, evaluated through the plan, zero).
-            let mut c = compiled.linearize(rest, inputs).c;
+            let mut c = at_rest
+                .get_or_insert_with(|| compiled.linearize(rest, inputs))
+                .c
+                .clone();
             for &k in compiled.nonaffine_outputs() {
                 c.row_mut(k as usize).fill(0.0);
             }

@@ -13,13 +13,14 @@ mod tests;
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{CompiledModel, PointCache, StateUnits};
+use crate::bond_graph::{CompiledModel, Linearization, PointCache, StateUnits};
 use crate::fmu::Values;
 use crate::fnv1a;
+use crate::fragments::plate::PlateModel;
 use crate::fragments::servo_valve;
 use crate::solver::OdeSystem;
 
-use super::compose::bond_graph;
+use super::compose::bond_graph_and_plate;
 use ode::stamp;
 use outputs::on_demand;
 
@@ -69,6 +70,8 @@ pub struct Assembled {
     /// `(K, C)` with |stored energy| ≤ K max|x|² + C when every storage is linear or declares a
     /// bound (`CompiledModel::stored_energy_bound`; the energy is then left until read too).
     energy_bound: Option<(f64, f64)>,
+    /// The plate model the bond graph was built from, for the plate's natural frequencies.
+    plate: PlateModel,
 }
 
 /// How one of the FMU's variables is computed on its own, from the state, when it is read.
@@ -94,7 +97,22 @@ enum OnDemand {
 
 impl Assembled {
     pub fn new(p: &Parameters) -> Result<Self, String> {
-        let graph = bond_graph(p)?;
+        Ok(Self::assemble(p)?.0)
+    }
+
+    /// The model and its linearisation at rest (the rest state, zero inputs; `A`, `B`, `C`, `D`
+    /// by dual numbers, [`CompiledModel::linearize`]), which building the model's affine outputs
+    /// computes already: what `hsp identify` compares with the measured responses at each trial.
+    pub fn with_linearization_at_rest(p: &Parameters) -> Result<(Self, Linearization), String> {
+        let (system, at_rest) = Self::assemble(p)?;
+        let at_rest =
+            at_rest.unwrap_or_else(|| system.compiled.linearize(&system.rest, &system.inputs));
+        Ok((system, at_rest))
+    }
+
+    /// The model, and its linearisation at rest if building it computed that.
+    fn assemble(p: &Parameters) -> Result<(Self, Option<Linearization>), String> {
+        let (graph, plate) = bond_graph_and_plate(p)?;
         let mut compiled = graph.compile().map_err(|e| e.to_string())?;
         let position = super::variables::position;
         let input_index = compiled
@@ -144,10 +162,11 @@ impl Assembled {
         });
         // All rows affine with a constant J; with a varying one the rows that are not affine
         // go through their part of the plan (worth it while they are a minority).
+        let mut at_rest = None;
         let affine = match (&constant_jacobian, compiled.constant_entries()) {
-            (Some((_, jac)), _) => Some(Affine::new(jac, &compiled, &rest, &inputs)),
+            (Some((_, jac)), _) => Some(Affine::new(jac, &compiled, &rest, &inputs, &mut at_rest)),
             (None, Some(fixed)) if 2 * compiled.nonaffine_rows().len() < compiled.n_states() => {
-                Some(Affine::new(fixed, &compiled, &rest, &inputs))
+                Some(Affine::new(fixed, &compiled, &rest, &inputs, &mut at_rest))
             }
             _ => None,
         };
@@ -160,7 +179,7 @@ impl Assembled {
         if energy_bound.is_some() && !on_demand.is_empty() {
             on_demand[idx::ENERGY] = OnDemand::Energy;
         }
-        Ok(Assembled {
+        let system = Assembled {
             energy_bound,
             constant_jacobian,
             constant_part,
@@ -174,7 +193,15 @@ impl Assembled {
             state_slot,
             nominal,
             units: graph.state_units(),
-        })
+            plate,
+        };
+        Ok((system, at_rest))
+    }
+
+    /// The plate model the bond graph was built from (eq. 4 and 5; its damping as the graph
+    /// has it).
+    pub fn plate(&self) -> &PlateModel {
+        &self.plate
     }
 
     /// For each compiled state, its place among the declared continuous states, if any.

@@ -9,6 +9,7 @@ use crate::fragments::{
     self, controller, hub, loes, reference, servo_valve, torsion_bar, validity,
 };
 
+use super::assembly::Assembled;
 use super::parameters::{HydraulicsModel, Parameters};
 use super::variables::position;
 
@@ -22,6 +23,14 @@ use super::variables::position;
 /// the torsion bar (Fig. 8); without it the motor runs alone, as in the paper's identification,
 /// and the plate is driven by F1 and F2 only (hub free on its gas bearing, or locked).
 pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
+    Ok(bond_graph_and_plate(p)?.0)
+}
+
+/// The bond graph of the whole model for a parameter set ([`bond_graph`]) and the plate model
+/// it was built from, whose mass and stiffness give the plate's natural frequencies (eq. 14)
+/// without building the plate model a second time (its damping, which they do not read, set
+/// for the graph).
+pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), String> {
     p.controller.validate()?;
     let mut model = PlateModel::new(&p.plate)?;
     // The consistent structure on its hub is damped on its own modes (bar included, motor
@@ -144,7 +153,7 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
     for (k, &a) in plate.acc.iter().enumerate() {
         g.add_output(format!("acc[{}]", k + 1), a);
     }
-    Ok(g)
+    Ok((g, model))
 }
 
 /// The natural frequencies of the plate model of a parameter set (eq. 14; the chosen
@@ -156,9 +165,10 @@ pub fn plate_modes(p: &Parameters) -> Result<Vec<NaturalMode>, String> {
 /// Number of calculated frequency parameters `plate.f[1]` ... `plate.f[20]`.
 pub const PLATE_FREQUENCIES: usize = 20;
 
-/// Writes `plate.f[i]` (0 where the model has fewer modes).
-pub fn write_plate_frequencies(p: &Parameters, values: &mut Values) -> Result<(), String> {
-    let modes = plate_modes(p)?;
+/// Writes `plate.f[i]` (0 where the model has fewer modes) of the plate model the model was
+/// built from ([`Assembled::plate`]).
+pub fn write_plate_frequencies(system: &Assembled, values: &mut Values) -> Result<(), String> {
+    let modes = natural_modes(system.plate())?;
     for i in 0..PLATE_FREQUENCIES {
         let name = format!("plate.f[{}]", i + 1);
         let index = position(&name).ok_or_else(|| format!("{name} is not an FMU variable"))?;

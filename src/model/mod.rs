@@ -161,7 +161,7 @@ impl HydraulicSlewingPlate {
             return Err("the model was not built".into());
         };
         system.set_inputs(values);
-        compose::write_plate_frequencies(parameters, values)?;
+        compose::write_plate_frequencies(system, values)?;
         // The loop margin: NaN when every eigenvalue is a zero (no mode to damp).
         let (zeta, f) = self
             .margin

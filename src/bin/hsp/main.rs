@@ -262,10 +262,7 @@ enum Command {
 /// with the vane motor sliding ([`Parameters::sliding`]: its seal friction's regularised slope
 /// at rest left out).
 fn linearization_at_rest(p: &Parameters) -> Result<Linearization, String> {
-    let system = Assembled::new(&p.sliding())?;
-    Ok(system
-        .compiled()
-        .linearize(&system.initial_state(), system.inputs()))
+    Ok(Assembled::with_linearization_at_rest(&p.sliding())?.1)
 }
 
 /// The FMU's start values with the preset, then `--set`, applied.

@@ -25,8 +25,12 @@
 //! integrals use composite Gauss-Legendre quadrature (16 panels of 20 nodes, exact to rounding
 //! for these entire functions up to the mode counts used here).
 
+use std::collections::HashMap;
 use std::f64::consts::PI;
-use std::sync::OnceLock;
+use std::hash::Hash;
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+
+use nalgebra::DMatrix;
 
 /// Boundary conditions of a beam-function family (left end, right end).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -164,7 +168,10 @@ impl BeamFunction {
 
     /// The first `n` functions of a family.
     pub fn family(kind: BeamKind, n: usize) -> Vec<BeamFunction> {
-        (1..=n).map(|i| BeamFunction::new(kind, i)).collect()
+        static KNOWN: Known<(BeamKind, usize), Vec<BeamFunction>> = OnceLock::new();
+        memo(&KNOWN, (kind, n), || {
+            (1..=n).map(|i| BeamFunction::new(kind, i)).collect()
+        })
     }
 
     /// `d^k phi / d xi^k` at `xi` (any `k`; the functions are entire).
@@ -207,16 +214,71 @@ impl BeamFunction {
     }
 }
 
+/// What was computed so far in this process of a kind `V`, by what it was computed from `K`.
+type Known<K, V> = OnceLock<Mutex<HashMap<K, V>>>;
+
+/// `compute()`, or what it gave before for `key`. A beam function is fixed by its family and
+/// index ([`BeamFunction::new`]), so its roots and integrals are the same bits whatever the
+/// plate: every build of the model (each FMU instantiation, each trial of `hsp identify`) would
+/// compute them anew for the same few functions.
+fn memo<K: Eq + Hash, V: Clone>(known: &Known<K, V>, key: K, compute: impl FnOnce() -> V) -> V {
+    let known = known.get_or_init(Default::default);
+    let cached = known
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .get(&key)
+        .cloned();
+    cached.unwrap_or_else(|| {
+        let value = compute();
+        known
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .insert(key, value.clone());
+        value
+    })
+}
+
+/// One derivative of one beam function, `(family, index, order)`, as an integral's key.
+type Factor = (BeamKind, usize, u32);
+
 /// `int_0^1 phi_i^(ki) phi_j^(kj) dxi` (derivatives with respect to `xi`).
 pub fn product_integral(fi: &BeamFunction, ki: u32, fj: &BeamFunction, kj: u32) -> f64 {
-    integrate(|x| fi.derivative(ki, x) * fj.derivative(kj, x))
+    static KNOWN: Known<[Factor; 2], f64> = OnceLock::new();
+    let key = [(fi.kind, fi.index, ki), (fj.kind, fj.index, kj)];
+    memo(&KNOWN, key, || {
+        integrate(|x| fi.derivative(ki, x) * fj.derivative(kj, x))
+    })
+}
+
+/// The pairs of derivative orders `(i, j)` of [`product_tables`].
+pub const TABLE_ORDERS: [(usize, usize); 4] = [(0, 0), (1, 1), (2, 0), (2, 2)];
+
+/// For the first `n` functions of a family, the tables `T[(r, c)] = int_0^1 phi_r^(i)
+/// phi_c^(j) dxi` for each pair of derivative orders of [`TABLE_ORDERS`], from the functions
+/// tabulated once ([`tabulate`], [`integrate_product`]): what the Ritz matrices are assembled
+/// from.
+pub fn product_tables(kind: BeamKind, n: usize) -> Arc<[DMatrix<f64>; 4]> {
+    static KNOWN: Known<(BeamKind, usize), Arc<[DMatrix<f64>; 4]>> = OnceLock::new();
+    memo(&KNOWN, (kind, n), || {
+        // Each function's derivatives 0, 1, 2 at the quadrature's nodes, evaluated once.
+        let nodes: Vec<[Vec<f64>; 3]> = BeamFunction::family(kind, n)
+            .iter()
+            .map(|f| [0, 1, 2].map(|k| tabulate(|x| f.derivative(k, x))))
+            .collect();
+        Arc::new(TABLE_ORDERS.map(|(i, j)| {
+            DMatrix::from_fn(n, n, |r, c| integrate_product(&nodes[r][i], &nodes[c][j]))
+        }))
+    })
 }
 
 /// A function's values at the nodes of [`integrate`]'s rule, in its order: tables of many
 /// functions make their products' integrals ([`integrate_product`]) cost a dot product each
 /// instead of two function evaluations per node (the Ritz matrices need every pair).
 pub fn tabulate(f: impl Fn(f64) -> f64) -> Vec<f64> {
-    abscissae().map(f).collect()
+    // Sized up front: the panels' chained iterator does not tell its length.
+    let mut table = Vec::with_capacity(PANELS * NODES);
+    table.extend(abscissae().map(f));
+    table
 }
 
 /// `int_0^1 f g dxi` of two functions tabulated by [`tabulate`]: the same sum as [`integrate`]
@@ -227,7 +289,10 @@ pub fn integrate_product(f: &[f64], g: &[f64]) -> f64 {
 
 /// `int_0^1 xi^power phi(xi) dxi`.
 pub fn moment_integral(f: &BeamFunction, power: i32) -> f64 {
-    integrate(|x| x.powi(power) * f.value(x))
+    static KNOWN: Known<(BeamKind, usize, i32), f64> = OnceLock::new();
+    memo(&KNOWN, (f.kind, f.index, power), || {
+        integrate(|x| x.powi(power) * f.value(x))
+    })
 }
 
 const PANELS: usize = 16;
@@ -322,6 +387,41 @@ mod tests {
             );
         }
         assert_eq!(tabulate(|x| x).len(), PANELS * NODES);
+    }
+
+    /// What the memo hands out, asked again, is what the integrals and the functions compute
+    /// afresh, to the bit.
+    #[test]
+    fn remembered_integrals_are_those_computed_afresh() {
+        for (kind, n) in [(BeamKind::ClampedFree, 4), (BeamKind::FreeFree, 5)] {
+            let fresh: Vec<BeamFunction> = (1..=n).map(|i| BeamFunction::new(kind, i)).collect();
+            for _ in 0..2 {
+                let family = BeamFunction::family(kind, n);
+                let tables = product_tables(kind, n);
+                for (r, f) in family.iter().enumerate() {
+                    let g = &fresh[r];
+                    assert_eq!(
+                        (f.beta.to_bits(), f.value(0.3).to_bits()),
+                        (g.beta.to_bits(), g.value(0.3).to_bits())
+                    );
+                    for power in [0, 1] {
+                        let direct = integrate(|x| x.powi(power) * g.value(x));
+                        assert_eq!(moment_integral(f, power).to_bits(), direct.to_bits());
+                    }
+                    let direct = integrate(|x| g.derivative(2, x) * g.derivative(0, x));
+                    assert_eq!(product_integral(f, 2, f, 0).to_bits(), direct.to_bits());
+                    for (c, h) in fresh.iter().enumerate() {
+                        for (k, &(i, j)) in TABLE_ORDERS.iter().enumerate() {
+                            let direct = integrate_product(
+                                &tabulate(|x| g.derivative(i as u32, x)),
+                                &tabulate(|x| h.derivative(j as u32, x)),
+                            );
+                            assert_eq!(tables[k][(r, c)].to_bits(), direct.to_bits());
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

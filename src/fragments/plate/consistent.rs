@@ -26,7 +26,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::beam_functions::{integrate_product, moment_integral, tabulate, BeamFunction, BeamKind};
+use super::beam_functions::{
+    moment_integral, product_tables, BeamFunction, BeamKind, TABLE_ORDERS,
+};
 use super::{added_mass, PlateModel, PlateParameters, Root};
 
 /// Number of arms described by the coordinates (antisymmetric motion of the symmetric plate).
@@ -35,33 +37,19 @@ pub const ARMS: f64 = 2.0;
 /// The Ritz matrices of the plate alone (both arms) in the assumed-mode coordinates
 /// `j = N (m - 1) + n`: `(M, K)`, `M = 2 m a b I`.
 pub fn ritz_matrices(p: &PlateParameters) -> (DMatrix<f64>, DMatrix<f64>) {
-    let phis = BeamFunction::family(BeamKind::ClampedFree, p.n);
-    let psis = BeamFunction::family(BeamKind::FreeFree, p.m);
     let (a, b, d, nu) = (p.a, p.b, p.rigidity(), p.nu);
-    // Each function's derivatives 0, 1, 2 at the quadrature's nodes, evaluated once.
-    let nodes = |f: &[BeamFunction]| -> Vec<[Vec<f64>; 3]> {
-        f.iter()
-            .map(|f| [0, 1, 2].map(|k| tabulate(|x| f.derivative(k, x))))
-            .collect()
-    };
-    let (phi_nodes, psi_nodes) = (nodes(&phis), nodes(&psis));
-    let table = |f: &[[Vec<f64>; 3]], len: f64, i: usize, j: usize| {
-        DMatrix::from_fn(f.len(), f.len(), |r, c| {
-            integrate_product(&f[r][i], &f[c][j]) * len.powi(1 - i as i32 - j as i32)
+    // The dimensionless tables of the families, scaled by the lengths of their directions.
+    let scaled = |kind: BeamKind, count: usize, len: f64| {
+        let tables = product_tables(kind, count);
+        std::array::from_fn(|k| {
+            let (i, j) = TABLE_ORDERS[k];
+            DMatrix::from_fn(count, count, |r, c| {
+                tables[k][(r, c)] * len.powi(1 - i as i32 - j as i32)
+            })
         })
     };
-    let (x00, x11, x20, x22) = (
-        table(&phi_nodes, a, 0, 0),
-        table(&phi_nodes, a, 1, 1),
-        table(&phi_nodes, a, 2, 0),
-        table(&phi_nodes, a, 2, 2),
-    );
-    let (y00, y11, y20, y22) = (
-        table(&psi_nodes, b, 0, 0),
-        table(&psi_nodes, b, 1, 1),
-        table(&psi_nodes, b, 2, 0),
-        table(&psi_nodes, b, 2, 2),
-    );
+    let [x00, x11, x20, x22] = scaled(BeamKind::ClampedFree, p.n, a);
+    let [y00, y11, y20, y22] = scaled(BeamKind::FreeFree, p.m, b);
     let nm = p.n * p.m;
     let idx = |j: usize| (j % p.n, j / p.n);
     let mut k = DMatrix::zeros(nm, nm);

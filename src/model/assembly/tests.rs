@@ -394,3 +394,54 @@ fn the_laws_stay_within_their_declared_value_bounds() {
     let (a, _) = assembled(&[]);
     assert!(a.affine.as_ref().unwrap().point_radius > 0.0);
 }
+
+/// The plate's natural frequencies from the plate model the graph was built from (its damping
+/// set) are those of a plate model built on its own, to the bit: the FMU writes `plate.f[i]`
+/// from the former.
+#[test]
+fn plate_modes_of_the_built_model_are_the_plates_own() {
+    let configurations: [&[(&str, &str)]; 3] = [
+        &[],
+        &[("plate.formulation", "1")],
+        &[("hydraulics.model", "1"), ("plate.root", "2")],
+    ];
+    for sets in configurations {
+        let (a, values) = assembled(sets);
+        let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+        let own = crate::model::compose::plate_modes(&p).unwrap();
+        let built = crate::fragments::plate::modes::natural_modes(a.plate()).unwrap();
+        let bits = |m: &[crate::fragments::plate::modes::NaturalMode]| {
+            m.iter()
+                .map(|m| (m.f_hz.to_bits(), m.label))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&own), bits(&built), "{sets:?}");
+    }
+}
+
+/// The linearisation at rest handed out with the model (the one its affine outputs were built
+/// from) is the model's own linearisation at rest, computed afresh, to the bit.
+#[test]
+fn the_linearization_kept_at_rest_is_the_models_own() {
+    let configurations: [&[(&str, &str)]; 2] = [&[], &[("hydraulics.model", "1")]];
+    for sets in configurations {
+        let (_, values) = assembled(sets);
+        let p = Parameters::from_values(&values, &Experiment::default())
+            .unwrap()
+            .sliding();
+        let (system, kept) = Assembled::with_linearization_at_rest(&p).unwrap();
+        let fresh = Assembled::new(&p).unwrap();
+        let afresh = fresh
+            .compiled()
+            .linearize(&fresh.initial_state(), fresh.inputs());
+        let bits = |l: &crate::bond_graph::Linearization| {
+            [&l.a, &l.b, &l.c, &l.d]
+                .iter()
+                .flat_map(|m| m.iter().map(|v| v.to_bits()))
+                .chain(l.x0.iter().chain(&l.u0).map(|v| v.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&kept), bits(&afresh), "{sets:?}");
+        assert_eq!(system.dim(), fresh.dim());
+    }
+}
