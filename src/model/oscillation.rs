@@ -90,6 +90,35 @@ impl OscillationWatch {
         self.warned
     }
 
+    /// Keeps the sample `(t, e)` unless the last one kept is less than [`MIN_SPACING`] before.
+    fn record(&mut self, t: f64, e: f64) {
+        if self
+            .samples
+            .last()
+            .is_none_or(|&(last, _)| t - last >= MIN_SPACING * (1.0 - 1e-9))
+        {
+            self.samples.push((t, e));
+        }
+    }
+
+    /// The index of the first sample of the two windows before `t` (and of the sample just
+    /// before them, which weights the first), after the older samples were dropped if they are
+    /// as many as the kept ones. They are not dropped at every point: moving the kept ones to
+    /// the front at every point cost a copy of up to 800 samples a point, about a third of the
+    /// monitor's cost.
+    fn keep_two_windows(&mut self, t: f64) -> usize {
+        let start = t - 2.0 * WINDOW;
+        let first = self
+            .samples
+            .partition_point(|&(s, _)| s < start)
+            .saturating_sub(1);
+        if first > 0 && 2 * first >= self.samples.len() {
+            self.samples.drain(..first);
+            return 0;
+        }
+        first
+    }
+
     /// Takes the sample at the communication point `t` (the loop's reference and error \[V\]);
     /// returns the oscillation the first time one is found. `threshold` is the amplitude of
     /// error \[V\] below which nothing is reported.
@@ -109,29 +138,19 @@ impl OscillationWatch {
             self.samples.clear();
             self.next_check = t + 2.0 * WINDOW;
         }
-        if self
-            .samples
-            .last()
-            .is_none_or(|&(last, _)| t - last >= MIN_SPACING * (1.0 - 1e-9))
-        {
-            self.samples.push((t, error));
-        }
-        // Keep two windows (and the sample just before them, which weights the first). The
-        // older samples are dropped once they are as many as the kept ones, not at every point:
-        // moving the kept ones to the front at every point cost a copy of up to 800 samples a
-        // point, about a third of the monitor's cost.
-        let start = t - 2.0 * WINDOW;
-        let first_kept = self.samples.partition_point(|&(s, _)| s < start);
-        let dead = first_kept.saturating_sub(1);
-        if dead > 0 && 2 * dead >= self.samples.len() {
-            self.samples.drain(..dead);
-        }
+        self.record(t, error);
+        let first = self.keep_two_windows(t);
         if t < self.next_check {
             return None;
         }
         self.next_check = t + WINDOW;
-        let kept = &self.samples[first_kept.saturating_sub(1)..];
-        let found = compare(kept, t, threshold, &mut self.scratch, &mut self.sums)?;
+        let found = compare(
+            &self.samples[first..],
+            t,
+            threshold,
+            &mut self.scratch,
+            &mut self.sums,
+        )?;
         self.warned = true;
         Some(Oscillation {
             held_since: self.held_since,
@@ -380,6 +399,29 @@ mod tests {
                 (rotated - direct).abs() <= 1e-11 * largest,
                 "bin {k}: {rotated} against {direct}"
             );
+        }
+    }
+
+    /// At every point the samples compared start at the one just before the two windows,
+    /// whether or not the older ones are dropped at that point (at 5 ms and at 1 ms
+    /// communication steps, the latter thinned to [`MIN_SPACING`] as `observe` thins them).
+    #[test]
+    fn the_samples_compared_are_the_two_windows_at_every_point() {
+        for h in [0.005, 0.001] {
+            let mut w = OscillationWatch::default();
+            let mut drops = 0;
+            for k in 1..=(30.0 / h) as usize {
+                let t = k as f64 * h;
+                w.record(t, 0.0);
+                let before = w.samples.len();
+                let first = w.keep_two_windows(t);
+                drops += usize::from(w.samples.len() < before);
+                let kept = &w.samples[first..];
+                let start = t - 2.0 * WINDOW;
+                assert!(kept.len() < 2 || kept[1].0 >= start, "h = {h}, t = {t}");
+                assert!(first == 0 || kept[0].0 < start, "h = {h}, t = {t}");
+            }
+            assert!(drops > 0, "h = {h}: no drop exercised");
         }
     }
 
