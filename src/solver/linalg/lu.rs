@@ -43,6 +43,13 @@ pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], f
             return unsafe { lu_in_place_avx2(a, k, piv, floor) };
         }
     }
+    lu_in_place_large(a, k, piv, floor)
+}
+
+/// [`lu_in_place`] for a block of more than four states: in panels from [`PANELS_FROM`]
+/// states, the loops below.
+#[inline(always)]
+fn lu_in_place_large<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
     if k >= PANELS_FROM {
         lu_in_place_panels(a, k, piv, floor)
     } else {
@@ -82,8 +89,7 @@ pub(super) fn lu_in_place_panels<T: Scalar>(
     floor: f64,
 ) -> bool {
     let a = &mut a[..k * k];
-    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
-    let tiny = floor * amax;
+    let tiny = pivot_floor(a, floor);
     let mut j0 = 0;
     while j0 < k {
         let j1 = (j0 + PANEL).min(k);
@@ -100,15 +106,9 @@ pub(super) fn lu_in_place_panels<T: Scalar>(
                     }
                 }
             }
-            if !pivot(a, k, j, tiny, piv) {
+            if !pivot_and_scale(a, k, j, tiny, piv) {
                 return false;
             }
-            let column = &mut a[j * k..j * k + k];
-            let d = column[j];
-            for v in &mut column[j + 1..] {
-                *v = *v / d;
-            }
-            column[j] = T::ONE / d;
         }
         // The columns after the panel: its eliminations s = j0, ..., j1 - 1 in turn.
         let (left, right) = a.split_at_mut(j1 * k);
@@ -174,11 +174,7 @@ unsafe fn lu_in_place_avx2<T: Scalar>(
     piv: &mut [usize],
     floor: f64,
 ) -> bool {
-    if k >= PANELS_FROM {
-        lu_in_place_panels(a, k, piv, floor)
-    } else {
-        lu_in_place_loops(a, k, piv, floor)
-    }
+    lu_in_place_large(a, k, piv, floor)
 }
 
 /// Whether the tests asked for the portable loops only (always false outside the tests).
@@ -200,22 +196,14 @@ pub(super) fn lu_in_place_loops<T: Scalar>(
     floor: f64,
 ) -> bool {
     let a = &mut a[..k * k];
-    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.norm1()));
-    let tiny = floor * amax;
+    let tiny = pivot_floor(a, floor);
     for j in 0..k {
-        if !pivot(a, k, j, tiny, piv) {
+        if !pivot_and_scale(a, k, j, tiny, piv) {
             return false;
         }
-        // Column j after the pivot, and the columns after j (the elimination below reads only
-        // rows and columns after j: the pivot is free to go).
+        // The columns after j, with column j's multipliers.
         let (left, right) = a.split_at_mut((j + 1) * k);
-        let column = &mut left[j * k..];
-        let d = column[j];
-        for v in &mut column[j + 1..] {
-            *v = *v / d;
-        }
-        column[j] = T::ONE / d;
-        let l = &column[j + 1..];
+        let l = &left[j * k + j + 1..];
         for col in right.chunks_exact_mut(k) {
             let f = col[j];
             if f != T::ZERO {
@@ -290,6 +278,35 @@ pub(super) fn solve_2x2<T: Scalar>(
         x0 = x0 - u01 * x1;
     }
     (x0 * inv_u00, x1)
+}
+
+/// The size at or below which a pivot is refused: `floor` times the largest entry of `a`.
+#[inline(always)]
+fn pivot_floor<T: Scalar>(a: &[T], floor: f64) -> f64 {
+    floor * a.iter().fold(0.0f64, |m, v| m.max(v.norm1()))
+}
+
+/// Step j's pivot ([`pivot`]) and column j made into multipliers: its entries below the
+/// diagonal divided by the pivot, the pivot's reciprocal on the diagonal. False if the pivot is
+/// refused.
+#[inline(always)]
+fn pivot_and_scale<T: Scalar>(
+    a: &mut [T],
+    k: usize,
+    j: usize,
+    tiny: f64,
+    piv: &mut [usize],
+) -> bool {
+    if !pivot(a, k, j, tiny, piv) {
+        return false;
+    }
+    let column = &mut a[j * k..j * k + k];
+    let d = column[j];
+    for v in &mut column[j + 1..] {
+        *v = *v / d;
+    }
+    column[j] = T::ONE / d;
+    true
 }
 
 /// Step j's partial pivoting in the column-major k × k `a`: the row of column j's largest entry
