@@ -46,6 +46,12 @@ pub struct RunArgs {
     /// Size of the step of the external coil drive e_in, V (used with controller.external=true)
     #[arg(long, default_value_t = 0.0)]
     e_in: f64,
+    /// Close a digital loop around the FMU, as an importer's controller does: before every
+    /// communication step set e_in = K (controller.reference - y_pot), V, held over the step
+    /// (needs controller.external=true; the FMU's own analog loop has the gain
+    /// controller.A1 * controller.A2 = 20, with its pressure feedback besides)
+    #[arg(long, value_name = "K", conflicts_with = "e_in")]
+    loop_gain: Option<f64>,
     /// Stop time, s (default: 6 s with --profile move, which lets the hub settle after the move;
     /// 150 s with --profile step, whose ring-down of the plate on the hub lasts minutes)
     #[arg(long)]
@@ -228,6 +234,17 @@ fn prepare(args: &RunArgs, extra: &[String]) -> Result<(Vec<String>, Parameters)
     let settings = settings(args, extra)?;
     let values = super::values_with(None, &settings)?;
     let parameters = Parameters::from_values(&values, &Experiment::default())?;
+    if let Some(k) = args.loop_gain {
+        if !parameters.controller.external {
+            return Err(format!(
+                "--loop-gain {k} closes the loop through e_in, which the FMU reads only with \
+                 controller.external=true (add --set controller.external=true)"
+            ));
+        }
+        if !k.is_finite() {
+            return Err(format!("--loop-gain must be a finite number, got {k}"));
+        }
+    }
     Ok((settings, parameters))
 }
 
@@ -293,6 +310,7 @@ fn simulate(
     results.push(0.0, inst.get_reals(&vrs)?);
     let wall = Instant::now();
     let mut progress = super::progress::Progress::new("hsp run");
+    let mut fed_back = [0.0; 2];
     for i in 0..n {
         // Communication points computed from the index, not summed, so the grid does not drift.
         let t = i as f64 * args.step;
@@ -301,6 +319,10 @@ fn simulate(
         } else {
             (i + 1) as f64 * args.step
         };
+        if let Some(k) = args.loop_gain {
+            inst.get_reals_into(&[vr::CONTROLLER_REFERENCE, vr::Y_POT], &mut fed_back)?;
+            inst.set_real(vr::E_IN, k * (fed_back[0] - fed_back[1]))?;
+        }
         inst.do_step(t, t_next - t)?;
         results.push(t_next, inst.get_reals(&vrs)?);
         progress.update(t_next / stop);
@@ -357,10 +379,16 @@ pub fn summary(args: &RunArgs, res: &Results, info: &RunInfo, csv: &str) -> Stri
     // manoeuvre").
     let mut command = None;
     if p.controller.external {
+        let drive = match args.loop_gain {
+            Some(k) => format!(
+                "digital loop e_in = {k} (controller.reference - y_pot), held over each step"
+            ),
+            None => format!("step of e_in = {} V", args.e_in),
+        };
         writeln!(
             s,
-            "  drive   external: step of e_in = {} V, {stop} s in steps of {} s",
-            args.e_in, args.step
+            "  drive   external: {drive}, {stop} s in steps of {} s",
+            args.step
         )
         .unwrap();
         writeln!(
