@@ -676,3 +676,70 @@ fn derivatives_after_terminate_follow_the_last_states() {
     running(&rest);
     assert_ne!(after, derivatives(&rest).1);
 }
+
+/// An evaluation of Model Exchange gives the derivatives the Co-Simulation's integrator advances
+/// (the library's right-hand side, to the bit) and leaves the outputs until they are read: every
+/// Real output and the stored energy read after fmi2SetContinuousStates are, to the bit, what the
+/// library writes for that state all at once; and they follow the states from one evaluation to
+/// the next, including after fmi2GetDirectionalDerivative, which needs every value.
+#[test]
+fn evaluations_give_the_integrators_derivatives_and_the_outputs_when_read() {
+    let system = default_system();
+    let f = Fmu::model_exchange();
+    running(&f);
+    let (_, x0) = states(&f);
+    let outputs: Vec<u32> = real_vrs(Causality::Output)
+        .into_iter()
+        .chain([Fmu::vr("energy")])
+        .collect();
+    let declared = |x: &[f64]| {
+        // The compiled state from the declared one, as the FMU gathers it.
+        let mut values = Values::from_start(&VARIABLES);
+        for (&(state, _), &v) in CONTINUOUS_STATES.iter().zip(x) {
+            values.set_real(state, v);
+        }
+        let mut compiled = Vec::new();
+        system.state_from_values(&values, &mut compiled);
+        (values, compiled)
+    };
+    let mut x = x0.clone();
+    for k in 0..4 {
+        // Away from rest, further each time: the valve's states, the hub, the plate.
+        for (i, v) in x.iter_mut().enumerate() {
+            *v = x0[i] + (k as f64 + 1.0) * 1e-3 * (1.0 + 0.1 * i as f64) * nominals(&f)[i];
+        }
+        assert_eq!(set_states(&f, &x), Fmi2Status::Ok);
+        let (values, compiled) = declared(&x);
+        let mut rhs = vec![0.0; compiled.len()];
+        system.rhs(0.0, &compiled, &mut rhs);
+        let (s, dx) = derivatives(&f);
+        assert_eq!(s, Fmi2Status::Ok);
+        for (i, slot) in system.state_slots().iter().enumerate() {
+            if let Some(slot) = *slot {
+                assert_eq!(dx[slot].to_bits(), rhs[i].to_bits(), "row {i}, point {k}");
+            }
+        }
+        let mut eager = values;
+        system.write_outputs(&compiled, &mut eager);
+        if k == 2 {
+            // Every value at once (the directional derivatives read them all).
+            let (s, _) = directional(&f, &[Fmu::vr("y_pot")], &[Fmu::vr("r")], &[1.0]);
+            assert_eq!(s, Fmi2Status::Ok);
+        }
+        let read = get_reals(&f, &outputs);
+        for (&vr, v) in outputs.iter().zip(&read) {
+            let i = VARIABLES
+                .iter()
+                .position(|w| w.value_reference == vr)
+                .unwrap();
+            assert_eq!(
+                v.to_bits(),
+                eager.real(i).to_bits(),
+                "{} at point {k}",
+                VARIABLES[i].name
+            );
+        }
+        // The derivatives again, after the outputs: unchanged.
+        assert_eq!(derivatives(&f).1, dx);
+    }
+}

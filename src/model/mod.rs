@@ -62,6 +62,8 @@ pub struct HydraulicSlewingPlate {
     /// Model Exchange: the compiled state vector gathered from the declared continuous states
     /// (allocated once, reused every evaluation).
     state: Vec<f64>,
+    /// Model Exchange: the derivatives of `state` (allocated once, reused every evaluation).
+    rates: Vec<f64>,
     /// Values were left to be computed when read since the last step (see
     /// [`Assembled::write_at_point`]); `fresh[i] == step` once variable `i` has been.
     on_demand: OnDemandValues,
@@ -84,6 +86,9 @@ struct OnDemandValues {
     /// Every output is to be computed afresh at the next read (a restored FMU state: its stored
     /// values are not trusted).
     all: bool,
+    /// The values left are those of the Model Exchange state `state` the last evaluation
+    /// gathered, not of the integrator's point.
+    model_exchange: bool,
     step: u64,
     fresh: Vec<u64>,
     /// The nonlinear results computed so far at the point of `step`, shared by the values that
@@ -96,6 +101,17 @@ struct OnDemandValues {
 pub struct ModelState {
     integrator: Option<Integrator>,
     inputs: Vec<f64>,
+}
+
+impl OnDemandValues {
+    /// A new point's values are left to be computed when read: those of the integrator's
+    /// point, or (`model_exchange`) of the state a Model Exchange evaluation gathered.
+    fn leave(&mut self, model_exchange: bool) {
+        self.pending = true;
+        self.model_exchange = model_exchange;
+        self.step += 1;
+        self.fresh.resize(variables::VARIABLES.len(), 0);
+    }
 }
 
 impl HydraulicSlewingPlate {
@@ -227,8 +243,18 @@ impl HydraulicSlewingPlate {
     }
 
     fn write_outputs(&mut self, values: &mut Values) {
+        let model_exchange = self.on_demand.pending && self.on_demand.model_exchange;
         self.on_demand.pending = false;
         self.on_demand.all = false;
+        if model_exchange {
+            // The rest of the last Model Exchange evaluation's values, as `evaluate` writes them
+            // when it cannot leave any.
+            if let Some(system) = &self.system {
+                system.write_outputs(&self.state, values);
+                system.write_derivatives(&self.state, &mut self.rates, values);
+            }
+            return;
+        }
         let (Some(system), Some(integrator)) = (&self.system, &self.integrator) else {
             return;
         };
@@ -245,10 +271,7 @@ impl HydraulicSlewingPlate {
         };
         if system.write_at_point(integrator.x(), values) {
             Self::write_stats(integrator, values);
-            let d = &mut self.on_demand;
-            d.pending = true;
-            d.step += 1;
-            d.fresh.resize(variables::VARIABLES.len(), 0);
+            self.on_demand.leave(false);
         } else {
             self.write_outputs(values);
         }
@@ -454,12 +477,19 @@ impl FmuModel for HydraulicSlewingPlate {
             self.write_outputs(values);
             return;
         };
-        let (Some(system), Some(integrator)) = (&self.system, &self.integrator) else {
+        let Some(system) = &self.system else {
+            return;
+        };
+        let x = if self.on_demand.model_exchange {
+            &self.state[..]
+        } else if let Some(integrator) = &self.integrator {
+            integrator.x()
+        } else {
             return;
         };
         let d = &mut self.on_demand;
         if d.fresh[index] != d.step && system.on_demand(index) {
-            system.write_on_demand(integrator.x(), index, values, (&mut d.point, d.step));
+            system.write_on_demand(x, index, values, (&mut d.point, d.step));
             d.fresh[index] = d.step;
         }
     }
@@ -496,7 +526,26 @@ impl FmuModel for HydraulicSlewingPlate {
         };
         system.set_inputs(values);
         system.state_from_values(values, &mut self.state);
-        system.write_outputs(&self.state, values);
+        let system = &*system;
+        // An importer's solver reads the derivatives at every evaluation and the outputs at its
+        // communication points: the outputs and the energy are left until read, under the rule
+        // of `write_at_point` (only when shown finite), and the derivatives are the right-hand
+        // side the Co-Simulation's integrator advances, written now. The states are the
+        // importer's own.
+        if system.write_at_point(&self.state, values) {
+            let d = &mut self.on_demand;
+            d.leave(true);
+            for &slot in system.state_slots().iter().flatten() {
+                let (state, derivative) = variables::CONTINUOUS_STATES[slot];
+                d.fresh[derivative] = d.step;
+                d.fresh[state] = d.step;
+            }
+        } else {
+            self.on_demand.pending = false;
+            self.on_demand.all = false;
+            system.write_outputs(&self.state, values);
+        }
+        system.write_derivatives(&self.state, &mut self.rates, values);
         Ok(())
     }
 

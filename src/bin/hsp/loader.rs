@@ -1,12 +1,15 @@
-//! A minimal FMI 2.0 co-simulation importer for `hsp run`: unpacks the `.fmu`, `dlopen`s its
-//! shared object and calls it through the C ABI, exactly as an importing tool would.
+//! A minimal FMI 2.0 importer for `hsp run` and the benchmarks: unpacks the `.fmu`, `dlopen`s its
+//! shared object and calls it through the C ABI, exactly as an importing tool would (co-simulation;
+//! a Model Exchange instance for a caller that looks up the functions it needs with
+//! [`Fmu::symbol`]).
 
 use std::ffi::{c_void, CStr, CString};
 use std::os::raw::{c_char, c_int, c_uint};
 use std::path::{Path, PathBuf};
 
 use hydraulic_slewing_plate::fmi2::ffi::{
-    Fmi2CallbackFunctions, Fmi2Component, Fmi2Status, FMI2_CO_SIMULATION, FMI2_FALSE, FMI2_TRUE,
+    Fmi2CallbackFunctions, Fmi2Component, Fmi2Status, Fmi2Type, FMI2_CO_SIMULATION, FMI2_FALSE,
+    FMI2_MODEL_EXCHANGE, FMI2_TRUE,
 };
 use hydraulic_slewing_plate::fmu::Kind;
 use hydraulic_slewing_plate::model::variables::{vr, GUID, MODEL_IDENTIFIER, VARIABLES};
@@ -118,7 +121,10 @@ fn check(status: Fmi2Status, what: &str) -> Result<(), String> {
 impl Fmu {
     /// Unpacks `fmu` into a fresh temporary folder and loads its shared object.
     pub fn load(fmu: &Path) -> Result<Fmu, String> {
-        let dir = std::env::temp_dir().join(format!("hsp-run-{}", std::process::id()));
+        // One folder per load, so that a process can load two FMUs side by side.
+        static LOADED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = LOADED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("hsp-run-{}-{n}", std::process::id()));
         let file = std::fs::File::open(fmu).map_err(|e| format!("{}: {e}", fmu.display()))?;
         let mut archive =
             zip::ZipArchive::new(file).map_err(|e| format!("{}: {e}", fmu.display()))?;
@@ -169,6 +175,16 @@ impl Fmu {
 
     /// Instantiates a co-simulation slave.
     pub fn instantiate(&self, name: &str) -> Result<Instance<'_>, String> {
+        self.instantiate_as(name, FMI2_CO_SIMULATION)
+    }
+
+    /// Instantiates a Model Exchange model.
+    #[allow(dead_code)] // bench-model-exchange's; `hsp` needs none
+    pub fn instantiate_model_exchange(&self, name: &str) -> Result<Instance<'_>, String> {
+        self.instantiate_as(name, FMI2_MODEL_EXCHANGE)
+    }
+
+    fn instantiate_as(&self, name: &str, interface: Fmi2Type) -> Result<Instance<'_>, String> {
         let callbacks = Fmi2CallbackFunctions::with_plain_logger(logger, std::ptr::null_mut());
         let name = CString::new(name).map_err(|e| e.to_string())?;
         let guid = CString::new(GUID).map_err(|e| e.to_string())?;
@@ -178,7 +194,7 @@ impl Fmu {
         let c = unsafe {
             (self.instantiate)(
                 name.as_ptr(),
-                FMI2_CO_SIMULATION,
+                interface,
                 guid.as_ptr(),
                 resources.as_ptr(),
                 &callbacks,
@@ -208,6 +224,13 @@ pub struct Instance<'a> {
 }
 
 impl Instance<'_> {
+    /// The instance's `fmi2Component`, for the functions a caller looks up with
+    /// [`Fmu::symbol`].
+    #[allow(dead_code)] // bench-model-exchange's; `hsp` needs none
+    pub fn component(&self) -> Fmi2Component {
+        self.c
+    }
+
     pub fn setup(&self, tolerance: Option<f64>, start: f64, stop: f64) -> Result<(), String> {
         let tol_def = if tolerance.is_some() {
             FMI2_TRUE

@@ -58,6 +58,21 @@ impl Assembled {
         values.set_real(idx::ENERGY, self.compiled.stored_energy(x));
     }
 
+    /// Writes the derivatives of the declared states at state `x` into the FMU's values: the
+    /// right-hand side the integrator advances ([`OdeSystem::rhs`]), computed into `rates`
+    /// (resized to the state dimension, kept by the caller so that nothing is allocated once
+    /// warm). Model Exchange's derivatives, so that an importer's solver integrates the same
+    /// function as the Co-Simulation's.
+    pub fn write_derivatives(&self, x: &[f64], rates: &mut Vec<f64>, values: &mut Values) {
+        rates.resize(x.len(), 0.0);
+        self.rhs(0.0, x, rates);
+        for (slot, &r) in self.state_slot.iter().zip(rates.iter()) {
+            if let Some(k) = *slot {
+                values.set_real(CONTINUOUS_STATES[k].1, r);
+            }
+        }
+    }
+
     /// Runs `pass`, a pass of the plan that reports compiled outputs `(k, y_k)` and rows of f
     /// `(i, dx_i/dt)`, writing each into its place among the FMU's values (an output that is no
     /// FMU variable, or the row of a state the XML does not declare, is dropped).
@@ -112,7 +127,10 @@ impl Assembled {
             return false;
         }
         // Not `<=` on its own: a NaN input fails.
-        let point_waits = x_max.max(max_abs(&self.inputs, |_| true)) <= affine.point_radius;
+        // With no radius (a law without a bound) nothing that is not affine waits, not even at
+        // a state and inputs of exactly zero: those values are not left to be read.
+        let point_waits = affine.point_radius > 0.0
+            && x_max.max(max_abs(&self.inputs, |_| true)) <= affine.point_radius;
         if affine.partial && !point_waits {
             self.write_plan_values(values, |output, derivative| {
                 affine
