@@ -378,6 +378,7 @@ impl FmuModel for HydraulicSlewingPlate {
     ) -> Result<(), String> {
         self.integrator = None;
         self.on_demand.pending = false;
+        self.on_demand.model_exchange = false;
         self.validity.reset();
         self.oscillation.reset();
         self.try_initialize(values, experiment, log)
@@ -641,6 +642,7 @@ impl FmuModel for HydraulicSlewingPlate {
         // 1e308 handed out with OK).
         self.on_demand.pending = true;
         self.on_demand.all = true;
+        self.on_demand.model_exchange = false;
         Ok(())
     }
 }
