@@ -15,26 +15,10 @@
 #[path = "common/packaged.rs"]
 mod packaged;
 
-use std::process::Command;
-
 #[test]
 fn the_default_experiment_is_byte_identical_to_the_reference() {
     let fmu = packaged::fresh_fmu(packaged::Version::Fmi2);
-    let csv = std::env::temp_dir().join(format!("default-experiment-{}.csv", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
-        .args(["run", "--no-build", "--no-plot", "--fmu"])
-        .arg(&fmu)
-        .arg("--csv")
-        .arg(&csv)
-        .output()
-        .expect("cannot run hsp");
-    assert!(
-        out.status.success(),
-        "hsp run failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let got = std::fs::read(&csv).unwrap();
-    let _ = std::fs::remove_file(&csv);
+    let got = packaged::run_csv(&fmu, &[]);
     let reference = std::fs::read(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/reference/default_experiment.csv"),

@@ -18,15 +18,8 @@ use std::process::Command;
 /// Runs `hsp run --no-build` on the packaged FMU, a step of r = 0.25 V for 0.5 s at the
 /// communication step `step`, with `extra` arguments; the motor angle at every point.
 fn motor_angle(fmu: &Path, step: &str, extra: &[&str]) -> Vec<f64> {
-    let csv = std::env::temp_dir().join(format!(
-        "digital-loop-{}-{step}-{}.csv",
-        std::process::id(),
-        extra.len()
-    ));
-    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
-        .args(["run", "--no-build", "--no-plot", "--fmu"])
-        .arg(fmu)
-        .args([
+    let run = [
+        &[
             "--profile",
             "step",
             "--r",
@@ -35,19 +28,11 @@ fn motor_angle(fmu: &Path, step: &str, extra: &[&str]) -> Vec<f64> {
             "0.5",
             "--step",
             step,
-        ])
-        .args(extra)
-        .arg("--csv")
-        .arg(&csv)
-        .output()
-        .expect("cannot run hsp");
-    assert!(
-        out.status.success(),
-        "hsp run {extra:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let _ = std::fs::remove_file(&csv);
+        ],
+        extra,
+    ]
+    .concat();
+    let text = String::from_utf8(packaged::run_csv(fmu, &run)).unwrap();
     let mut lines = text.lines();
     let column = lines
         .next()

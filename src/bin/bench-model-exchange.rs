@@ -27,13 +27,16 @@
 mod loader;
 #[path = "bench-common/machine.rs"]
 mod machine;
+#[path = "bench-common/measure.rs"]
+mod measure;
 
 use std::fmt::Write as _;
 use std::os::raw::c_int;
 
 use hydraulic_slewing_plate::fmi2::ffi::{Fmi2Component, Fmi2EventInfo, Fmi2Status};
 use hydraulic_slewing_plate::model::variables::{vr, CONTINUOUS_STATES, VARIABLES};
-use loader::Fmu;
+use loader::{check, Fmu};
+use measure::{median_range, now};
 
 /// Communication points of the recorded trajectory: the default experiment's 6 s at 5 ms.
 const POINTS: usize = 1200;
@@ -47,14 +50,6 @@ type SetStates = unsafe extern "C" fn(Fmi2Component, *const f64, usize) -> Fmi2S
 type GetDerivatives = unsafe extern "C" fn(Fmi2Component, *mut f64, usize) -> Fmi2Status;
 type Simple = unsafe extern "C" fn(Fmi2Component) -> Fmi2Status;
 type NewDiscreteStates = unsafe extern "C" fn(Fmi2Component, *mut Fmi2EventInfo) -> Fmi2Status;
-
-fn check(status: Fmi2Status, what: &str) -> Result<(), String> {
-    if status <= Fmi2Status::Warning {
-        Ok(())
-    } else {
-        Err(format!("{what} returned {status:?}"))
-    }
-}
 
 /// The value references of the declared continuous states.
 fn state_vrs() -> Vec<u32> {
@@ -108,7 +103,7 @@ fn round(fmu: &Fmu, points: &[Vec<f64>]) -> Result<f64, String> {
     let mut dx = vec![0.0; n];
     let mut y = [0.0; 2];
     let mut failed: c_int = 0;
-    let start = now();
+    let start = now(libc::CLOCK_THREAD_CPUTIME_ID);
     for (k, x) in points.iter().enumerate() {
         // SAFETY: as above; `x` and `dx` hold n values.
         unsafe {
@@ -120,33 +115,11 @@ fn round(fmu: &Fmu, points: &[Vec<f64>]) -> Result<f64, String> {
         }
         inst.get_reals_into(&[vr::Y_POT, vr::W_TIP], &mut y)?;
     }
-    let elapsed = now() - start;
+    let elapsed = now(libc::CLOCK_THREAD_CPUTIME_ID) - start;
     if failed != 0 {
         return Err("a Model Exchange call failed".into());
     }
     Ok(elapsed as f64 / 1e3 / (points.len() * STAGES) as f64)
-}
-
-/// The calling thread's CPU time, ns.
-fn now() -> u64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes the timespec it is given.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
-}
-
-fn median_and_range(v: &mut [f64]) -> (f64, f64, f64) {
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    let median = if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    };
-    (median, v[0], v[v.len() - 1])
 }
 
 fn main() {
@@ -208,9 +181,9 @@ fn run() -> Result<(), String> {
         "| FMU | µs per evaluation | against the first |\n| --- | ---: | ---: |"
     )
     .unwrap();
-    let first = median_and_range(&mut times[0].clone()).0;
-    for (path, t) in paths.iter().zip(&mut times) {
-        let (m, lo, hi) = median_and_range(t);
+    let first = median_range(&times[0]).0;
+    for (path, t) in paths.iter().zip(&times) {
+        let (m, lo, hi) = median_range(t);
         writeln!(
             table,
             "| `{path}` | {m:.2} ({lo:.2}–{hi:.2}) | {:.2}× |",

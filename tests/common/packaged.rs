@@ -85,3 +85,28 @@ pub fn fresh_fmu(version: Version) -> PathBuf {
     );
     version.archive()
 }
+
+/// The CSV `hsp run --no-build --no-plot` writes for the packaged FMU `fmu` with the arguments
+/// `args`, read back (its file deleted). The run must succeed; its error output is the message
+/// when it does not.
+pub fn run_csv(fmu: &Path, args: &[&str]) -> Vec<u8> {
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let csv = std::env::temp_dir().join(format!("hsp-run-{}-{n}.csv", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
+        .args(["run", "--no-build", "--no-plot", "--fmu"])
+        .arg(fmu)
+        .args(args)
+        .arg("--csv")
+        .arg(&csv)
+        .output()
+        .expect("cannot run hsp");
+    assert!(
+        out.status.success(),
+        "hsp run {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got = std::fs::read(&csv).unwrap();
+    let _ = std::fs::remove_file(&csv);
+    got
+}

@@ -62,6 +62,10 @@
 mod loader;
 #[path = "../bench-common/machine.rs"]
 mod machine;
+#[path = "../bench-common/measure.rs"]
+mod measure;
+
+use measure::{median_range, now};
 
 mod accuracy;
 mod control;
@@ -181,16 +185,6 @@ fn slow_steps(cpu: &[u64], p50: f64) -> (f64, f64) {
     spacing.sort_by(f64::total_cmp);
     let median = spacing.get(spacing.len() / 2).copied().unwrap_or(f64::NAN);
     (at.len() as f64 / cpu.len().max(1) as f64, median)
-}
-
-fn now(clock: libc::clockid_t) -> u64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes the timespec it is given.
-    unsafe { libc::clock_gettime(clock, &mut ts) };
-    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
 }
 
 /// The value at quantile `q` of sorted nanoseconds (the smallest value with at least q of the
@@ -424,18 +418,6 @@ fn figures(record: Record) -> Figures {
         wall_p999: quantile(&wall, 0.999),
         wall_max: quantile(&wall, 1.0),
     }
-}
-
-/// The median of the rounds' values, and their range.
-fn median_range(values: &[f64]) -> (f64, f64, f64) {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let median = if v.len() % 2 == 1 {
-        v[v.len() / 2]
-    } else {
-        0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2])
-    };
-    (median, v[0], v[v.len() - 1])
 }
 
 /// Microseconds with their range over the rounds: "18.3 (18.1–18.9)".

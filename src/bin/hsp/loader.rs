@@ -110,7 +110,8 @@ pub struct Fmu {
     free: Free,
 }
 
-fn check(status: Fmi2Status, what: &str) -> Result<(), String> {
+/// `Ok` for a status of at most Warning, else an error naming the call `what`.
+pub fn check(status: Fmi2Status, what: &str) -> Result<(), String> {
     if status <= Fmi2Status::Warning {
         Ok(())
     } else {
