@@ -32,17 +32,11 @@ fn motor_angle(fmu: &Path, step: &str, extra: &[&str]) -> Vec<f64> {
         extra,
     ]
     .concat();
-    let text = String::from_utf8(packaged::run_csv(fmu, &run)).unwrap();
-    let mut lines = text.lines();
-    let column = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .position(|c| c == "theta_motor")
-        .expect("theta_motor column");
-    lines
-        .map(|l| l.split(',').nth(column).unwrap().parse().unwrap())
-        .collect()
+    packaged::csv_columns(&packaged::run_csv(fmu, &run))
+        .into_iter()
+        .find(|(name, _)| name == "theta_motor")
+        .expect("theta_motor column")
+        .1
 }
 
 /// The largest difference of `a` and `b`, relative to the range of `a`.

@@ -1,11 +1,13 @@
 //! The central hub on its gas bearing (section 3 of the paper, Fig. 5b): a rigid inertia whose
 //! angle `theta` is the plate's rigid rotation.
 //!
-//! Bond graph: a 1-junction `<prefix>.omega` (common flow: hub speed) with the hub inertia, either
-//! a one-port I `<prefix>.I` (the paper formulation: `I = I_H + 2 I_P` on the hub angle) or the
-//! first port of the plate's I-field (the consistent formulation, where the mass matrix couples
-//! the hub and the plate modes; then [`connect_inertia`] is called by the plate fragment). The
-//! hub angle is the integral of its speed (integrator `<prefix>.theta`, a state).
+//! Bond graph: a 1-junction `<prefix>.omega` (common flow: hub speed) with the hub inertia, a
+//! one-port I `<prefix>.I`: `I = I_H + 2 I_P` on the hub angle in the paper formulation; in the
+//! consistent one, where the mass matrix couples the hub and the plate modes, what is left of it
+//! once the modes carry their share of the rotation (`I_r`,
+//! [`crate::fragments::plate::AbsoluteRates`]). Without an inertia here, one is supplied later
+//! through [`connect_inertia`]. The hub angle is the integral of its speed (integrator
+//! `<prefix>.theta`, a state).
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 
@@ -14,7 +16,7 @@ use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 pub struct HubPorts {
     /// The hub 1-junction (common flow: hub speed).
     pub junction: ElementId,
-    /// The bond from the junction to the hub inertia (one-port I or I-field port), once known.
+    /// The bond from the junction to the hub inertia, once known.
     pub inertia_bond: Option<BondId>,
     /// Hub speed \[rad/s\] (signal port `<prefix>.omega_hub`).
     pub omega: SignalId,
@@ -23,7 +25,7 @@ pub struct HubPorts {
 }
 
 /// Adds the hub. With `Some(inertia)` a one-port I `<prefix>.I`; with `None` the inertia is
-/// supplied later by an I-field port ([`connect_inertia`]).
+/// supplied later ([`connect_inertia`]).
 pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPorts {
     let omega = g.add_signal_port(format!("{prefix}.omega_hub"));
     let theta = g.add_integrator(format!("{prefix}.theta"), omega);

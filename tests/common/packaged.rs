@@ -110,3 +110,21 @@ pub fn run_csv(fmu: &Path, args: &[&str]) -> Vec<u8> {
     let _ = std::fs::remove_file(&csv);
     got
 }
+
+/// The columns of a CSV that `hsp run` wrote: each header name with its values.
+pub fn csv_columns(csv: &[u8]) -> Vec<(String, Vec<f64>)> {
+    let text = std::str::from_utf8(csv).expect("the CSV is UTF-8");
+    let mut lines = text.lines();
+    let mut columns: Vec<(String, Vec<f64>)> = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(|name| (name.to_string(), Vec::new()))
+        .collect();
+    for line in lines {
+        for ((_, values), v) in columns.iter_mut().zip(line.split(',')) {
+            values.push(v.parse().expect("a number"));
+        }
+    }
+    columns
+}

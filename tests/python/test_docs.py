@@ -86,8 +86,10 @@ def test_bond_graph_shows_the_models_elements(archive, page):
     for group in ("BG1 ", "BG2 ", "BG3 ", "Torsion bar", "Hub", "Plate modes", "Signal part"):
         assert any(t.startswith(group) for t in texts), group
     assert "Other elements" not in texts
-    # The consistent formulation: hub and modes in one I-field, the structure's modal dashpots.
-    for name in ("plate.inertia", "plate.C[1]", "plate.damping[1]", "torsion_bar.k"):
+    # The consistent formulation: each mode's inertia on its absolute rate (a 0-junction fed by
+    # the hub through a TF), the structure's modal dashpots.
+    for name in ("plate.I[1]", "plate.I[1].rate", "plate.I[1].hub_tf", "plate.C[1]",
+                 "plate.damping[1]", "torsion_bar.k"):
         assert name in titles, name
 
 

@@ -15,7 +15,8 @@
 //!   orthogonal), so the plate part is first diagonalised exactly: the coordinates of the model
 //!   are the natural modes of the clamped plate (eigenvectors of the Ritz problem), with an R
 //!   per mode (`2 zeta omega` modal damping of the clamped plate). The mass matrix then couples
-//!   the hub angle to these modes; with the hub, the fragment is an I-field.
+//!   the hub angle to these modes. The bond graph carries this kinetic energy on one-port
+//!   inertias, the hub's and one per mode on its absolute rate ([`super::AbsoluteRates`]).
 //! * the air's added mass ([`super::added_mass`]) joins the plate's: the modes are then those of
 //!   the plate in air, still normalised to the modal mass `2 m a b`, and the hub gains the air's
 //!   share of the slewing inertia and of the coupling.

@@ -14,8 +14,9 @@
 //!
 //! [`modes`] solves eq. 14 (natural frequencies) with a symmetric generalised eigen-solver;
 //! [`add_plate`] turns a [`PlateModel`] into bond-graph fragments (modal I, C, R per coordinate,
-//! or an I-field where the mass matrix couples the hub and the plate; TFs from the root-torque
-//! junction and from the shaker-force junctions to the coordinates).
+//! the I's on the modes' absolute rates where the mass matrix couples the hub and the plate,
+//! [`AbsoluteRates`]; TFs from the root-torque junction and from the shaker-force junctions to
+//! the coordinates).
 //!
 //! Scope: the structure is symmetric, one arm on each side of the hub; the model keeps the
 //! antisymmetric motion that a hub torque excites (both arms described by one set of
@@ -270,9 +271,9 @@ pub struct PlateNominal {
     /// The lowest plate coordinate's momentum: the arm's mass `m a b` moving at 0.1 m/s
     /// \[kg m/s\].
     pub momentum: f64,
-    /// A momentum of the I-field (hub and modes together, consistent formulation): the modal
-    /// momentum, or the hub's at 1 mrad/s if larger; the hub's entry, and the lowest plate
-    /// coordinate's.
+    /// A momentum where the mass matrix couples the hub and the modes (consistent formulation,
+    /// [`AbsoluteRates`]): the modal momentum, or the hub's at 1 mrad/s if larger; the hub's,
+    /// and the lowest plate coordinate's.
     pub field_momentum: f64,
 }
 
@@ -337,16 +338,69 @@ impl PlateModel {
         omega_sq.iter().map(|&w| (lowest / w).sqrt()).collect()
     }
 
-    /// Whether the mass matrix is diagonal (one-port inertias suffice).
-    pub fn diagonal_mass(&self) -> bool {
+    /// The kinetic energy as one-port inertias on the coordinates' absolute rates
+    /// ([`AbsoluteRates`]); `None` if the plate coordinates' mass matrix is not diagonal.
+    pub fn absolute_rates(&self) -> Option<AbsoluteRates> {
+        let first = self.first_plate();
         let n = self.dim();
-        (0..n).all(|i| (0..n).all(|j| i == j || self.mass[(i, j)] == 0.0))
+        let plate_diagonal =
+            (first..n).all(|i| (first..n).all(|j| i == j || self.mass[(i, j)] == 0.0));
+        if !plate_diagonal {
+            return None;
+        }
+        let masses: Vec<f64> = (first..n).map(|j| self.mass[(j, j)]).collect();
+        let ratios: Vec<f64> = if self.hub {
+            (first..n)
+                .map(|j| self.mass[(0, j)] / self.mass[(j, j)])
+                .collect()
+        } else {
+            vec![0.0; n - first]
+        };
+        // I_r = M_00 - sum_j M_0j^2 / M_jj, the Schur complement of the plate block: positive
+        // as M is positive definite.
+        let hub = self.hub.then(|| {
+            (first..n).fold(self.mass[(0, 0)], |i, j| {
+                i - self.mass[(0, j)] * self.mass[(0, j)] / self.mass[(j, j)]
+            })
+        });
+        Some(AbsoluteRates {
+            hub,
+            masses,
+            ratios,
+        })
     }
 
-    /// The hub inertia as a one-port I, when the mass matrix does not couple it to the plate.
+    /// The hub's one-port inertia: `I_r` of [`AbsoluteRates`] (the whole `M_00` when the
+    /// plate does not couple to the hub, the paper formulation).
     pub fn hub_one_port(&self) -> Option<f64> {
-        (self.hub && self.diagonal_mass()).then(|| self.mass[(0, 0)])
+        self.absolute_rates().and_then(|r| r.hub)
     }
+}
+
+/// The kinetic energy of hub and plate on one-port inertias, for a mass matrix that couples
+/// the plate coordinates to the hub only (`M = [I_t b'; b D]`, `D` diagonal: the consistent
+/// formulation's clamped modes, [`consistent`]). With the *absolute modal rates*
+/// `u_j = eta_j' + c_j theta'`, `c_j = b_j / D_jj` (the mode's rate plus the share of the
+/// rigid rotation it projects on),
+///
+/// `T = q' M q / 2 = I_r theta'^2 / 2 + sum_j D_jj u_j^2 / 2`, `I_r = I_t - sum_j b_j^2 / D_jj`.
+///
+/// Each term is a one-port I: the hub's on the hub's rate, mode j's on `u_j`, a 0-junction
+/// whose inflows are `eta_j'` and `c_j theta'` (a TF from the hub). The momenta are those of
+/// the I-field `p = M q'` for the modes (`D_jj u_j = b_j theta' + D_jj eta_j'`), `I_r theta'`
+/// for the hub. The equations are the I-field's (the same Lagrangian), but each mode's rate
+/// `eta_j' = p_j / D_jj - c_j p_hub / I_r` reads only its own momentum and the hub's, where
+/// `M^-1 p` reads every momentum: the Jacobian keeps the plate's modes in blocks of their own
+/// joined at the hub (the structured LU, `solver::linalg`), and a right-hand side costs
+/// `O(n)` instead of `O(n^2)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AbsoluteRates {
+    /// `I_r` \[kg m^2\], with the hub.
+    pub hub: Option<f64>,
+    /// `D_jj` per plate coordinate.
+    pub masses: Vec<f64>,
+    /// `c_j = b_j / D_jj` per plate coordinate (zero without the hub).
+    pub ratios: Vec<f64>,
 }
 
 /// The bending stress at the surface of the plate at `(x, y)` per unit amplitude of each
@@ -408,9 +462,10 @@ fn combination(g: &mut BondGraph, name: String, terms: Vec<(f64, SignalId)>) -> 
 
 /// Adds the plate under `prefix`.
 ///
-/// * `hub`: the hub fragment (`None` when the root is locked). If the model's mass matrix is
-///   not diagonal, the hub was created without a one-port inertia and the plate's I-field
-///   (`<prefix>.inertia`, hub first) is bonded to the hub junction here.
+/// * `hub`: the hub fragment (`None` when the root is locked), with its one-port inertia
+///   ([`PlateModel::hub_one_port`]). Where the mass matrix couples the hub and the plate, each
+///   mode's I `<prefix>.I[j]` sits on a 0-junction `<prefix>.I[j].rate` fed by the mode's
+///   junction and, through a TF `<prefix>.I[j].hub_tf`, by the hub's ([`AbsoluteRates`]).
 /// * `root`: the 0-junction whose common effort is the root torque (the torsion bar), if any;
 ///   it is bonded to the hub junction and, through TFs of modulus `torque[j]`, to each plate
 ///   coordinate that the torque drives directly (the paper formulation).
@@ -439,40 +494,45 @@ pub fn add_plate(
     for j in 0..np {
         coord.push(g.add_one(format!("{prefix}.mode[{}]", j + 1)));
     }
-    // inertias: bond per coordinate whose effort is d p / dt
-    let mut inertia_bonds: Vec<BondId> = Vec::with_capacity(n);
-    if model.diagonal_mass() {
-        if let Some(h) = hub {
-            inertia_bonds.push(h.inertia_bond.expect("hub with a one-port inertia"));
-        }
-        for j in 0..np {
-            let i = g.add_i(
-                format!("{prefix}.I[{}]", j + 1),
-                model.mass[(first + j, first + j)],
-            );
-            g.set_nominal(i, &[model.nominal.momentum * scale[j]]);
-            g.set_domains(i, &[Domain::Translation]);
-            inertia_bonds.push(g.bond(coord[first + j], i));
-        }
+    // inertias: one-port I's on the absolute rates, a bond per coordinate whose effort is the
+    // rate of its momentum
+    let rates = model
+        .absolute_rates()
+        .expect("the plate coordinates' mass matrix must be diagonal");
+    // Coupled to the hub, the momenta are the I-field's (hub and modes together), and so are
+    // their magnitudes.
+    let coupled = rates.ratios.iter().any(|&c| c != 0.0);
+    let momentum = if coupled {
+        model.nominal.field_momentum
     } else {
-        let field = g.add_i_field(format!("{prefix}.inertia"), model.mass.clone());
-        let mut momenta = vec![model.nominal.field_momentum; n];
-        for (m, s) in momenta[first..].iter_mut().zip(&scale) {
-            *m *= s;
+        model.nominal.momentum
+    };
+    let mut inertia_bonds: Vec<BondId> = Vec::with_capacity(n);
+    if let Some(h) = hub {
+        let bond = h.inertia_bond.expect("hub with a one-port inertia");
+        if coupled {
+            let inertia = g.bonds()[bond.index()].to;
+            g.set_nominal(inertia, &[momentum]);
         }
-        g.set_nominal(field, &momenta);
-        // The hub's coordinate is an angle, the plate's a displacement [m].
-        let mut domains = vec![Domain::Translation; n];
-        domains[..first].fill(Domain::Rotation);
-        g.set_domains(field, &domains);
-        for (k, &c) in coord.iter().enumerate() {
-            let b = g.bond(c, field);
-            if k == 0 {
-                if let Some(h) = hub {
-                    super::hub::connect_inertia(g, h, b);
-                }
-            }
-            inertia_bonds.push(b);
+        inertia_bonds.push(bond);
+    }
+    for j in 0..np {
+        let i = g.add_i(format!("{prefix}.I[{}]", j + 1), rates.masses[j]);
+        g.set_nominal(i, &[momentum * scale[j]]);
+        g.set_domains(i, &[Domain::Translation]);
+        let c = rates.ratios[j];
+        if c == 0.0 {
+            inertia_bonds.push(g.bond(coord[first + j], i));
+        } else {
+            // u_j = eta_j' + c_j theta': a 0-junction fed by the mode, giving -c_j theta' to the
+            // hub through a TF (port 1 on the 0-junction: its flow is -c_j times the hub's),
+            // which takes back the torque -c_j dp_j/dt
+            let node = g.add_zero(format!("{prefix}.I[{}].rate", j + 1));
+            g.bond(coord[first + j], node);
+            let tf = g.add_tf(format!("{prefix}.I[{}].hub_tf", j + 1), -c);
+            g.bond(node, tf);
+            g.bond(tf, coord[0]);
+            inertia_bonds.push(g.bond(node, i));
         }
     }
     // stiffness and damping per plate coordinate
@@ -561,14 +621,9 @@ pub fn add_plate(
             }
         }
     }
-    // sensors: accelerations from the efforts on the inertia bonds (q'' = M^-1 e), displacements
-    // from the C states and the hub angle
-    let minv = model
-        .mass
-        .clone()
-        .cholesky()
-        .expect("the mass matrix is positive definite")
-        .inverse();
+    // sensors: accelerations from the efforts on the inertia bonds (the momenta's rates: hub
+    // theta'' = dp_hub / I_r, mode eta_j'' = dp_j / D_jj - c_j theta''), displacements from the
+    // C states and the hub angle
     let efforts: Vec<SignalId> = inertia_bonds
         .iter()
         .enumerate()
@@ -580,7 +635,15 @@ pub fn add_plate(
         .map(|(j, &c)| g.add_state_sensor(format!("{prefix}.eta[{}]", j + 1), c))
         .collect();
     let acc_of = |g: &mut BondGraph, name: String, s: &DVector<f64>| {
-        let w = &minv * s;
+        // a = s' q'' = (s_0 - sum_j c_j s_j) theta'' + sum_j s_j dp_j / D_jj
+        let mut w = DVector::zeros(n);
+        for j in 0..np {
+            w[first + j] = s[first + j] / rates.masses[j];
+        }
+        if let Some(i_r) = rates.hub {
+            let hub_share = (0..np).fold(s[0], |a, j| a - rates.ratios[j] * s[first + j]);
+            w[0] = hub_share / i_r;
+        }
         let terms = (0..n)
             .filter(|&i| w[i] != 0.0)
             .map(|i| (w[i], efforts[i]))
@@ -610,5 +673,63 @@ pub fn add_plate(
         acc_tip,
         stress,
         acc,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(formulation: Formulation) -> PlateModel {
+        let p = PlateParameters {
+            formulation,
+            ..PlateParameters::default()
+        };
+        PlateModel::new(&p).unwrap()
+    }
+
+    /// The one-port inertias on the absolute rates carry the consistent formulation's kinetic
+    /// energy `q' M q / 2` (with the air's added mass), and their momenta are the I-field's
+    /// `M q'` for the modes: at random rates, to rounding.
+    #[test]
+    fn absolute_rates_carry_the_mass_matrix() {
+        let model = model(Formulation::Consistent);
+        let r = model.absolute_rates().expect("the plate block is diagonal");
+        let (n, first) = (model.dim(), model.first_plate());
+        // The modes the rotation projects on (uniform across the arm) ride on the hub.
+        assert!(model.hub && r.ratios.iter().filter(|&&c| c != 0.0).count() >= 3);
+        let i_r = r.hub.unwrap();
+        assert!(i_r > 0.0 && i_r < model.mass[(0, 0)]);
+        let mut seed = 0.3f64;
+        for _ in 0..10 {
+            let v = DVector::from_fn(n, |_, _| {
+                seed = (seed * 997.0 + 0.123).fract();
+                seed - 0.5
+            });
+            let full = 0.5 * (v.transpose() * &model.mass * &v)[(0, 0)];
+            let u: Vec<f64> = (0..n - first)
+                .map(|j| v[first + j] + r.ratios[j] * v[0])
+                .collect();
+            let split = 0.5 * i_r * v[0] * v[0]
+                + (0..n - first)
+                    .map(|j| 0.5 * r.masses[j] * u[j] * u[j])
+                    .sum::<f64>();
+            assert!((split - full).abs() <= 1e-12 * full, "{split} vs {full}");
+            let p_field = &model.mass * &v;
+            for j in 0..n - first {
+                let p = r.masses[j] * u[j];
+                assert!((p - p_field[first + j]).abs() <= 1e-12 * p_field.amax());
+            }
+        }
+    }
+
+    /// The paper formulation's mass matrix is diagonal: the hub keeps `I_H + 2 I_P` and no mode
+    /// rides on it.
+    #[test]
+    fn the_paper_plate_needs_no_absolute_rates() {
+        let model = model(Formulation::Paper);
+        let r = model.absolute_rates().unwrap();
+        assert!(r.ratios.iter().all(|&c| c == 0.0));
+        assert_eq!(r.hub, Some(model.mass[(0, 0)]));
     }
 }

@@ -5,12 +5,12 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
-use super::lu::{lu_in_place, lu_solve, lu_solve_loops, solve_2x2};
+use super::lu::{lu_in_place, lu_solve, lu_solve_loops, pivots_clear, scales, solve_2x2};
 use super::partition::Partition;
 use super::scalar::Scalar;
 
-/// A block whose smallest pivot is below this share of its largest entry is left to the dense
-/// LU: elimination inside blocks does not pivot across them.
+/// A block with a pivot below this share of its row's and column's scales is left to the dense
+/// LU: elimination inside blocks does not pivot across them ([`pivots_clear`]).
 const PIVOT_FLOOR: f64 = 1e-10;
 
 /// The entries of a matrix to factorise: a closure `|i, j| M_ij`, or a type that also gives a
@@ -102,6 +102,8 @@ pub struct Factorisation<T: Scalar> {
     /// LU of the Schur complement (m × m, column-major) and its interchanges.
     schur: Vec<T>,
     schur_piv: Vec<usize>,
+    /// Scratch: a block's row and column scales before its LU ([`pivots_clear`]).
+    scales: Vec<f64>,
     /// The dense partition [`factor_with_fallback`] falls back to, kept once made: a system
     /// whose structured elimination fails at every step (a badly scaled block) then allocates
     /// nothing per step.
@@ -119,6 +121,7 @@ impl<T: Scalar> Factorisation<T> {
             c: Vec::new(),
             schur: Vec::new(),
             schur_piv: Vec::new(),
+            scales: Vec::new(),
             dense_fallback: None,
         }
     }
@@ -130,7 +133,8 @@ impl<T: Scalar> Factorisation<T> {
 
     /// Factorises the matrix with entries `entry(i, j)` for the partition `part` (reusing this
     /// factorisation's memory). False if a pivot is zero, or, for a structured partition, small
-    /// against its block (below 1e-10 of its largest entry); the factors are then unusable.
+    /// against its row and column (below 1e-10 in the block with its rows and columns scaled to
+    /// a largest entry of 1, as LAPACK's `dgeequ` scales); the factors are then unusable.
     pub fn factor(&mut self, part: &Arc<Partition>, entry: impl Entries<T>) -> bool {
         self.factor_by(part, &entry)
     }
@@ -151,6 +155,9 @@ impl<T: Scalar> Factorisation<T> {
         grow(&mut self.piv, n, 0);
         grow(&mut self.schur, m * m, T::ZERO);
         grow(&mut self.schur_piv, m, 0);
+        if floor > 0.0 {
+            grow(&mut self.scales, 2 * n, 0.0);
+        }
         // The blocks' LUs first, at the offsets the solves read them from: a block with a small
         // pivot fails the factorisation before any of the couplings' work is done (a model whose
         // structured elimination fails then pays only its small blocks before the dense LU).
@@ -174,7 +181,7 @@ impl<T: Scalar> Factorisation<T> {
                     gather(entry, idx, idx, a);
                 }
             }
-            if !lu_in_place(a, k, &mut self.piv[s..s + k], floor) {
+            if !factor_block(a, k, &mut self.piv[s..s + k], floor, &mut self.scales) {
                 return false;
             }
         }
@@ -214,7 +221,13 @@ impl<T: Scalar> Factorisation<T> {
                 _ => couple(k, a, piv, x, c, links, schur, m),
             }
         }
-        lu_in_place(&mut self.schur[..m * m], m, &mut self.schur_piv[..m], floor)
+        factor_block(
+            &mut self.schur[..m * m],
+            m,
+            &mut self.schur_piv[..m],
+            floor,
+            &mut self.scales,
+        )
     }
 
     /// Solves M x = rhs in place; `scratch` is any vector of the same length (its contents are
@@ -412,6 +425,23 @@ fn couple<T: Scalar>(
 /// at every step), and a buffer resized down and up again at every factorisation had its grown
 /// part zeroed each time, to be overwritten (every entry a factorisation or a solve reads is
 /// written by the factorisation first, within the partition's lengths).
+/// The LU of one block or of the Schur complement in place ([`lu_in_place`]); with a `floor`
+/// (a structured partition), false unless every pivot is above `floor` in the equilibrated
+/// block ([`pivots_clear`]; `scratch` holds at least 2k entries).
+fn factor_block<T: Scalar>(
+    a: &mut [T],
+    k: usize,
+    piv: &mut [usize],
+    floor: f64,
+    scratch: &mut [f64],
+) -> bool {
+    if floor == 0.0 {
+        return lu_in_place(a, k, piv, 0.0);
+    }
+    scales(a, k, scratch);
+    lu_in_place(a, k, piv, 0.0) && pivots_clear(a, k, piv, scratch, floor)
+}
+
 fn grow<V: Copy>(v: &mut Vec<V>, len: usize, zero: V) {
     if v.len() < len {
         v.resize(len, zero);
@@ -499,6 +529,14 @@ mod tests {
         }
     }
 
+    /// The portable loops' LU with the structured partition's pivot test (`factor_block`).
+    fn loops_with_floor<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+        let mut scratch = vec![0.0; 2 * k];
+        scales(a, k, &mut scratch);
+        super::super::lu::lu_in_place_loops(a, k, piv, 0.0)
+            && (floor == 0.0 || pivots_clear(a, k, piv, &mut scratch, floor))
+    }
+
     /// The factorisation as it was written before its gathers and its couplings' loops were
     /// specialised: entry by entry, one solve per column of X_b, and the Schur update pair of
     /// links by pair. The reference for [`Factorisation::factor`]'s bits.
@@ -528,7 +566,7 @@ mod tests {
                     a[r + cj * k] = entry.entry(idx[r], idx[cj]);
                 }
             }
-            if !super::super::lu::lu_in_place_loops(a, k, &mut f.piv[s..s + k], floor) {
+            if !loops_with_floor(a, k, &mut f.piv[s..s + k], floor) {
                 return false;
             }
         }
@@ -566,7 +604,7 @@ mod tests {
                 }
             }
         }
-        super::super::lu::lu_in_place_loops(&mut f.schur[..m * m], m, &mut f.schur_piv[..m], floor)
+        loops_with_floor(&mut f.schur[..m * m], m, &mut f.schur_piv[..m], floor)
     }
 
     /// A random arrowhead matrix with blocks of the given sizes (dense inside, each state
@@ -794,6 +832,55 @@ mod tests {
             f.solve(&mut x, &mut vec![0.0; n]);
             assert!(residual(n, entry, &x, &b) < 1e-9);
         }
+    }
+
+    /// The blocks' pivot test does not depend on the states' units: an arrowhead matrix whose
+    /// rows and columns are scaled by powers of ten up to 1e±8 (so that entries of one block
+    /// differ by up to 1e32, beyond the 1e10 a test against the block's largest entry allows) is
+    /// factorised with its structure and solves to rounding; a block singular to rounding stays
+    /// refused whatever its rows' scales.
+    #[test]
+    fn the_pivot_test_is_the_equilibrated_blocks() {
+        let mut rng = Rng(23);
+        for round in 0..20 {
+            let j = arrowhead(&mut rng, 40, 2, 4);
+            let n = j.nrows();
+            let part = Arc::new(Partition::of_matrix(&j));
+            assert!(!part.is_dense());
+            let mut scale = || 10f64.powi((8.0 * rng.next()) as i32);
+            let row: Vec<f64> = (0..n).map(|_| scale()).collect();
+            let col: Vec<f64> = (0..n).map(|_| scale()).collect();
+            let c = 3.0;
+            let scaled = |i: usize, k: usize| {
+                let m = if i == k { c - j[(i, k)] } else { -j[(i, k)] };
+                row[i] * m * col[k]
+            };
+            let mut f = Factorisation::new(Arc::clone(&part));
+            assert!(f.factor(&part, scaled), "round {round}: refused");
+            let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+            let mut x = b.clone();
+            f.solve(&mut x, &mut vec![0.0; n]);
+            // each row's residual relative to the size of its terms
+            let worst = (0..n)
+                .map(|i| {
+                    let terms = (0..n).map(|k| scaled(i, k) * x[k]);
+                    let size = terms.clone().map(f64::abs).fold(b[i].abs(), f64::max);
+                    (terms.sum::<f64>() - b[i]).abs() / size
+                })
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-12, "round {round}: relative residual {worst:e}");
+        }
+        // A block singular to rounding, one row scaled by 1e6: refused (the dense LU's job).
+        let mut j = arrowhead(&mut rng, 10, 2, 3);
+        let part = Arc::new(Partition::of_matrix(&j));
+        let (s, _, _) = part.block(0);
+        let (u, v) = (part.perm[s], part.perm[s + 1]);
+        for k in [u, v] {
+            j[(v, k)] = j[(u, k)] * (1.0 + 1e-15);
+        }
+        let entry = |i: usize, k: usize| if i == v { 1e6 * j[(i, k)] } else { j[(i, k)] };
+        let mut f = Factorisation::new(Arc::clone(&part));
+        assert!(!f.factor(&part, entry));
     }
 
     /// [`Shifted`]'s columns and gathered submatrices are its entries, bit for bit, and so is

@@ -280,6 +280,60 @@ pub(super) fn solve_2x2<T: Scalar>(
     (x0 * inv_u00, x1)
 }
 
+/// The scales of the column-major k × k `a` that [`pivots_clear`] measures its pivots with,
+/// into `out` (length 2k): the largest entry (in [`Scalar::norm1`]) of each row, `out[..k]`,
+/// and of each column once every row is divided by its own, `out[k..]` (LAPACK's `dgeequ`
+/// equilibration, as sizes rather than their reciprocals).
+pub(super) fn scales<T: Scalar>(a: &[T], k: usize, out: &mut [f64]) {
+    let (rows, columns) = out[..2 * k].split_at_mut(k);
+    rows.fill(0.0);
+    for column in a[..k * k].chunks_exact(k) {
+        for (m, v) in rows.iter_mut().zip(column) {
+            *m = m.max(v.norm1());
+        }
+    }
+    for (m, column) in columns.iter_mut().zip(a[..k * k].chunks_exact(k)) {
+        *m = column
+            .iter()
+            .zip(rows.iter())
+            .filter(|(_, &r)| r > 0.0)
+            .fold(0.0f64, |m, (v, &r)| m.max(v.norm1() / r));
+    }
+}
+
+/// Whether every pivot of the LU `lu` from [`lu_in_place`] (interchanges `piv`) is above
+/// `floor` in the equilibrated matrix: `|u_jj| > floor r c`, with `r` the largest entry of the
+/// row the pivot came from and `c` that of its column once the rows are scaled to 1 (`scales`,
+/// [`scales`] of the matrix before the factorisation; its rows' part is permuted here as the rows
+/// were).
+///
+/// The test does not depend on the rows' and columns' scales, which are the states' units: a
+/// plate mode's block pairs its displacement's row, whose entries are near `1/(h γ)` and `1/m`,
+/// with its momentum's, near its stiffness, up to 1e11 apart in a 20 × 20 plate, and a block of
+/// the servo valve has a column of pressures' rates per unit volume, 1e16 against the others'
+/// 1e2. Against the block's largest entry, as the kernels' own `floor` measures, such blocks
+/// are refused though their elimination is as stable as any. Every pivot the kernels' measure
+/// accepts is accepted here too: `r` is at most the largest entry and `c` at most 1.
+pub(super) fn pivots_clear<T: Scalar>(
+    lu: &[T],
+    k: usize,
+    piv: &[usize],
+    scales: &mut [f64],
+    floor: f64,
+) -> bool {
+    let (rows, columns) = scales[..2 * k].split_at_mut(k);
+    for j in 0..k {
+        rows.swap(j, piv[j]);
+        // The diagonal holds the pivot's reciprocal (finite and non-zero: the kernels refuse
+        // other pivots).
+        let pivot = (T::ONE / lu[j + j * k]).norm1();
+        if pivot <= floor * rows[j] * columns[j] {
+            return false;
+        }
+    }
+    true
+}
+
 /// The size at or below which a pivot is refused: `floor` times the largest entry of `a`.
 #[inline(always)]
 fn pivot_floor<T: Scalar>(a: &[T], floor: f64) -> f64 {
@@ -378,6 +432,52 @@ mod tests {
     thread_local! {
         /// The kernels take the portable loops even where AVX2 is available.
         pub(super) static PORTABLE_ONLY: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// [`pivots_clear`] accepts every block the kernels' own floor (against the block's largest
+    /// entry) accepts, and more: random blocks of 1 to 6 states, some nearly singular, with rows
+    /// and columns scaled by up to 1e±6.
+    #[test]
+    fn the_equilibrated_test_accepts_what_the_block_test_accepts() {
+        let mut rng = Rng(5);
+        let (mut old_accepts, mut only_new) = (0, 0);
+        for round in 0..4000 {
+            let k = 1 + round % 6;
+            let mut a: Vec<f64> = (0..k * k).map(|_| rng.next()).collect();
+            if round % 3 == 0 && k > 1 {
+                // row k-1 nearly a multiple of row 0
+                let f = rng.next();
+                for c in 0..k {
+                    a[k - 1 + c * k] = f * a[c * k] + 1e-11 * rng.next();
+                }
+            }
+            let row: Vec<f64> = (0..k)
+                .map(|_| 10f64.powi((6.0 * rng.next()) as i32))
+                .collect();
+            let col: Vec<f64> = (0..k)
+                .map(|_| 10f64.powi((6.0 * rng.next()) as i32))
+                .collect();
+            for (i, v) in a.iter_mut().enumerate() {
+                *v *= row[i % k] * col[i / k];
+            }
+            let mut old = a.clone();
+            let mut piv = vec![0; k];
+            let by_block = lu_in_place(&mut old, k, &mut piv, 1e-10);
+            let mut scratch = vec![0.0; 2 * k];
+            scales(&a, k, &mut scratch);
+            let by_rows = lu_in_place(&mut a, k, &mut piv, 0.0)
+                && pivots_clear(&a, k, &piv, &mut scratch, 1e-10);
+            assert!(
+                !by_block || by_rows,
+                "round {round}: refused what the block test accepts"
+            );
+            old_accepts += usize::from(by_block);
+            only_new += usize::from(by_rows && !by_block);
+        }
+        assert!(
+            old_accepts > 1000 && only_new > 100,
+            "{old_accepts} {only_new}"
+        );
     }
 
     /// [`lu_in_place`]'s elimination as it was written with index loops (its pivoting is the

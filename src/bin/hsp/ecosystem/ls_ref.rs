@@ -30,23 +30,26 @@ const LS_DESCRIPTION: &str =
 
 /// The largest deviation from the result, relative to each column's largest magnitude, of an
 /// importer that passes no stop time and steps the default experiment's grid: a regression
-/// bound on the value measured with libcosim and with fmpy's low-level API, 2.4e-8 (in
-/// `servo_valve.x_f`, at the last points):
+/// bound on the value measured with libcosim and with fmpy's low-level API, 4.5e-8 (in
+/// `servo_valve.x_f`, at the last points; the dense output's error at those points, within the
+/// solver's tolerance, so that it moves with the solver's steps: 2.4e-8 before the hub's
+/// inertias were put on the modes' absolute rates):
 /// `tests/python/test_ecosystem.py::test_the_stated_reproduction_holds_with_and_without_a_stop_time`
 /// and `test_libcosim_without_a_stop_time_reproduces_the_result_as_stated` print it and fail
 /// above the bound.
-const WITHOUT_STOP_TIME: f64 = 3e-8;
+const WITHOUT_STOP_TIME: f64 = 5e-8;
 
 /// The same bound before the last [`DIFFERING_POINTS`] communication points: fmpy without a stop
 /// time reproduces those to the bit; libcosim, whose communication points are whole nanoseconds
-/// (steps of 0.004999999999999893 s), within 3e-14 (a regression bound, the same tests).
+/// (steps of 0.004999999999999893 s), within 7.1e-14 (a regression bound, the same tests).
 const BEFORE_THE_LAST: f64 = 1e-13;
 
 /// How many communication points at the end differ by more than [`BEFORE_THE_LAST`] when the
 /// importer passes no stop time: the FMU's solver steps run past communication points up to the
 /// stop time (`solver.dense_output`); without one its last step runs past the end, and these
-/// points come from its dense output.
-const DIFFERING_POINTS: usize = 2;
+/// points come from its dense output: as many as the last step spans (a regression value, 3
+/// since the hub's inertias were put on the modes' absolute rates, 2 before).
+const DIFFERING_POINTS: usize = 3;
 
 /// The name of the result file, as the Reference FMUs name theirs (`<model>_out.csv`).
 pub fn result_name() -> String {
