@@ -25,9 +25,10 @@
 //! the estimated work stops falling, and keeps the best split it saw; if that split does not
 //! save at least half of the dense work it returns the dense partition (one block holding every
 //! state, no border), which is an ordinary LU with partial pivoting. The elimination does not
-//! pivot across blocks, so a block whose pivots are small against its own entries (or an exactly
-//! singular one) makes [`Factorisation::factor`] report failure; the caller then factorises
-//! with the dense partition, which fails only if M is singular.
+//! pivot across blocks, so a block whose pivots are small against its own entries, its rows and
+//! columns scaled to a largest entry of 1 (or an exactly singular one), makes
+//! [`Factorisation::factor`] report failure; the caller then factorises with the dense
+//! partition, which fails only if M is singular.
 //!
 //! Everything is deterministic (the same J gives the same partition and the same bits), which
 //! keeps a restored integrator, which refactorises, bit-identical to the original.
