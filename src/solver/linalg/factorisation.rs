@@ -420,11 +420,6 @@ fn couple<T: Scalar>(
     }
 }
 
-/// Makes `v` at least `len` long, never shorter: the buffers serve partitions of different
-/// sizes in turn (a structured one and its dense fallback, when the structured elimination fails
-/// at every step), and a buffer resized down and up again at every factorisation had its grown
-/// part zeroed each time, to be overwritten (every entry a factorisation or a solve reads is
-/// written by the factorisation first, within the partition's lengths).
 /// The LU of one block or of the Schur complement in place ([`lu_in_place`]); with a `floor`
 /// (a structured partition), false unless every pivot is above `floor` in the equilibrated
 /// block ([`pivots_clear`]; `scratch` holds at least 2k entries).
@@ -442,6 +437,11 @@ fn factor_block<T: Scalar>(
     lu_in_place(a, k, piv, 0.0) && pivots_clear(a, k, piv, scratch, floor)
 }
 
+/// Makes `v` at least `len` long, never shorter: the buffers serve partitions of different
+/// sizes in turn (a structured one and its dense fallback, when the structured elimination fails
+/// at every step), and a buffer resized down and up again at every factorisation had its grown
+/// part zeroed each time, to be overwritten (every entry a factorisation or a solve reads is
+/// written by the factorisation first, within the partition's lengths).
 fn grow<V: Copy>(v: &mut Vec<V>, len: usize, zero: V) {
     if v.len() < len {
         v.resize(len, zero);
