@@ -192,3 +192,67 @@ fn varying_update_gives_the_bits_of_a_full_evaluation() {
         }
     }
 }
+
+/// The varying entries from the forms of the rows that are not affine, by the chain rule
+/// through their nonlinear operations (`FormsJacobian`, what the integrators use), against the
+/// plan's tangent sweeps (dual numbers through every operation, an independent evaluation of
+/// the same derivatives): on every preset and on the default with a 20 x 20 consistent plate,
+/// at points near and far from rest, every varying entry agrees within 1e-13 of the largest
+/// entry of its row; the forms reach no entry the structure calls constant.
+#[test]
+fn the_forms_give_the_varying_entries_of_the_sweeps() {
+    let mut cases: Vec<(String, Assembled)> = presets::PRESETS
+        .iter()
+        .map(|p| {
+            (
+                p.name.to_string(),
+                Assembled::new(&parameters(p.name)).unwrap(),
+            )
+        })
+        .collect();
+    let large = parameters_with("complete", &[("plate.N", "20"), ("plate.M", "20")]);
+    cases.push(("complete 20 x 20".into(), Assembled::new(&large).unwrap()));
+    let mut checked = 0;
+    for (name, system) in &cases {
+        let m = system.compiled();
+        if m.jacobian_is_constant() {
+            continue;
+        }
+        let forms = m.nonaffine_forms();
+        let by_forms = forms.jacobian(m.n_states(), m.jacobian_varying_pattern());
+        assert_eq!(
+            by_forms.unlisted(),
+            0,
+            "{name}: the chain reaches constant entries"
+        );
+        let (entries, links) = by_forms.size();
+        println!("{name:<20} {entries} varying entries, {links} chain links");
+        let mut worst: f64 = 0.0;
+        for (spread, seed) in [(0.1, 11), (1.0, 12), (3.0, 13)] {
+            for (x, u) in points(system, 6, spread, seed) {
+                let full = jacobian(m, &x, &u);
+                let mut a = full.clone();
+                let mut b = full.clone();
+                a.fill(f64::NAN);
+                b.fill(f64::NAN);
+                assert!(
+                    by_forms.varying_entries(&forms, m, &x, &u, &mut a),
+                    "{name}"
+                );
+                assert!(m.jacobian_varying_by_sweeps(&x, &u, &mut b), "{name}");
+                for (i, row) in m.jacobian_varying_pattern().iter().enumerate() {
+                    let scale = full.row(i).iter().fold(0.0f64, |s, v| s.max(v.abs()));
+                    for &j in row {
+                        let (fa, fb) = (a[(i, j as usize)], b[(i, j as usize)]);
+                        let error = (fa - fb).abs() / scale;
+                        assert!(error <= 1e-13, "{name}: ({i}, {j}) {fa:e} against {fb:e}");
+                        worst = worst.max(error);
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        println!("{name:<20} largest difference {worst:.1e} of the row's largest entry");
+    }
+    assert!(checked > 0);
+}

@@ -17,6 +17,10 @@
 
 use std::cell::RefCell;
 
+mod jacobian;
+
+pub use jacobian::FormsJacobian;
+
 use super::compiled::CompiledModel;
 use super::plan::{Op, NONE};
 

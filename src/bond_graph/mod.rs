@@ -124,7 +124,7 @@ pub use element::{
 };
 pub use energy::PowerBalance;
 pub use error::BondGraphError;
-pub use forms::{NonaffineForms, PointCache, PointForms};
+pub use forms::{FormsJacobian, NonaffineForms, PointCache, PointForms};
 pub use graph::BondGraph;
 pub use linearization::Linearization;
 pub use units::{Domain, StateUnits};

@@ -11,7 +11,9 @@
 
 use nalgebra::DMatrix;
 
-use crate::bond_graph::{AffineOffsets, CompiledModel, Linearization, NonaffineForms, PointForms};
+use crate::bond_graph::{
+    AffineOffsets, CompiledModel, FormsJacobian, Linearization, NonaffineForms, PointForms,
+};
 
 /// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
 /// as (column, value).
@@ -130,6 +132,8 @@ pub(super) struct Affine {
     pub(super) partial: bool,
     /// The rows that are not affine as forms over the states, inputs and nonlinear results.
     nonaffine: NonaffineForms,
+    /// The varying entries of J by the chain rule through `nonaffine`.
+    jacobian: FormsJacobian,
     /// The outputs and rows that are not affine, as a communication point computes them.
     pub(super) point: PointForms,
     /// The largest max(|x_i|, |u_j|) within which every value of `point` is shown finite
@@ -227,17 +231,20 @@ impl Affine {
         } else {
             (PointForms::default(), 0.0)
         };
+        let nonaffine = if partial {
+            compiled.nonaffine_forms()
+        } else {
+            NonaffineForms::default()
+        };
+        let jacobian = nonaffine.jacobian(compiled.n_states(), compiled.jacobian_varying_pattern());
         let mut affine = Affine {
             point,
             point_radius,
             jac_row_sum: jac.max_abs_row_sum(),
             jac,
             partial,
-            nonaffine: if partial {
-                compiled.nonaffine_forms()
-            } else {
-                NonaffineForms::default()
-            },
+            nonaffine,
+            jacobian,
             offsets: compiled.affine_offset_forms(),
             offset: vec![0.0; jac_rows],
             offset_max: 0.0,
@@ -298,6 +305,20 @@ impl Affine {
         if self.partial {
             self.nonaffine.derivatives(compiled, x, u, dx);
         }
+    }
+
+    /// The Jacobian's varying entries into `jac` from the forms of the rows that are not affine
+    /// ([`FormsJacobian`]); false where one is not finite (then the plan's passes must give
+    /// them).
+    pub(super) fn jacobian_varying(
+        &self,
+        compiled: &CompiledModel,
+        x: &[f64],
+        u: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) -> bool {
+        self.jacobian
+            .varying_entries(&self.nonaffine, compiled, x, u, jac)
     }
 }
 

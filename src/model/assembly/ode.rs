@@ -39,7 +39,14 @@ impl OdeSystem for Assembled {
     }
 
     fn jacobian_varying(&self, _t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> bool {
-        self.constant_part.is_some() && self.compiled.jacobian_varying(x, &self.inputs, jac)
+        if self.constant_part.is_none() {
+            return false;
+        }
+        // From the forms of the rows that are not affine where they give finite entries, else
+        // through the plan (whose passes handle a law's infinite slope at a zero weight).
+        let by_forms = |a: &Affine| a.jacobian_varying(&self.compiled, x, &self.inputs, jac);
+        self.affine.as_ref().is_some_and(by_forms)
+            || self.compiled.jacobian_varying(x, &self.inputs, jac)
     }
 
     fn jacobian_varying_pattern(&self) -> Option<&[Vec<u32>]> {

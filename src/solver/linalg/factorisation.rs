@@ -156,7 +156,7 @@ impl<T: Scalar> Factorisation<T> {
         grow(&mut self.schur, m * m, T::ZERO);
         grow(&mut self.schur_piv, m, 0);
         if floor > 0.0 {
-            grow(&mut self.scales, 2 * n, 0.0);
+            grow(&mut self.scales, 3 * n, 0.0);
         }
         // The blocks' LUs first, at the offsets the solves read them from: a block with a small
         // pivot fails the factorisation before any of the couplings' work is done (a model whose
@@ -422,7 +422,7 @@ fn couple<T: Scalar>(
 
 /// The LU of one block or of the Schur complement in place ([`lu_in_place`]); with a `floor`
 /// (a structured partition), false unless every pivot is above `floor` in the equilibrated
-/// block ([`pivots_clear`]; `scratch` holds at least 2k entries).
+/// block ([`pivots_clear`]; `scratch` holds at least 3k entries).
 fn factor_block<T: Scalar>(
     a: &mut [T],
     k: usize,
@@ -531,7 +531,7 @@ mod tests {
 
     /// The portable loops' LU with the structured partition's pivot test (`factor_block`).
     fn loops_with_floor<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
-        let mut scratch = vec![0.0; 2 * k];
+        let mut scratch = vec![0.0; 3 * k];
         scales(a, k, &mut scratch);
         super::super::lu::lu_in_place_loops(a, k, piv, 0.0)
             && (floor == 0.0 || pivots_clear(a, k, piv, &mut scratch, floor))

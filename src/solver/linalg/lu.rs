@@ -281,23 +281,31 @@ pub(super) fn solve_2x2<T: Scalar>(
 }
 
 /// The scales of the column-major k × k `a` that [`pivots_clear`] measures its pivots with,
-/// into `out` (length 2k): the largest entry (in [`Scalar::norm1`]) of each row, `out[..k]`,
-/// and of each column once every row is divided by its own, `out[k..]` (LAPACK's `dgeequ`
-/// equilibration, as sizes rather than their reciprocals).
+/// into `out` (length 3k, the last k a scratch): the largest entry (in [`Scalar::norm1`]) of
+/// each row, `out[..k]`, and of each column once every row is divided by its own,
+/// `out[k..2k]` (LAPACK's `dgeequ` equilibration, as sizes rather than their reciprocals).
 pub(super) fn scales<T: Scalar>(a: &[T], k: usize, out: &mut [f64]) {
-    let (rows, columns) = out[..2 * k].split_at_mut(k);
+    let (rows, rest) = out[..3 * k].split_at_mut(k);
+    let (columns, inverse) = rest.split_at_mut(k);
     rows.fill(0.0);
     for column in a[..k * k].chunks_exact(k) {
         for (m, v) in rows.iter_mut().zip(column) {
             *m = m.max(v.norm1());
         }
     }
+    // A product by each row's reciprocal instead of a division per entry (a zero row, whose
+    // reciprocal is taken as 0, adds nothing), and at most 1, which the exact quotients are and
+    // the rounded products may exceed by an ulp. The scales only judge the pivots: their
+    // rounding changes no result.
+    for (q, &r) in inverse.iter_mut().zip(rows.iter()) {
+        *q = if r > 0.0 { 1.0 / r } else { 0.0 };
+    }
     for (m, column) in columns.iter_mut().zip(a[..k * k].chunks_exact(k)) {
         *m = column
             .iter()
-            .zip(rows.iter())
-            .filter(|(_, &r)| r > 0.0)
-            .fold(0.0f64, |m, (v, &r)| m.max(v.norm1() / r));
+            .zip(inverse.iter())
+            .fold(0.0f64, |m, (v, &q)| m.max(v.norm1() * q))
+            .min(1.0);
     }
 }
 
@@ -463,7 +471,7 @@ mod tests {
             let mut old = a.clone();
             let mut piv = vec![0; k];
             let by_block = lu_in_place(&mut old, k, &mut piv, 1e-10);
-            let mut scratch = vec![0.0; 2 * k];
+            let mut scratch = vec![0.0; 3 * k];
             scales(&a, k, &mut scratch);
             let by_rows = lu_in_place(&mut a, k, &mut piv, 0.0)
                 && pivots_clear(&a, k, &piv, &mut scratch, 1e-10);
