@@ -66,6 +66,9 @@ thread_local! {
     static WS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
+/// The number of terms from which [`NonaffineForms::dot`] sums in four running sums.
+const DOT_SPLIT: usize = 8;
+
 /// A form under construction: the constant and the coefficients by variable.
 #[derive(Clone, Default)]
 struct Sparse {
@@ -207,11 +210,27 @@ impl NonaffineForms {
     }
 
     /// `c + Σ a_v w_v` of `f` (the same sum, in the same order, wherever it is evaluated).
+    ///
+    /// A form of [`DOT_SPLIT`] terms or more is summed in four running sums (terms `4i + l`
+    /// into sum `l`), added pairwise at the end, then to the terms after the last four and `c`:
+    /// the drag points' forms read a dozen states each, and one running sum would make each
+    /// product wait on the addition before it.
     #[inline]
     fn dot(&self, w: &[f64], f: &Form) -> f64 {
-        self.entries[f.start as usize..f.end as usize]
-            .iter()
-            .fold(f.c, |acc, &(v, a)| acc + a * w[v as usize])
+        let e = &self.entries[f.start as usize..f.end as usize];
+        let term = |&(v, a): &(u32, f64)| a * w[v as usize];
+        if e.len() < DOT_SPLIT {
+            return e.iter().fold(f.c, |acc, t| acc + term(t));
+        }
+        let (body, tail) = e.split_at(e.len() - e.len() % 4);
+        let mut sums = [0.0; 4];
+        for four in body.chunks_exact(4) {
+            for (s, t) in sums.iter_mut().zip(four) {
+                *s += term(t);
+            }
+        }
+        let rest = tail.iter().fold(f.c, |acc, t| acc + term(t));
+        rest + ((sums[0] + sums[1]) + (sums[2] + sums[3]))
     }
 
     /// The `c`-th nonlinear result from the variables before it in `w`.

@@ -431,10 +431,10 @@ fn factor_block<T: Scalar>(
     scratch: &mut [f64],
 ) -> bool {
     if floor == 0.0 {
-        return lu_in_place(a, k, piv, 0.0);
+        return lu_in_place(a, k, piv);
     }
     scales(a, k, scratch);
-    lu_in_place(a, k, piv, 0.0) && pivots_clear(a, k, piv, scratch, floor)
+    lu_in_place(a, k, piv) && pivots_clear(a, k, piv, scratch, floor)
 }
 
 /// Makes `v` at least `len` long, never shorter: the buffers serve partitions of different
@@ -533,7 +533,7 @@ mod tests {
     fn loops_with_floor<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
         let mut scratch = vec![0.0; 3 * k];
         scales(a, k, &mut scratch);
-        super::super::lu::lu_in_place_loops(a, k, piv, 0.0)
+        super::super::lu::lu_in_place_loops(a, k, piv)
             && (floor == 0.0 || pivots_clear(a, k, piv, &mut scratch, floor))
     }
 

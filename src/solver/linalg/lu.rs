@@ -19,41 +19,41 @@ const VECTOR_FROM: usize = 9;
 
 /// LU with partial pivoting of the column-major k × k matrix `a` in place (unit lower L below
 /// the diagonal, U above it, and the reciprocals of U's diagonal on the diagonal), interchanges
-/// in `piv` (row j was swapped with row piv[j]). False if a pivot is zero or below `floor`
-/// times the largest entry of `a`.
+/// in `piv` (row j was swapped with row piv[j]). False if a pivot is zero or not finite; a
+/// structured partition judges its blocks' pivots afterwards ([`pivots_clear`]).
 ///
 /// The diagonal is stored inverted because every factorisation serves many solves (8 per
 /// Rodas5P step, several per Newton iteration of Radau5, hundreds of steps with a constant
 /// Jacobian): a solve then multiplies where it would divide, and a division (a complex one
 /// above all) costs several multiplications' latency on the solve's critical path.
-pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) -> bool {
     // The plate's modes make blocks of one state, the servo valve's three and four: with k
     // known the loops unroll (the same operations in the same order, so the same bits).
     match k {
-        1 => return lu_in_place_loops(a, 1, piv, floor),
-        2 => return lu_in_place_loops(a, 2, piv, floor),
-        3 => return lu_in_place_loops(a, 3, piv, floor),
-        4 => return lu_in_place_loops(a, 4, piv, floor),
+        1 => return lu_in_place_loops(a, 1, piv),
+        2 => return lu_in_place_loops(a, 2, piv),
+        3 => return lu_in_place_loops(a, 3, piv),
+        4 => return lu_in_place_loops(a, 4, piv),
         _ => {}
     }
     #[cfg(target_arch = "x86_64")]
     {
         if k >= VECTOR_FROM && !portable_only() && std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2 (checked just above).
-            return unsafe { lu_in_place_avx2(a, k, piv, floor) };
+            return unsafe { lu_in_place_avx2(a, k, piv) };
         }
     }
-    lu_in_place_large(a, k, piv, floor)
+    lu_in_place_large(a, k, piv)
 }
 
 /// [`lu_in_place`] for a block of more than four states: in panels from [`PANELS_FROM`]
 /// states, the loops below.
 #[inline(always)]
-fn lu_in_place_large<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize], floor: f64) -> bool {
+fn lu_in_place_large<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) -> bool {
     if k >= PANELS_FROM {
-        lu_in_place_panels(a, k, piv, floor)
+        lu_in_place_panels(a, k, piv)
     } else {
-        lu_in_place_loops(a, k, piv, floor)
+        lu_in_place_loops(a, k, piv)
     }
 }
 
@@ -82,14 +82,8 @@ const PANEL: usize = 4;
 /// large block (the dense LU of a system of hundreds of states) is the difference between
 /// streaming the matrix from memory at every elimination and at every fourth.
 #[inline(always)]
-pub(super) fn lu_in_place_panels<T: Scalar>(
-    a: &mut [T],
-    k: usize,
-    piv: &mut [usize],
-    floor: f64,
-) -> bool {
+pub(super) fn lu_in_place_panels<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) -> bool {
     let a = &mut a[..k * k];
-    let tiny = pivot_floor(a, floor);
     let mut j0 = 0;
     while j0 < k {
         let j1 = (j0 + PANEL).min(k);
@@ -106,7 +100,7 @@ pub(super) fn lu_in_place_panels<T: Scalar>(
                     }
                 }
             }
-            if !pivot_and_scale(a, k, j, tiny, piv) {
+            if !pivot_and_scale(a, k, j, piv) {
                 return false;
             }
         }
@@ -168,13 +162,8 @@ pub(super) fn lu_in_place_panels<T: Scalar>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn lu_in_place_avx2<T: Scalar>(
-    a: &mut [T],
-    k: usize,
-    piv: &mut [usize],
-    floor: f64,
-) -> bool {
-    lu_in_place_large(a, k, piv, floor)
+unsafe fn lu_in_place_avx2<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) -> bool {
+    lu_in_place_large(a, k, piv)
 }
 
 /// Whether the tests asked for the portable loops only (always false outside the tests).
@@ -189,16 +178,10 @@ fn portable_only() -> bool {
 
 /// [`lu_in_place`]'s loops.
 #[inline(always)]
-pub(super) fn lu_in_place_loops<T: Scalar>(
-    a: &mut [T],
-    k: usize,
-    piv: &mut [usize],
-    floor: f64,
-) -> bool {
+pub(super) fn lu_in_place_loops<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) -> bool {
     let a = &mut a[..k * k];
-    let tiny = pivot_floor(a, floor);
     for j in 0..k {
-        if !pivot_and_scale(a, k, j, tiny, piv) {
+        if !pivot_and_scale(a, k, j, piv) {
             return false;
         }
         // The columns after j, with column j's multipliers.
@@ -290,7 +273,7 @@ pub(super) fn scales<T: Scalar>(a: &[T], k: usize, out: &mut [f64]) {
     rows.fill(0.0);
     for column in a[..k * k].chunks_exact(k) {
         for (m, v) in rows.iter_mut().zip(column) {
-            *m = m.max(v.norm1());
+            *m = larger(*m, v.norm1());
         }
     }
     // A product by each row's reciprocal instead of a division per entry (a zero row, whose
@@ -301,11 +284,31 @@ pub(super) fn scales<T: Scalar>(a: &[T], k: usize, out: &mut [f64]) {
         *q = if r > 0.0 { 1.0 / r } else { 0.0 };
     }
     for (m, column) in columns.iter_mut().zip(a[..k * k].chunks_exact(k)) {
-        *m = column
-            .iter()
-            .zip(inverse.iter())
-            .fold(0.0f64, |m, (v, &q)| m.max(v.norm1() * q))
-            .min(1.0);
+        // Four running maxima, so that the comparisons do not wait on each other.
+        let mut four = [0.0f64; 4];
+        let (body, tail) = column.split_at(k - k % 4);
+        for (v, q) in body.chunks_exact(4).zip(inverse.chunks_exact(4)) {
+            for l in 0..4 {
+                four[l] = larger(four[l], v[l].norm1() * q[l]);
+            }
+        }
+        let quotients = tail.iter().zip(&inverse[k - k % 4..]);
+        let most = quotients.fold(
+            larger(larger(four[0], four[1]), larger(four[2], four[3])),
+            |m, (v, &q)| larger(m, v.norm1() * q),
+        );
+        *m = most.min(1.0);
+    }
+}
+
+/// The larger of `m` and `x`, `m` if `x` is NaN: one comparison the compiler can vectorise
+/// (`f64::max`'s handling of NaN in either operand keeps it from doing so).
+#[inline(always)]
+fn larger(m: f64, x: f64) -> f64 {
+    if x > m {
+        x
+    } else {
+        m
     }
 }
 
@@ -319,9 +322,9 @@ pub(super) fn scales<T: Scalar>(a: &[T], k: usize, out: &mut [f64]) {
 /// plate mode's block pairs its displacement's row, whose entries are near `1/(h γ)` and `1/m`,
 /// with its momentum's, near its stiffness, up to 1e11 apart in a 20 × 20 plate, and a block of
 /// the servo valve has a column of pressures' rates per unit volume, 1e16 against the others'
-/// 1e2. Against the block's largest entry, as the kernels' own `floor` measures, such blocks
-/// are refused though their elimination is as stable as any. Every pivot the kernels' measure
-/// accepts is accepted here too: `r` is at most the largest entry and `c` at most 1.
+/// 1e2. Against the block's largest entry, such blocks would be refused though their
+/// elimination is as stable as any. Every pivot that measure accepts is accepted here too:
+/// `r` is at most the largest entry and `c` at most 1.
 pub(super) fn pivots_clear<T: Scalar>(
     lu: &[T],
     k: usize,
@@ -342,24 +345,12 @@ pub(super) fn pivots_clear<T: Scalar>(
     true
 }
 
-/// The size at or below which a pivot is refused: `floor` times the largest entry of `a`.
-#[inline(always)]
-fn pivot_floor<T: Scalar>(a: &[T], floor: f64) -> f64 {
-    floor * a.iter().fold(0.0f64, |m, v| m.max(v.norm1()))
-}
-
 /// Step j's pivot ([`pivot`]) and column j made into multipliers: its entries below the
 /// diagonal divided by the pivot, the pivot's reciprocal on the diagonal. False if the pivot is
 /// refused.
 #[inline(always)]
-fn pivot_and_scale<T: Scalar>(
-    a: &mut [T],
-    k: usize,
-    j: usize,
-    tiny: f64,
-    piv: &mut [usize],
-) -> bool {
-    if !pivot(a, k, j, tiny, piv) {
+fn pivot_and_scale<T: Scalar>(a: &mut [T], k: usize, j: usize, piv: &mut [usize]) -> bool {
+    if !pivot(a, k, j, piv) {
         return false;
     }
     let column = &mut a[j * k..j * k + k];
@@ -375,7 +366,7 @@ fn pivot_and_scale<T: Scalar>(
 /// at or below the diagonal, recorded in `piv[j]` and swapped into row j; false if that entry
 /// is zero, not finite, or not above `tiny`.
 #[inline(always)]
-fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, tiny: f64, piv: &mut [usize]) -> bool {
+fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, piv: &mut [usize]) -> bool {
     let column = &a[j * k..j * k + k];
     let mut p = j;
     let mut pmax = column[j].norm1();
@@ -387,7 +378,7 @@ fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, tiny: f64, piv: &mut [usize
         }
     }
     piv[j] = p;
-    if pmax == 0.0 || pmax <= tiny || !pmax.is_finite() {
+    if pmax == 0.0 || !pmax.is_finite() {
         return false;
     }
     if p != j {
@@ -442,8 +433,8 @@ mod tests {
         pub(super) static PORTABLE_ONLY: Cell<bool> = const { Cell::new(false) };
     }
 
-    /// [`pivots_clear`] accepts every block the kernels' own floor (against the block's largest
-    /// entry) accepts, and more: random blocks of 1 to 6 states, some nearly singular, with rows
+    /// [`pivots_clear`] accepts every block that a test against the block's largest entry
+    /// (every pivot above 1e-10 of it) accepts, and more: random blocks of 1 to 6 states, some nearly singular, with rows
     /// and columns scaled by up to 1e±6.
     #[test]
     fn the_equilibrated_test_accepts_what_the_block_test_accepts() {
@@ -468,13 +459,16 @@ mod tests {
             for (i, v) in a.iter_mut().enumerate() {
                 *v *= row[i % k] * col[i / k];
             }
-            let mut old = a.clone();
-            let mut piv = vec![0; k];
-            let by_block = lu_in_place(&mut old, k, &mut piv, 1e-10);
+            // The block test: every pivot above 1e-10 of the block's largest entry (the
+            // pivots are those of the same elimination; the diagonal holds their reciprocals).
+            let largest = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let mut scratch = vec![0.0; 3 * k];
             scales(&a, k, &mut scratch);
-            let by_rows = lu_in_place(&mut a, k, &mut piv, 0.0)
-                && pivots_clear(&a, k, &piv, &mut scratch, 1e-10);
+            let mut piv = vec![0; k];
+            let factorised = lu_in_place(&mut a, k, &mut piv);
+            let by_block =
+                factorised && (0..k).all(|j| (1.0 / a[j + j * k]).abs() > 1e-10 * largest);
+            let by_rows = factorised && pivots_clear(&a, k, &piv, &mut scratch, 1e-10);
             assert!(
                 !by_block || by_rows,
                 "round {round}: refused what the block test accepts"
@@ -491,11 +485,9 @@ mod tests {
     /// [`lu_in_place`]'s elimination as it was written with index loops (its pivoting is the
     /// same [`pivot`]), the reference for the bits of the iterator loops; and the solve with the
     /// index loops of [`lu_solve_loops`].
-    fn lu_indexed(a: &mut [f64], k: usize, piv: &mut [usize], floor: f64) -> bool {
-        let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let tiny = floor * amax;
+    fn lu_indexed(a: &mut [f64], k: usize, piv: &mut [usize]) -> bool {
         for j in 0..k {
-            if !pivot(a, k, j, tiny, piv) {
+            if !pivot(a, k, j, piv) {
                 return false;
             }
             let d = a[j + j * k];
@@ -561,8 +553,8 @@ mod tests {
                     .collect();
                 let (mut lu, mut reference) = (a.clone(), a.clone());
                 let (mut piv, mut piv_ref) = (vec![0; k], vec![0; k]);
-                let ok = lu_in_place(&mut lu, k, &mut piv, 1e-10);
-                assert_eq!(ok, lu_indexed(&mut reference, k, &mut piv_ref, 1e-10));
+                let ok = lu_in_place(&mut lu, k, &mut piv);
+                assert_eq!(ok, lu_indexed(&mut reference, k, &mut piv_ref));
                 if !ok {
                     // Refused at the same column; the half-eliminated rest is nobody's (the
                     // panels leave it differently).
@@ -591,10 +583,10 @@ mod tests {
         fn both<T: Scalar + std::fmt::Debug>(a: &[T], k: usize) -> [String; 2] {
             let mut lu = a.to_vec();
             let mut piv = vec![usize::MAX; k];
-            let ok = lu_in_place_panels(&mut lu, k, &mut piv, 1e-12);
+            let ok = lu_in_place_panels(&mut lu, k, &mut piv);
             let mut reference = a.to_vec();
             let mut piv_ref = vec![usize::MAX; k];
-            let ok_ref = lu_in_place_loops(&mut reference, k, &mut piv_ref, 1e-12);
+            let ok_ref = lu_in_place_loops(&mut reference, k, &mut piv_ref);
             // A refused matrix is left half-eliminated, differently: only the refusal and the
             // column it came at (the pivots chosen up to it) are compared.
             if !(ok && ok_ref) {
@@ -631,7 +623,7 @@ mod tests {
                 let [panels, loops] = both(&a, k);
                 assert_eq!(panels, loops, "real, k = {k}, trial {trial}");
                 let mut piv = vec![0; k];
-                lu_in_place_loops(&mut a.clone(), k, &mut piv, 1e-12);
+                lu_in_place_loops(&mut a.clone(), k, &mut piv);
                 swaps += piv.iter().enumerate().filter(|&(j, &p)| p != j).count();
                 let ac: Vec<Complex<f64>> = a
                     .iter()
@@ -659,7 +651,7 @@ mod tests {
                 PORTABLE_ONLY.with(|p| p.set(portable));
                 let mut lu = a.to_vec();
                 let mut piv = vec![0; k];
-                let ok = lu_in_place(&mut lu, k, &mut piv, 1e-10);
+                let ok = lu_in_place(&mut lu, k, &mut piv);
                 let mut x = rhs.to_vec();
                 lu_solve(&lu, k, &piv, &mut x);
                 PORTABLE_ONLY.with(|p| p.set(false));
@@ -695,7 +687,7 @@ mod tests {
         fn check<T: Scalar + std::fmt::Debug>(a: &[T], k: usize, rhs: &[T]) {
             let mut lu = a.to_vec();
             let mut piv = vec![0; k];
-            assert!(lu_in_place(&mut lu, k, &mut piv, 0.0));
+            assert!(lu_in_place(&mut lu, k, &mut piv));
             let (mut fast, mut loops) = (rhs.to_vec(), rhs.to_vec());
             lu_solve(&lu, k, &piv, &mut fast);
             lu_solve_loops(&lu, k, &piv, &mut loops);

@@ -193,7 +193,7 @@ impl VaryingRows {
                 self.s[a + b * r] = diagonal - jac[(i, j)] - self.s_row[b];
             }
         }
-        lu_in_place(&mut self.s, r, &mut self.piv, 0.0)
+        lu_in_place(&mut self.s, r, &mut self.piv)
     }
 
     /// Σ_k J_{R_a, P_k} v_k over the couplings of varying row `a` (`v` indexed by position
