@@ -1,8 +1,10 @@
 //! Rough timing of the compiled plan: derivatives and Jacobian of the LOES, of a chain of 20
 //! masses, and of the complete system with the full servo valve (preset `complete`, 44 states),
 //! whose Jacobian is timed twice in the same run: every entry evaluated, and with the constant
-//! entries fixed once (`CompiledModel::fix_constant_entries`, what the FMU does)
-//! (`cargo run --release --bin bench-plan`). A benchmark, not a test: it prints figures and
+//! entries fixed once (`CompiledModel::fix_constant_entries`); then what the integrators call
+//! at every stage and step (the assembled model's right-hand side, the affine rows as a sparse
+//! product and the others as forms, and its varying Jacobian entries from the forms, beside the
+//! same entries by the plan's tangent sweeps) (`cargo run --release --bin bench-plan`). A benchmark, not a test: it prints figures and
 //! asserts nothing.
 
 use std::time::Instant;
@@ -15,6 +17,7 @@ use hydraulic_slewing_plate::model::parameters::Parameters;
 use hydraulic_slewing_plate::model::presets;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use hydraulic_slewing_plate::model::{assembly::Assembled, compose::bond_graph};
+use hydraulic_slewing_plate::solver::OdeSystem;
 use nalgebra::DMatrix;
 
 /// A chain of `n` masses and springs driven by a force: 2n states.
@@ -57,6 +60,15 @@ fn jacobian_time(m: &CompiledModel, x: &[f64], u: &[f64]) -> f64 {
     let t = Instant::now();
     for _ in 0..reps {
         m.jacobian(x, u, &mut jac);
+    }
+    t.elapsed().as_secs_f64() / reps as f64 * 1e6
+}
+
+/// Mean time of `f` over `reps` calls, in µs.
+fn mean_time(reps: usize, mut f: impl FnMut()) -> f64 {
+    let t = Instant::now();
+    for _ in 0..reps {
+        f();
     }
     t.elapsed().as_secs_f64() / reps as f64 * 1e6
 }
@@ -124,5 +136,29 @@ fn main() {
         fixed.variable_jacobian_colours(),
         fixed.variable_jacobian_pass_ops(),
         fixed.variable_jacobian_ops(),
+    );
+    // What the integrators call, alternating the same way: the right-hand side, and the
+    // varying entries from the forms against the same entries by tangent sweeps.
+    let n = system.dim();
+    let (mut dx, mut jac) = (vec![0.0; n], DMatrix::zeros(n, n));
+    let inputs = system.inputs().to_vec();
+    let (mut t_rhs, mut t_forms, mut t_sweeps) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..5 {
+        t_rhs.push(mean_time(200_000, || system.rhs(0.0, &x, &mut dx)));
+        t_forms.push(mean_time(100_000, || {
+            assert!(system.jacobian_varying(0.0, &x, &mut jac));
+        }));
+        t_sweeps.push(mean_time(20_000, || {
+            assert!(fixed.jacobian_varying_by_sweeps(&x, &inputs, &mut jac));
+        }));
+    }
+    let varying: usize = fixed.jacobian_varying_pattern().iter().map(Vec::len).sum();
+    println!(
+        "complete (servo valve) as the integrators call it, median of 5 alternating runs: \
+         right-hand side {:.3} us; the {varying} varying entries from the forms {:.3} us, by \
+         tangent sweeps {:.3} us",
+        median(&mut t_rhs),
+        median(&mut t_forms),
+        median(&mut t_sweeps),
     );
 }

@@ -15,6 +15,12 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
     };
     let nonzeros: usize = m.jacobian_pattern().iter().map(Vec::len).sum();
     let varying: usize = m.jacobian_varying_pattern().iter().map(Vec::len).sum();
+    // What each step evaluates: the varying entries by the chain rule through the forms of the
+    // rows that are not affine (`FormsJacobian`), a multiply-add per link.
+    let (_, chain_links) = m
+        .nonaffine_forms()
+        .jacobian(m.n_states(), m.jacobian_varying_pattern())
+        .size();
     serde_json::json!({
         "states": m.n_states(),
         "inputs": m.input_names(),
@@ -35,6 +41,7 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
             "passes_per_step": m.variable_jacobian_colours(),
             "operations_full": m.jacobian_colours() * m.derivative_plan_len(),
             "operations_per_step": m.variable_jacobian_ops(),
+            "chain_links_per_step": chain_links,
             "constant_entries_fixed": m.constant_entries_fixed(),
         },
     })
@@ -100,10 +107,13 @@ pub fn text(system: &Assembled) -> String {
         format!("passes     {full}, once per parameter set\n")
     } else {
         format!(
-            "passes     {full} for every entry; once the constant entries are fixed, each \
-             step: one value pass and tangent sweeps over {} column groups, {} operations in all\n",
+            "passes     {full} for every entry; once the constant entries are fixed, one \
+             value pass and tangent sweeps over {} column groups, {} operations in all; each \
+             step: the varying entries by the chain rule through the forms of f, {} \
+             multiply-adds\n",
             m.variable_jacobian_colours(),
-            m.variable_jacobian_ops()
+            m.variable_jacobian_ops(),
+            j["chain_links_per_step"]
         )
     });
     if !variable.is_empty() {
