@@ -256,3 +256,45 @@ fn the_forms_give_the_varying_entries_of_the_sweeps() {
     }
     assert!(checked > 0);
 }
+
+/// The servo valve's rest state by Newton steps through the structured LU (what the FMU does)
+/// is the one by least-norm SVD steps (the reference, which handles singular Jacobians), on
+/// every preset with the full valve and on the default with a 20 x 20 plate: every state within
+/// 1e-10 of its nominal value.
+#[test]
+fn the_structured_rest_state_is_the_least_norm_one() {
+    use hydraulic_slewing_plate::fragments::servo_valve::rest::rest_state_least_norm;
+    use hydraulic_slewing_plate::model::parameters::HydraulicsModel;
+    let mut cases: Vec<(String, _)> = presets::PRESETS
+        .iter()
+        .map(|p| (p.name.to_string(), parameters(p.name)))
+        .collect();
+    let large = parameters_with("complete", &[("plate.N", "20"), ("plate.M", "20")]);
+    cases.push(("complete 20 x 20".into(), large));
+    let mut checked = 0;
+    for (name, p) in &cases {
+        if !matches!(p.hydraulics, HydraulicsModel::ServoValve) {
+            continue;
+        }
+        let system = Assembled::new(p).unwrap();
+        let m = system.compiled();
+        let u = vec![0.0; m.n_inputs()];
+        let reference =
+            rest_state_least_norm(m, &u, "servo_valve", &p.servo_valve, system.nominal()).unwrap();
+        let rest = system.initial_state();
+        for (i, ((a, b), n)) in rest
+            .iter()
+            .zip(&reference)
+            .zip(system.nominal())
+            .enumerate()
+        {
+            assert!(
+                (a - b).abs() <= 1e-10 * n,
+                "{name}: {} {a:e} against {b:e}",
+                m.state_names()[i]
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 3, "{checked}");
+}

@@ -108,9 +108,22 @@ pub struct Factorisation<T: Scalar> {
     /// whose structured elimination fails at every step (a badly scaled block) then allocates
     /// nothing per step.
     dense_fallback: Option<Arc<Partition>>,
+    /// Judge the pivots of a dense partition too ([`Factorisation::judging_pivots`]).
+    judge_dense: bool,
 }
 
 impl<T: Scalar> Factorisation<T> {
+    /// An empty factorisation that judges the pivots of every partition, the dense one
+    /// included, by the equilibrated test of the structured ones: for a caller that needs to
+    /// know whether a matrix is singular to rounding (a Newton step that must fall back to a
+    /// least-norm solve), not for an iteration matrix, which the dense LU must take as it is.
+    pub fn judging_pivots(part: Arc<Partition>) -> Self {
+        Factorisation {
+            judge_dense: true,
+            ..Self::new(part)
+        }
+    }
+
     /// An empty factorisation (to be filled by [`Factorisation::factor`]).
     pub fn new(part: Arc<Partition>) -> Self {
         Factorisation {
@@ -123,6 +136,7 @@ impl<T: Scalar> Factorisation<T> {
             schur_piv: Vec::new(),
             scales: Vec::new(),
             dense_fallback: None,
+            judge_dense: false,
         }
     }
 
@@ -148,7 +162,11 @@ impl<T: Scalar> Factorisation<T> {
         let n = p.n;
         let nb = p.starts[p.blocks()];
         let m = n - nb;
-        let floor = if p.is_dense() { 0.0 } else { PIVOT_FLOOR };
+        let floor = if p.is_dense() && !self.judge_dense {
+            0.0
+        } else {
+            PIVOT_FLOOR
+        };
         grow(&mut self.lu, p.lu_len, T::ZERO);
         grow(&mut self.x, p.x_len, T::ZERO);
         grow(&mut self.c, p.x_len, T::ZERO);

@@ -268,6 +268,10 @@ pub(super) fn solve_2x2<T: Scalar>(
 /// each row, `out[..k]`, and of each column once every row is divided by its own,
 /// `out[k..2k]` (LAPACK's `dgeequ` equilibration, as sizes rather than their reciprocals).
 pub(super) fn scales<T: Scalar>(a: &[T], k: usize, out: &mut [f64]) {
+    if k == 0 {
+        // An empty block (a partition without a border): nothing to scale.
+        return;
+    }
     let (rows, rest) = out[..3 * k].split_at_mut(k);
     let (columns, inverse) = rest.split_at_mut(k);
     rows.fill(0.0);
