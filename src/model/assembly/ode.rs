@@ -25,7 +25,15 @@ impl OdeSystem for Assembled {
     fn jacobian(&self, _t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> bool {
         match &self.constant_jacobian {
             Some((_, j)) => jac.copy_from(j),
-            None => self.compiled.jacobian(x, &self.inputs, jac),
+            None => {
+                self.compiled.jacobian(x, &self.inputs, jac);
+                // The varying entries with the bits `jacobian_varying` gives them, so that a
+                // full evaluation and an update of a held matrix agree to the bit (a restored
+                // FMU state starts from a full one).
+                if self.constant_part.is_some() {
+                    self.varying_entries(x, jac);
+                }
+            }
         }
         true
     }
@@ -39,14 +47,7 @@ impl OdeSystem for Assembled {
     }
 
     fn jacobian_varying(&self, _t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> bool {
-        if self.constant_part.is_none() {
-            return false;
-        }
-        // From the forms of the rows that are not affine where they give finite entries, else
-        // through the plan (whose passes handle a law's infinite slope at a zero weight).
-        let by_forms = |a: &Affine| a.jacobian_varying(&self.compiled, x, &self.inputs, jac);
-        self.affine.as_ref().is_some_and(by_forms)
-            || self.compiled.jacobian_varying(x, &self.inputs, jac)
+        self.constant_part.is_some() && self.varying_entries(x, jac)
     }
 
     fn jacobian_varying_pattern(&self) -> Option<&[Vec<u32>]> {
@@ -62,5 +63,16 @@ impl OdeSystem for Assembled {
     fn is_autonomous(&self) -> bool {
         // The inputs are held constant over a communication step.
         true
+    }
+}
+
+impl Assembled {
+    /// The Jacobian's varying entries into `jac`: from the forms of the rows that are not affine
+    /// where they give finite entries, else through the plan (whose passes handle a law's
+    /// infinite slope at a zero weight). Whether they are finite.
+    fn varying_entries(&self, x: &[f64], jac: &mut DMatrix<f64>) -> bool {
+        let by_forms = |a: &Affine| a.jacobian_varying(&self.compiled, x, &self.inputs, jac);
+        self.affine.as_ref().is_some_and(by_forms)
+            || self.compiled.jacobian_varying(x, &self.inputs, jac)
     }
 }
