@@ -257,12 +257,12 @@ fn the_forms_give_the_varying_entries_of_the_sweeps() {
     assert!(checked > 0);
 }
 
-/// The servo valve's rest state by Newton steps through the structured LU (what the FMU does)
-/// is the one by least-norm SVD steps (the reference, which handles singular Jacobians), on
-/// every preset with the full valve and on the default with a 20 x 20 plate: every state within
-/// 1e-10 of its nominal value.
+/// The servo valve's rest state by Newton steps through the LU with partial pivoting (what the
+/// FMU does) is the one by least-norm SVD steps (the reference, which handles singular
+/// Jacobians), on every preset with the full valve and on the default with a 20 x 20 plate:
+/// every state within 1e-10 of its nominal value.
 #[test]
-fn the_structured_rest_state_is_the_least_norm_one() {
+fn the_lu_rest_state_is_the_least_norm_one() {
     use hydraulic_slewing_plate::fragments::servo_valve::rest::rest_state_least_norm;
     use hydraulic_slewing_plate::model::parameters::HydraulicsModel;
     let mut cases: Vec<(String, _)> = presets::PRESETS

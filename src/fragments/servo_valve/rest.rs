@@ -36,8 +36,8 @@ pub fn rest_state(
     newton(model, u, prefix, p, scale, true)
 }
 
-/// [`rest_state`] with every step the least-norm one by SVD: the reference its structured
-/// steps are tested against.
+/// [`rest_state`] with every step the least-norm one by SVD: the reference its LU steps are
+/// tested against.
 #[doc(hidden)]
 pub fn rest_state_least_norm(
     model: &CompiledModel,
@@ -55,7 +55,7 @@ fn newton(
     prefix: &str,
     p: &ServoValveParameters,
     scale: &[f64],
-    structured: bool,
+    by_lu: bool,
 ) -> Result<Vec<f64>, String> {
     let n = model.n_states();
     let names = model.state_names();
@@ -83,7 +83,7 @@ fn newton(
         // Solve in scaled variables x = S z: (S^-1 J S) dz = -S^-1 f, a matrix of rates (1/s).
         let js = DMatrix::from_fn(n, n, |i, j| jac[(i, j)] * scale[j] / scale[i]);
         let rhs = DVector::from_iterator(n, (0..n).map(|i| -f[i] / scale[i]));
-        let dz = match structured.then(|| lu_step(&js, &rhs)).flatten() {
+        let dz = match by_lu.then(|| lu_step(&js, &rhs)).flatten() {
             Some(dz) => dz,
             None => {
                 let svd = js.svd(true, true);
@@ -110,7 +110,7 @@ fn newton(
 /// column is zero (a free angle, which no rate reads) replaced by `dz_j = 0`, the least-norm
 /// step's value there. Its own equation (the angle's rate, a speed, zero) is left to the other
 /// equations, which bring every speed to rest: the rest state is the least-norm iteration's
-/// (test `the_structured_rest_state_is_the_least_norm_one`, on every preset), the path to it
+/// (test `the_lu_rest_state_is_the_least_norm_one`, on every preset), the path to it
 /// differs. `None` where a pivot is small in the equilibrated matrix
 /// ([`Factorisation::judging_pivots`]: a Jacobian singular otherwise, as with the hub locked,
 /// where the rotor angle and the bar's twist integrate the same speed) or the step's residual
