@@ -22,6 +22,13 @@ fn points(system: &Assembled, count: usize, spread: f64, seed: u64) -> Vec<(Vec<
     })
 }
 
+/// Whether `a` and `b` hold the same bits, entry by entry.
+fn same_bits(a: &DMatrix<f64>, b: &DMatrix<f64>) -> bool {
+    a.iter()
+        .zip(b.iter())
+        .all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 fn jacobian(m: &CompiledModel, x: &[f64], u: &[f64]) -> DMatrix<f64> {
     let n = m.n_states();
     let mut jac = DMatrix::zeros(n, n);
@@ -184,11 +191,11 @@ fn varying_update_gives_the_bits_of_a_full_evaluation() {
         for (x, u) in &pts[1..] {
             assert!(m.jacobian_varying(x, u, &mut held), "{}", preset.name);
             let full = jacobian(m, x, u);
-            let same = held
-                .iter()
-                .zip(full.iter())
-                .all(|(a, b)| a.to_bits() == b.to_bits());
-            assert!(same, "{}: the update differs from the full J", preset.name);
+            assert!(
+                same_bits(&held, &full),
+                "{}: the update differs from the full J",
+                preset.name
+            );
         }
     }
 }
@@ -324,11 +331,11 @@ fn the_assembled_jacobian_and_its_update_agree_to_the_bit() {
             );
             let mut full = DMatrix::from_element(n, n, f64::NAN);
             system.jacobian(0.0, x, &mut full);
-            let same = held
-                .iter()
-                .zip(full.iter())
-                .all(|(a, b)| a.to_bits() == b.to_bits());
-            assert!(same, "{}: the update differs from the full J", preset.name);
+            assert!(
+                same_bits(&held, &full),
+                "{}: the update differs from the full J",
+                preset.name
+            );
             checked += 1;
         }
     }

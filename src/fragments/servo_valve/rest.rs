@@ -21,11 +21,11 @@ use super::ServoValveParameters;
 /// has no rest value: it stays at its guess too.
 ///
 /// Each step is first solved by the solver's LU with partial pivoting ([`Factorisation`]) on
-/// the states whose rate depends on some state, the others' steps 0: for a model of hundreds of
-/// states (816 with a 20 × 20 plate) tens of milliseconds where the SVD of its Jacobian takes
-/// seconds. Where a pivot is small in the equilibrated matrix (a Jacobian singular to rounding,
-/// as with a free rotor angle) or the step does not solve the system to a backward error of
-/// 1e-9, the step is the least-norm one by SVD.
+/// the states whose rate depends on some state, the others' steps 0, and a free angle's step 0
+/// (see `lu_step`): for a model of hundreds of states (816 with a 20 × 20 plate) tens of
+/// milliseconds where the SVD of its Jacobian takes seconds. Where a pivot is small in the
+/// equilibrated matrix (a Jacobian singular otherwise, as with the hub locked) or the step does
+/// not solve the system to a backward error of 1e-9, the step is the least-norm one by SVD.
 pub fn rest_state(
     model: &CompiledModel,
     u: &[f64],
