@@ -16,6 +16,8 @@
 //!
 //! `tests/portable_math.rs` checks that the library calls no platform function but `sqrt`.
 
+pub mod lanes;
+
 use nalgebra::DMatrix;
 
 /// `a b`, each entry summed in order of the inner index with separately rounded products and

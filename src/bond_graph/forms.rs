@@ -21,6 +21,8 @@ mod jacobian;
 
 pub use jacobian::FormsJacobian;
 
+use crate::math::lanes::{self, Lanes, Run, Summation, LANES};
+
 use super::compiled::CompiledModel;
 use super::plan::{Op, NONE};
 
@@ -60,6 +62,13 @@ pub struct NonaffineForms {
     /// (row, form).
     rows: Vec<(u32, Form)>,
     entries: Vec<(u32, f64)>,
+    /// Runs of nonlinear operations evaluated side by side ([`lanes`]): laws without a
+    /// modulator whose first operands have one length and read no result of their run (so the
+    /// run's operands are known at its start).
+    operation_runs: Vec<Run>,
+    /// Runs of rows of one length evaluated side by side.
+    row_runs: Vec<Run>,
+    lanes: Lanes,
 }
 
 thread_local! {
@@ -68,6 +77,12 @@ thread_local! {
 
 /// The number of terms from which [`NonaffineForms::dot`] sums in four running sums.
 const DOT_SPLIT: usize = 8;
+
+/// How [`NonaffineForms::dot`] sums, for the lanes.
+const SUMMATION: Summation = Summation::Split { from: DOT_SPLIT };
+
+/// Forms shorter than this are evaluated alone: too few terms for the lanes' set-up to pay.
+const LANE_TERMS: usize = 4;
 
 /// A form under construction: the constant and the coefficients by variable.
 #[derive(Clone, Default)]
@@ -174,7 +189,74 @@ impl NonaffineForms {
             let f = push(&mut out, &form_of(&slot, s));
             out.rows.push((i, f));
         }
+        out.lay_out_lanes();
         out
+    }
+
+    /// The runs of operations and rows evaluated side by side.
+    fn lay_out_lanes(&mut self) {
+        let known = self.known;
+        // The operations that may join a run begun at `first`, with their operands' lengths.
+        let joins = |c: usize, first: usize| -> Option<usize> {
+            let op = &self.nonlinear[c];
+            let a = self.form_entries(&op.a);
+            let fits = matches!(op.kind, Kind::Law { .. })
+                && op.b.is_none()
+                && a.iter().all(|&(v, _)| (v as usize) < known + first);
+            fits.then_some(a.len())
+        };
+        let mut operations = Vec::new();
+        let mut c = 0;
+        while c < self.nonlinear.len() {
+            let Some(len) = joins(c, c).filter(|&len| len >= LANE_TERMS) else {
+                c += 1;
+                continue;
+            };
+            let end = c
+                + (c..self.nonlinear.len())
+                    .take_while(|&e| joins(e, c) == Some(len))
+                    .count();
+            if end - c >= 2 {
+                operations.push(c..end);
+            }
+            c = end;
+        }
+        let lengths: Vec<usize> = self
+            .rows
+            .iter()
+            .map(|(_, f)| self.form_entries(f).len())
+            .collect();
+        let mut lanes = Lanes::default();
+        for range in operations {
+            let forms: Vec<&[(u32, f64)]> = self.nonlinear[range.clone()]
+                .iter()
+                .map(|op| self.form_entries(&op.a))
+                .collect();
+            self.operation_runs
+                .push(lanes.add(range.start, &forms, SUMMATION));
+        }
+        for range in lanes::equal_lengths(&lengths, LANE_TERMS) {
+            let forms: Vec<&[(u32, f64)]> = self.rows[range.clone()]
+                .iter()
+                .map(|(_, f)| self.form_entries(f))
+                .collect();
+            self.row_runs
+                .push(lanes.add(range.start, &forms, SUMMATION));
+        }
+        self.lanes = lanes;
+    }
+
+    /// The constants of the forms `form(i)` for `i` in `chunk`, 0 for padding lanes.
+    #[inline]
+    fn constants(chunk: std::ops::Range<usize>, form: impl Fn(usize) -> Form) -> [f64; LANES] {
+        std::array::from_fn(|l| {
+            let i = chunk.start + l;
+            if i < chunk.end {
+                form(i).c
+            } else {
+                0.0
+            }
+        })
     }
 
     /// The form of the `count`-th nonlinear result (1-based).
@@ -183,6 +265,11 @@ impl NonaffineForms {
             c: 0.0,
             terms: vec![((known + count - 1) as u32, 1.0)],
         }
+    }
+
+    /// The (variable, coefficient) terms of `f`.
+    fn form_entries(&self, f: &Form) -> &[(u32, f64)] {
+        &self.entries[f.start as usize..f.end as usize]
     }
 
     /// Number of nonlinear operations and of coefficients: the work of one evaluation.
@@ -239,10 +326,48 @@ impl NonaffineForms {
         let op = &self.nonlinear[c];
         let a = self.dot(w, &op.a);
         let b = op.b.as_ref().map_or(0.0, |b| self.dot(w, b));
-        match op.kind {
+        self.law_value(m, c, a, b)
+    }
+
+    /// The `c`-th nonlinear result from the values `a` and `b` of its operands.
+    #[inline]
+    fn law_value(&self, m: &CompiledModel, c: usize, a: f64, b: f64) -> f64 {
+        match self.nonlinear[c].kind {
             Kind::Law { law, ki, ko } => (m.laws[law as usize].value)(a * ki, b) * ko,
             Kind::Mul { k } => (a * b) * k,
             Kind::Div { k } => (a / b) * k,
+        }
+    }
+
+    /// Every nonlinear result into its place in `w` (whose states and inputs are set), in plan
+    /// order: `alone(c, w)` gives the `c`-th from the variables before it; the operations of a
+    /// run (see [`lanes`]), whose first operands are computed four at a time, give theirs by
+    /// `from_operand(c, a)` (a law without modulator: `b` is 0).
+    #[inline]
+    fn operations(
+        &self,
+        w: &mut [f64],
+        mut alone: impl FnMut(usize, &[f64]) -> f64,
+        mut from_operand: impl FnMut(usize, f64) -> f64,
+    ) {
+        let known = self.known;
+        let mut c = 0;
+        for run in &self.operation_runs {
+            for c in c..run.forms().start {
+                w[known + c] = alone(c, w);
+            }
+            for k in 0..run.chunks() {
+                // A run reads no result of its own: its operands are known at its start.
+                let constants = Self::constants(run.chunk(k), |c| self.nonlinear[c].a);
+                let a = self.lanes.values(w, run, k, constants);
+                for (c, a) in run.chunk(k).zip(a) {
+                    w[known + c] = from_operand(c, a);
+                }
+            }
+            c = run.forms().end;
+        }
+        for c in c..self.nonlinear.len() {
+            w[known + c] = alone(c, w);
         }
     }
 
@@ -267,10 +392,26 @@ impl NonaffineForms {
                 None => w[..n].fill(0.0),
             }
             w[n..self.known].copy_from_slice(u);
-            for c in 0..self.nonlinear.len() {
-                w[self.known + c] = self.nonlinear_value(m, w, c);
+            self.operations(
+                w,
+                |c, w| self.nonlinear_value(m, w, c),
+                |c, a| self.law_value(m, c, a, 0.0),
+            );
+            let mut r = 0;
+            for run in &self.row_runs {
+                for (i, f) in &self.rows[r..run.forms().start] {
+                    each(*i, self.dot(w, f));
+                }
+                for k in 0..run.chunks() {
+                    let c = Self::constants(run.chunk(k), |p| self.rows[p].1);
+                    let v = self.lanes.values(w, run, k, c);
+                    for (p, value) in run.chunk(k).zip(v) {
+                        each(self.rows[p].0, value);
+                    }
+                }
+                r = run.forms().end;
             }
-            for (i, f) in &self.rows {
+            for (i, f) in &self.rows[r..] {
                 each(*i, self.dot(w, f));
             }
         })

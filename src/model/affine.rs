@@ -14,6 +14,7 @@ use nalgebra::DMatrix;
 use crate::bond_graph::{
     AffineOffsets, CompiledModel, FormsJacobian, Linearization, NonaffineForms, PointForms,
 };
+use crate::math::lanes::{self, Lanes, Run, Summation};
 
 /// A sparse matrix by rows: row `i`'s nonzeros are `entries[row_start[i]..row_start[i + 1]]`,
 /// as (column, value).
@@ -21,7 +22,15 @@ use crate::bond_graph::{
 pub(super) struct SparseRows {
     row_start: Vec<usize>,
     entries: Vec<(u32, f64)>,
+    /// Runs of consecutive rows of one length (the plate's modes that the drag does not reach
+    /// read the same momenta), whose products [`SparseRows::times`] computes four rows at a
+    /// time ([`lanes`]).
+    runs: Vec<Run>,
+    lanes: Lanes,
 }
+
+/// Rows shorter than this are multiplied alone: too few terms for the lanes' set-up to pay.
+const LANE_TERMS: usize = 4;
 
 impl SparseRows {
     /// The nonzeros of `m`'s rows `i` for which `keep(i)`; the other rows are left empty.
@@ -35,7 +44,46 @@ impl SparseRows {
             }
             row_start.push(entries.len());
         }
-        SparseRows { row_start, entries }
+        let rows = |range: std::ops::Range<usize>| {
+            range
+                .map(|i| &entries[row_start[i]..row_start[i + 1]])
+                .collect::<Vec<_>>()
+        };
+        let lengths: Vec<usize> = rows(0..m.nrows()).iter().map(|r| r.len()).collect();
+        let mut lanes = Lanes::default();
+        let runs = lanes::equal_lengths(&lengths, LANE_TERMS)
+            .into_iter()
+            .map(|range| lanes.add(range.start, &rows(range), Summation::Fold))
+            .collect();
+        SparseRows {
+            row_start,
+            entries,
+            runs,
+            lanes,
+        }
+    }
+
+    /// `offset_i + (row i) x` into `out[i]` for every row, the same bits as
+    /// [`SparseRows::row_times`] row by row.
+    pub(super) fn times(&self, x: &[f64], offset: &[f64], out: &mut [f64]) {
+        let mut i = 0;
+        for run in &self.runs {
+            for i in i..run.forms().start {
+                out[i] = self.row_times(i, x, offset[i]);
+            }
+            for k in 0..run.chunks() {
+                let chunk = run.chunk(k);
+                let c = std::array::from_fn(|l| offset.get(chunk.start + l).map_or(0.0, |&c| c));
+                let v = self.lanes.values(x, run, k, c);
+                for (i, v) in chunk.zip(v) {
+                    out[i] = v;
+                }
+            }
+            i = run.forms().end;
+        }
+        for i in i..out.len() {
+            out[i] = self.row_times(i, x, offset[i]);
+        }
     }
 
     /// The largest Σ_j |m_ij| over the rows.
@@ -299,9 +347,7 @@ impl Affine {
         u: &[f64],
         dx: &mut [f64],
     ) {
-        for (i, d) in dx.iter_mut().enumerate() {
-            *d = self.jac.row_times(i, x, self.offset[i]);
-        }
+        self.jac.times(x, &self.offset, dx);
         if self.partial {
             self.nonaffine.derivatives(compiled, x, u, dx);
         }

@@ -174,11 +174,6 @@ impl NonaffineForms {
         }
         out
     }
-
-    /// The (variable, coefficient) terms of `f`.
-    fn form_entries(&self, f: &Form) -> &[(u32, f64)] {
-        &self.entries[f.start as usize..f.end as usize]
-    }
 }
 
 impl FormsJacobian {
@@ -222,10 +217,9 @@ impl FormsJacobian {
             let (w, grad) = (&mut w[..len], &mut grad[..grad_len]);
             w[..x.len()].copy_from_slice(x);
             w[x.len()..known].copy_from_slice(u);
-            for (c, op) in forms.nonlinear.iter().enumerate() {
-                let a = forms.dot(w, &op.a);
-                let b = op.b.as_ref().map_or(0.0, |b| forms.dot(w, b));
-                let (y, ga, gb) = match op.kind {
+            // Each result and its gradient from its operands' values.
+            let mut result = |c: usize, a: f64, b: f64| -> f64 {
+                let (y, ga, gb) = match forms.nonlinear[c].kind {
                     Kind::Law { law, ki, ko } => {
                         let (y, dx, dm) = (m.laws[law as usize].f)(a * ki, b);
                         (y * ko, dx * ki * ko, dm * ko)
@@ -236,7 +230,6 @@ impl FormsJacobian {
                         (q * k, k / b, -(q * k) / b)
                     }
                 };
-                w[known + c] = y;
                 let (lo, hi) = (self.start[c] as usize, self.start[c + 1] as usize);
                 grad[lo..hi].fill(0.0);
                 for (range, g) in self.operands[c].iter().zip([ga, gb]) {
@@ -249,7 +242,19 @@ impl FormsJacobian {
                         grad[l.dst as usize] += g * d;
                     }
                 }
-            }
+                y
+            };
+            let result = std::cell::RefCell::new(&mut result);
+            forms.operations(
+                w,
+                |c, w| {
+                    let op = &forms.nonlinear[c];
+                    let a = forms.dot(w, &op.a);
+                    let b = op.b.as_ref().map_or(0.0, |b| forms.dot(w, b));
+                    (result.borrow_mut())(c, a, b)
+                },
+                |c, a| (result.borrow_mut())(c, a, 0.0),
+            );
             let mut finite = true;
             for e in &self.entries {
                 let v = self.terms[e.start as usize..e.end as usize]
