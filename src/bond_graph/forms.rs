@@ -14,6 +14,11 @@
 //!
 //! The forms' coefficients are the products of the plan's factors along each path, added up,
 //! so a value differs from the plan's by rounding only (the same sums, associated otherwise).
+//!
+//! Consecutive forms of one length, the drag points' operands (all over the same momenta) and
+//! rows of one length, are evaluated four at a time ([`crate::math::lanes`]), each summed in
+//! the order [`NonaffineForms::dot`] sums it alone: a value has the same bits however it is
+//! reached, alone at a communication point ([`PointForms::output`]) or in a run.
 
 use std::cell::RefCell;
 
@@ -21,7 +26,7 @@ mod jacobian;
 
 pub use jacobian::FormsJacobian;
 
-use crate::math::lanes::{self, Lanes, Run, Summation, LANES};
+use crate::math::lanes::{self, Lanes, Run, Summation};
 
 use super::compiled::CompiledModel;
 use super::plan::{Op, NONE};
@@ -83,6 +88,10 @@ const SUMMATION: Summation = Summation::Split { from: DOT_SPLIT };
 
 /// Forms shorter than this are evaluated alone: too few terms for the lanes' set-up to pay.
 const LANE_TERMS: usize = 4;
+
+/// The most operations in one run (a longer stretch makes several): their results wait in a
+/// scratch of this size on the stack until the run's operands are all read.
+const MAX_RUN: usize = 32;
 
 /// A form under construction: the constant and the coefficients by variable.
 #[derive(Clone, Default)]
@@ -217,7 +226,7 @@ impl NonaffineForms {
                     .take_while(|&e| joins(e, c) == Some(len))
                     .count();
             if end - c >= 2 {
-                operations.push(c..end);
+                operations.extend((c..end).step_by(MAX_RUN).map(|s| s..(s + MAX_RUN).min(end)));
             }
             c = end;
         }
@@ -244,19 +253,6 @@ impl NonaffineForms {
                 .push(lanes.add(range.start, &forms, SUMMATION));
         }
         self.lanes = lanes;
-    }
-
-    /// The constants of the forms `form(i)` for `i` in `chunk`, 0 for padding lanes.
-    #[inline]
-    fn constants(chunk: std::ops::Range<usize>, form: impl Fn(usize) -> Form) -> [f64; LANES] {
-        std::array::from_fn(|l| {
-            let i = chunk.start + l;
-            if i < chunk.end {
-                form(i).c
-            } else {
-                0.0
-            }
-        })
     }
 
     /// The form of the `count`-th nonlinear result (1-based).
@@ -356,14 +352,16 @@ impl NonaffineForms {
             for c in c..run.forms().start {
                 w[known + c] = alone(c, w);
             }
-            for k in 0..run.chunks() {
-                // A run reads no result of its own: its operands are known at its start.
-                let constants = Self::constants(run.chunk(k), |c| self.nonlinear[c].a);
-                let a = self.lanes.values(w, run, k, constants);
-                for (c, a) in run.chunk(k).zip(a) {
-                    w[known + c] = from_operand(c, a);
-                }
-            }
+            // A run reads no result of its own: its operands are known at its start (the
+            // results go to a scratch first, `w` being read meanwhile).
+            let mut results = [0.0; MAX_RUN];
+            let constant = |c: usize| self.nonlinear[c].a.c;
+            let first = run.forms().start;
+            self.lanes.each_value(w, run, constant, |c, a| {
+                results[c - first] = from_operand(c, a);
+            });
+            w[known + first..known + run.forms().end]
+                .copy_from_slice(&results[..run.forms().len()]);
             c = run.forms().end;
         }
         for c in c..self.nonlinear.len() {
@@ -402,13 +400,9 @@ impl NonaffineForms {
                 for (i, f) in &self.rows[r..run.forms().start] {
                     each(*i, self.dot(w, f));
                 }
-                for k in 0..run.chunks() {
-                    let c = Self::constants(run.chunk(k), |p| self.rows[p].1);
-                    let v = self.lanes.values(w, run, k, c);
-                    for (p, value) in run.chunk(k).zip(v) {
-                        each(self.rows[p].0, value);
-                    }
-                }
+                let constant = |p: usize| self.rows[p].1.c;
+                let each = |p: usize, value| each(self.rows[p].0, value);
+                self.lanes.each_value(w, run, constant, each);
                 r = run.forms().end;
             }
             for (i, f) in &self.rows[r..] {

@@ -143,34 +143,97 @@ impl Lanes {
         run
     }
 
-    /// The values of chunk `k` of `run` at the variables `w`, with the constants `c` (0 for a
-    /// padding lane): lane `l` the value of the form `run.chunk(k).start + l`, to the bit that
-    /// of the form alone summed by the run's [`Summation`]. With AVX2, where the processor has
-    /// it, the four lanes are one vector operation (products and sums apart, no fused
-    /// multiply-add, so the same bits as the portable loops).
+    /// The values of the forms of `run` at the variables `w`, each given to `out(form, value)`
+    /// in order, the form `i`'s constant being `constant(i)` (forms numbered as given to
+    /// [`Lanes::add`]): each value to the bit that of the form alone summed by the run's
+    /// [`Summation`]. With AVX2, where the processor has it, the four lanes of a chunk are one
+    /// vector operation (products and sums apart, no fused multiply-add, so the same bits as
+    /// the portable loops).
     #[inline]
-    pub fn values(&self, w: &[f64], run: &Run, k: usize, c: [f64; LANES]) -> [f64; LANES] {
-        let len = run.len as usize;
-        let from = run.at as usize + k * LANES * len;
-        let variable = &self.variable[from..from + LANES * len];
-        let coefficient = &self.coefficient[from..from + LANES * len];
+    pub fn each_value(
+        &self,
+        w: &[f64],
+        run: &Run,
+        constant: impl Fn(usize) -> f64,
+        out: impl FnMut(usize, f64),
+    ) {
         assert!(w.len() >= self.reads_below, "the forms' variables");
-        let body = run.summation.body(len);
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx2") {
-                let shared = &self.shared[from / LANES..from / LANES + len];
                 // SAFETY: the processor has AVX2 (checked just above); every variable of the
                 // lanes is below `reads_below` (`add`), which `w`'s length is not below
-                // (asserted above), and the three slices hold `len` rows of terms.
-                return unsafe { values_avx2(w, variable, coefficient, shared, body, c) };
+                // (asserted above).
+                unsafe { self.each_value_avx2(w, run, constant, out) };
+                return;
             }
         }
-        values_loops(w, variable, coefficient, body, c)
+        self.each_chunk::<false>(w, run, constant, out);
+    }
+
+    /// [`Lanes::each_value`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor has AVX2 and `w` is at least `reads_below` long.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn each_value_avx2(
+        &self,
+        w: &[f64],
+        run: &Run,
+        constant: impl Fn(usize) -> f64,
+        out: impl FnMut(usize, f64),
+    ) {
+        self.each_chunk::<true>(w, run, constant, out);
+    }
+
+    /// [`Lanes::each_value`]'s loop over the chunks, with the AVX2 kernel (`AVX2`, which the
+    /// caller has checked the processor has, and `w`'s length) or the portable loops.
+    #[inline(always)]
+    fn each_chunk<const AVX2: bool>(
+        &self,
+        w: &[f64],
+        run: &Run,
+        constant: impl Fn(usize) -> f64,
+        mut out: impl FnMut(usize, f64),
+    ) {
+        let len = run.len as usize;
+        let body = run.summation.body(len);
+        for k in 0..run.chunks() {
+            let chunk = run.chunk(k);
+            let c = std::array::from_fn(|l| {
+                let i = chunk.start + l;
+                if i < chunk.end {
+                    constant(i)
+                } else {
+                    0.0
+                }
+            });
+            let from = run.at as usize + k * LANES * len;
+            let variable = &self.variable[from..from + LANES * len];
+            let coefficient = &self.coefficient[from..from + LANES * len];
+            let values = if AVX2 {
+                #[cfg(target_arch = "x86_64")]
+                {
+                    let shared = &self.shared[from / LANES..from / LANES + len];
+                    // SAFETY: the caller has checked that the processor has AVX2 and that
+                    // `w` is long enough for every variable of the lanes; the slices hold
+                    // `len` rows of terms.
+                    unsafe { values_avx2(w, variable, coefficient, shared, body, c) }
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!("AVX2 is an x86-64 extension")
+            } else {
+                values_loops(w, variable, coefficient, body, c)
+            };
+            for (i, v) in chunk.zip(values) {
+                out(i, v);
+            }
+        }
     }
 }
 
-/// [`Lanes::values`] lane by lane: each form's terms summed as the form alone sums them, the
+/// A chunk's values lane by lane: each form's terms summed as the form alone sums them, the
 /// first `body` into the four running sums.
 fn values_loops(
     w: &[f64],
@@ -197,7 +260,7 @@ fn values_loops(
     })
 }
 
-/// [`Lanes::values`] with AVX2: a row of four terms is one vector product and one vector sum;
+/// A chunk's values with AVX2: a row of four terms is one vector product and one vector sum;
 /// a row whose four lanes read one variable loads it once.
 ///
 /// # Safety
@@ -315,27 +378,19 @@ mod tests {
                     lanes.add(0, &[&[(0, 1.0)]], summation);
                     let run = lanes.add(5, &refs, summation);
                     assert_eq!(run.forms(), 5..5 + count);
-                    for k in 0..run.chunks() {
-                        let chunk = run.chunk(k);
-                        let c = std::array::from_fn(|l| {
-                            constants.get(chunk.start - 5 + l).copied().unwrap_or(0.0)
-                        });
-                        let got = lanes.values(&w, &run, k, c);
-                        let from = run.at as usize + k * LANES * len;
-                        let portable = values_loops(
-                            &w,
-                            &lanes.variable[from..from + LANES * len],
-                            &lanes.coefficient[from..from + LANES * len],
-                            summation.body(len),
-                            c,
-                        );
-                        for (l, f) in chunk.enumerate() {
-                            let f = f - 5;
-                            let want = alone(&w, constants[f], &forms[f], summation);
-                            assert_eq!(got[l].to_bits(), want.to_bits(), "{count} {len} {f}");
-                            assert_eq!(portable[l].to_bits(), want.to_bits());
-                            checked += 1;
-                        }
+                    let constant = |i: usize| constants[i - 5];
+                    let mut got = Vec::new();
+                    lanes.each_value(&w, &run, constant, |i, v| got.push((i, v)));
+                    let mut portable = Vec::new();
+                    lanes.each_chunk::<false>(&w, &run, constant, |i, v| portable.push((i, v)));
+                    let order: Vec<usize> = got.iter().map(|&(i, _)| i).collect();
+                    assert_eq!(order, (5..5 + count).collect::<Vec<_>>());
+                    for ((i, got), (_, portable)) in got.into_iter().zip(portable) {
+                        let f = i - 5;
+                        let want = alone(&w, constants[f], &forms[f], summation);
+                        assert_eq!(got.to_bits(), want.to_bits(), "{count} {len} {f}");
+                        assert_eq!(portable.to_bits(), want.to_bits());
+                        checked += 1;
                     }
                 }
             }
@@ -355,6 +410,6 @@ mod tests {
     fn a_chunk_is_not_evaluated_at_too_few_variables() {
         let mut lanes = Lanes::default();
         let run = lanes.add(0, &[&[(9, 1.0)], &[(2, 1.0)]], Summation::Fold);
-        lanes.values(&[0.0; 5], &run, 0, [0.0; LANES]);
+        lanes.each_value(&[0.0; 5], &run, |_| 0.0, |_, _| ());
     }
 }

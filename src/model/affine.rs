@@ -71,14 +71,8 @@ impl SparseRows {
             for i in i..run.forms().start {
                 out[i] = self.row_times(i, x, offset[i]);
             }
-            for k in 0..run.chunks() {
-                let chunk = run.chunk(k);
-                let c = std::array::from_fn(|l| offset.get(chunk.start + l).map_or(0.0, |&c| c));
-                let v = self.lanes.values(x, run, k, c);
-                for (i, v) in chunk.zip(v) {
-                    out[i] = v;
-                }
-            }
+            self.lanes
+                .each_value(x, run, |i| offset[i], |i, v| out[i] = v);
             i = run.forms().end;
         }
         for i in i..out.len() {
