@@ -28,7 +28,8 @@ use std::cell::RefCell;
 use nalgebra::DMatrix;
 
 use super::super::compiled::CompiledModel;
-use super::{Form, Kind, NonaffineForms};
+use super::{Form, Kind, NonaffineForms, LANE_TERMS};
+use crate::math::lanes::{Lanes, Run, Summation};
 
 /// `src` of a [`Link`] that adds its coefficient alone (a state read directly).
 const DIRECT: u32 = u32::MAX;
@@ -64,6 +65,10 @@ pub struct FormsJacobian {
     entries: Vec<Entry>,
     /// (grad position, coefficient) of the entries' chain terms.
     terms: Vec<(u32, f64)>,
+    /// Runs of consecutive entries with as many chain terms, summed four at a time
+    /// ([`crate::math::lanes`]; the same bits as alone).
+    entry_runs: Vec<Run>,
+    lanes: Lanes,
     /// Entries of the chain's pattern that `varying` did not list: none when the structure's
     /// analysis and the forms agree (it is asserted by the tests).
     unlisted: usize,
@@ -172,6 +177,16 @@ impl NonaffineForms {
                 .filter(|j| listed.binary_search(j).is_err())
                 .count();
         }
+        let terms = |e: &Entry| &out.terms[e.start as usize..e.end as usize];
+        let lengths: Vec<usize> = out.entries.iter().map(|e| terms(e).len()).collect();
+        let mut lanes = Lanes::default();
+        let mut entry_runs = Vec::new();
+        for range in crate::math::lanes::equal_lengths(&lengths, LANE_TERMS) {
+            let forms: Vec<&[(u32, f64)]> = out.entries[range.clone()].iter().map(terms).collect();
+            entry_runs.push(lanes.add(range.start, &forms, Summation::Fold));
+        }
+        out.entry_runs = entry_runs;
+        out.lanes = lanes;
         out
     }
 }
@@ -256,12 +271,27 @@ impl FormsJacobian {
                 |c, a| (result.borrow_mut())(c, a, 0.0),
             );
             let mut finite = true;
-            for e in &self.entries {
-                let v = self.terms[e.start as usize..e.end as usize]
-                    .iter()
-                    .fold(e.direct, |acc, &(p, a)| acc + a * grad[p as usize]);
+            let mut write = |i: usize, v: f64| {
+                let e = &self.entries[i];
                 finite &= v.is_finite();
                 jac[(e.row as usize, e.column as usize)] = v;
+            };
+            let alone = |e: &Entry| {
+                self.terms[e.start as usize..e.end as usize]
+                    .iter()
+                    .fold(e.direct, |acc, &(p, a)| acc + a * grad[p as usize])
+            };
+            let mut i = 0;
+            for run in &self.entry_runs {
+                for i in i..run.forms().start {
+                    write(i, alone(&self.entries[i]));
+                }
+                let direct = |i: usize| self.entries[i].direct;
+                self.lanes.each_value(grad, run, direct, &mut write);
+                i = run.forms().end;
+            }
+            for i in i..self.entries.len() {
+                write(i, alone(&self.entries[i]));
             }
             finite
         })
