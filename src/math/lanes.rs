@@ -9,9 +9,8 @@
 //! the forces of all the points with the modes' linear terms. Alone, each term costs a load of
 //! its (variable, coefficient) pair, a bounds check, a load of the variable, a product and a
 //! sum, each sum waiting on the one before. Forms of one length side by side, their terms
-//! stored term by term across the [`LANES`] forms of a chunk, share the loop: a term's products
-//! and sums are one vector operation for the four forms, and where the four read the same
-//! variable (the drag's speeds all read the same momenta) it is loaded once.
+//! stored term by term across the [`LANES`] forms of a chunk, share the loop: a term's four
+//! variables are one gather, its products and sums one vector operation for the four forms.
 //!
 //! A form is summed in one of two orders ([`Summation`]), the order its alone evaluation uses;
 //! the lanes keep it, without fused multiply-adds, so the bits are those of the form alone on
@@ -55,8 +54,7 @@ pub struct Run {
     first: u32,
     count: u32,
     len: u32,
-    /// Chunk `k`'s term `t` of lane `l` is at `at + (k len + t) LANES + l` of the layout; its
-    /// row of [`LANES`] terms is row `at / LANES + k len + t` of [`Lanes::shared`].
+    /// Chunk `k`'s term `t` of lane `l` is at `at + (k len + t) LANES + l` of the layout.
     at: u32,
     summation: Summation,
 }
@@ -85,8 +83,6 @@ impl Run {
 pub struct Lanes {
     variable: Vec<u32>,
     coefficient: Vec<f64>,
-    /// For each row of [`LANES`] terms, whether its lanes read one variable (loaded once).
-    shared: Vec<bool>,
     /// One more than the largest variable a lane reads: the least length of the variables a
     /// chunk is evaluated at.
     reads_below: usize,
@@ -131,7 +127,6 @@ impl Lanes {
                 // Padding lanes read the first lane's variable with a zero coefficient.
                 let lane = |l: usize| chunk.get(l).map_or((chunk[0][t].0, 0.0), |f| f[t]);
                 let row: [(u32, f64); LANES] = std::array::from_fn(lane);
-                self.shared.push(row.iter().all(|&(v, _)| v == row[0].0));
                 for (v, a) in row {
                     assert!(v < 1 << 31, "a variable fits a gather's index");
                     self.reads_below = self.reads_below.max(v as usize + 1);
@@ -215,11 +210,10 @@ impl Lanes {
             let values = if AVX2 {
                 #[cfg(target_arch = "x86_64")]
                 {
-                    let shared = &self.shared[from / LANES..from / LANES + len];
                     // SAFETY: the caller has checked that the processor has AVX2 and that
                     // `w` is long enough for every variable of the lanes; the slices hold
                     // `len` rows of terms.
-                    unsafe { values_avx2(w, variable, coefficient, shared, body, c) }
+                    unsafe { values_avx2(w, variable, coefficient, body, c) }
                 }
                 #[cfg(not(target_arch = "x86_64"))]
                 unreachable!("AVX2 is an x86-64 extension")
@@ -260,35 +254,32 @@ fn values_loops(
     })
 }
 
-/// A chunk's values with AVX2: a row of four terms is one vector product and one vector sum;
-/// a row whose four lanes read one variable loads it once.
+/// A chunk's values with AVX2: a row of four terms is one gather of its variables, one vector
+/// product and one vector sum. (A row whose four lanes read one variable is gathered too: a
+/// branch to a broadcast for it cost more instructions than it saved, by callgrind on the
+/// default plant.)
 ///
 /// # Safety
-/// The processor has AVX2; `variable` and `coefficient` hold `len` rows of [`LANES`] terms and
-/// `shared` `len` flags; every variable is below `w.len()` (and below 2^31).
+/// The processor has AVX2; `variable` and `coefficient` hold the same number of rows of
+/// [`LANES`] terms; every variable is below `w.len()` (and below 2^31).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn values_avx2(
     w: &[f64],
     variable: &[u32],
     coefficient: &[f64],
-    shared: &[bool],
     body: usize,
     c: [f64; LANES],
 ) -> [f64; LANES] {
     use std::arch::x86_64::*;
-    let len = shared.len();
+    let len = variable.len() / LANES;
     let (v, a, w) = (variable.as_ptr(), coefficient.as_ptr(), w.as_ptr());
     let row = |t: usize| -> __m256d {
-        // SAFETY: row `t < len` of `variable` and `coefficient` is at `t · LANES`, its flag
-        // at `t`; a variable read is below `w`'s length (the caller's contract).
+        // SAFETY: row `t < len` of `variable` and `coefficient` is at `t · LANES`; a variable
+        // read is below `w`'s length (the caller's contract).
         unsafe {
-            let x = if *shared.get_unchecked(t) {
-                _mm256_broadcast_sd(&*w.add(*v.add(t * LANES) as usize))
-            } else {
-                let index = _mm_loadu_si128(v.add(t * LANES) as *const __m128i);
-                _mm256_i32gather_pd::<8>(w, index)
-            };
+            let index = _mm_loadu_si128(v.add(t * LANES) as *const __m128i);
+            let x = _mm256_i32gather_pd::<8>(w, index);
             _mm256_mul_pd(_mm256_loadu_pd(a.add(t * LANES)), x)
         }
     };
@@ -347,7 +338,7 @@ mod tests {
     }
 
     /// Every run length (1 to 9 forms, so full and padded chunks), form length (1 to 13, both
-    /// summations), and rows both shared (every form reads one variable) and not: each lane's
+    /// summations), and rows where every form reads one variable and where not: each lane's
     /// value is the form's alone to the bit, by the AVX2 kernel where the processor has it and
     /// by the portable loops.
     #[test]
