@@ -261,7 +261,7 @@ impl<T: Scalar> Factorisation<T> {
     /// The written-out blocks read and write their entries without bounds checks: a block of
     /// one state has a multiplication and a few multiply-adds with the border, fewer
     /// instructions than the checks and slices of its data would take. Their indices are the
-    /// partition's, which [`Partition::with`] checked against its dimensions when it made it
+    /// partition's, which `Partition::with` checked against its dimensions when it made it
     /// (every state below n, every link below the border's m, each block's data within the
     /// factors' lengths), and the lengths of the vectors they index are checked once here.
     pub fn solve(&self, rhs: &mut [T], scratch: &mut [T]) {
@@ -440,7 +440,8 @@ fn forward<T: Scalar>(
         *dst = rhs[i];
     }
     if k <= 4 {
-        // The bits of `lu_solve`'s unrolled solves (`small_block_solves_match_the_loops_bit_for_bit`).
+        // Inlined (for a constant k, unrolled): the bits of `lu_solve`'s unrolled solves
+        // (`small_block_solves_match_the_loops_bit_for_bit`).
         lu_solve_loops(lu, k, piv, y);
     } else {
         lu_solve(lu, k, piv, y);
