@@ -281,10 +281,9 @@ impl<T: Scalar> Factorisation<T> {
         for at in &p.linked {
             let (st, k) = (at.start, at.size);
             match k {
-                // SAFETY (both written-out blocks): st + k ≤ nb = blocks.len() = perm.len(),
-                // perm's entries below n = rhs.len(), at.lu + k² ≤ lu_len = lu.len() and
-                // at.x + k (links_to − links_from) ≤ x_len = c.len(), links_to ≤ links.len()
-                // and every link below m = border.len() (`Partition::with` checked them).
+                // SAFETY: `Partition::with` checked: st + k ≤ nb = blocks.len() = perm.len(),
+                // perm's entries < n = rhs.len(), at.lu + k² ≤ lu.len(), at.x + k × links ≤
+                // c.len(), links_to ≤ links.len(), links < m = border.len().
                 1 => unsafe {
                     let v = get(rhs, get(perm, st)) * get(lu, at.lu);
                     *get_mut(blocks, st) = v;
