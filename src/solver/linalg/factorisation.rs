@@ -257,115 +257,157 @@ impl<T: Scalar> Factorisation<T> {
     /// solve is final at once. Blocks of one and two states, all the plate's modes, are written
     /// out; the operations and their order are those of the general block solve and the block
     /// formulas, so the bits do not depend on the block size's path or on a block's being free.
+    ///
+    /// The written-out blocks read and write their entries without bounds checks: a block of
+    /// one state has a multiplication and a few multiply-adds with the border, fewer
+    /// instructions than the checks and slices of its data would take. Their indices are the
+    /// partition's, which `Partition::with` checked against its dimensions when it made it
+    /// (every state below n, every link below the border's m, each block's data within the
+    /// factors' lengths), and the lengths of the vectors they index are checked once here.
     pub fn solve(&self, rhs: &mut [T], scratch: &mut [T]) {
         let p = &*self.part;
-        let nb = p.starts[p.blocks()];
-        let (blocks, border) = scratch[..p.n].split_at_mut(nb);
-        for (dst, &i) in border.iter_mut().zip(&p.perm[nb..]) {
-            *dst = rhs[i];
+        let (n, nb) = (p.n, p.starts[p.blocks()]);
+        let m = n - nb;
+        let rhs = &mut rhs[..n];
+        let (lu, x, c) = (&self.lu[..p.lu_len], &self.x[..p.x_len], &self.c[..p.x_len]);
+        let (piv, links) = (&self.piv[..n], &p.links[..]);
+        let (blocks, border) = scratch[..n].split_at_mut(nb);
+        let (perm, border_states) = p.perm.split_at(nb);
+        for (dst, &i) in border.iter_mut().zip(border_states) {
+            // SAFETY: i < n = rhs.len() (`Partition::with` checked `perm`).
+            *dst = unsafe { get(rhs, i) };
         }
         // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
         for at in &p.linked {
             let (st, k) = (at.start, at.size);
-            let links = &p.links[at.links_from..at.links_to];
-            let lu = &self.lu[at.lu..at.lu + k * k];
-            let c = &self.c[at.x..at.x + k * links.len()];
-            let idx = &p.perm[st..st + k];
-            match (lu, idx, &mut blocks[st..st + k]) {
-                (&[inv_u00], &[i0], [y0]) => {
-                    let v = rhs[i0] * inv_u00;
-                    *y0 = v;
-                    for (&q, &c0) in links.iter().zip(c) {
-                        border[q] = border[q] - (T::ZERO + c0 * v);
+            match k {
+                // SAFETY: `Partition::with` checked: st + k ≤ nb = blocks.len() = perm.len(),
+                // perm's entries < n = rhs.len(), at.lu + k² ≤ lu.len(), at.x + k × links ≤
+                // c.len(), links_to ≤ links.len(), links < m = border.len().
+                1 => unsafe {
+                    let v = get(rhs, get(perm, st)) * get(lu, at.lu);
+                    *get_mut(blocks, st) = v;
+                    let ls = links.get_unchecked(at.links_from..at.links_to);
+                    let cs = c.get_unchecked(at.x..at.x + ls.len());
+                    for (&q, &c0) in ls.iter().zip(cs) {
+                        let b = get_mut(border, q);
+                        *b = *b - (T::ZERO + c0 * v);
                     }
-                }
-                (&[inv_u00, l10, u01, inv_u11], &[i0, i1], [y0, y1]) => {
+                },
+                // SAFETY: as for the block of one state, and st + 1 < n = piv.len().
+                2 => unsafe {
+                    let a = at.lu;
                     let (v0, v1) = solve_2x2(
-                        inv_u00,
-                        l10,
-                        u01,
-                        inv_u11,
-                        self.piv[st] != 0,
-                        rhs[i0],
-                        rhs[i1],
+                        get(lu, a),
+                        get(lu, a + 1),
+                        get(lu, a + 2),
+                        get(lu, a + 3),
+                        get(piv, st) != 0,
+                        get(rhs, get(perm, st)),
+                        get(rhs, get(perm, st + 1)),
                     );
-                    (*y0, *y1) = (v0, v1);
-                    for (&q, cr) in links.iter().zip(c.chunks_exact(2)) {
-                        border[q] = border[q] - (T::ZERO + cr[0] * v0 + cr[1] * v1);
+                    (*get_mut(blocks, st), *get_mut(blocks, st + 1)) = (v0, v1);
+                    let ls = links.get_unchecked(at.links_from..at.links_to);
+                    let cs = c.get_unchecked(at.x..at.x + 2 * ls.len());
+                    for (&q, cr) in ls.iter().zip(cs.chunks_exact(2)) {
+                        let b = get_mut(border, q);
+                        *b = *b - (T::ZERO + cr[0] * v0 + cr[1] * v1);
                     }
-                }
-                (_, _, y) => {
-                    for (dst, &i) in y.iter_mut().zip(idx) {
-                        *dst = rhs[i];
-                    }
-                    lu_solve(lu, k, &self.piv[st..st + k], y);
-                    for (&q, cr) in links.iter().zip(c.chunks_exact(k)) {
-                        let mut acc = T::ZERO;
-                        for i in 0..k {
-                            acc = acc + cr[i] * y[i];
-                        }
-                        border[q] = border[q] - acc;
+                },
+                _ => {
+                    let links = &links[at.links_from..at.links_to];
+                    let c = &c[at.x..at.x + k * links.len()];
+                    let (lu, piv) = (&lu[at.lu..at.lu + k * k], &piv[st..st + k]);
+                    let (idx, y) = (&perm[st..st + k], &mut blocks[st..st + k]);
+                    // The servo valve's blocks of three and four states: with k known, the
+                    // loops unroll.
+                    match k {
+                        3 => forward(3, lu, piv, idx, rhs, y, links, c, border),
+                        4 => forward(4, lu, piv, idx, rhs, y, links, c, border),
+                        _ => forward(k, lu, piv, idx, rhs, y, links, c, border),
                     }
                 }
             }
         }
-        let m = p.n - nb;
         lu_solve(&self.schur[..m * m], m, &self.schur_piv[..m], border);
         // x_b = y_b - X_b x_B.
         for at in &p.linked {
             let (st, k) = (at.start, at.size);
-            let links = &p.links[at.links_from..at.links_to];
-            let x = &self.x[at.x..at.x + k * links.len()];
-            let idx = &p.perm[st..st + k];
-            match (idx, &mut blocks[st..st + k]) {
-                (&[i0], &mut [mut y0]) => {
-                    for (&q, &x0) in links.iter().zip(x) {
-                        y0 = y0 - x0 * border[q];
+            match k {
+                // SAFETY: as in the forward pass, with x.len() = c.len().
+                1 => unsafe {
+                    let mut y0 = get(blocks, st);
+                    let ls = links.get_unchecked(at.links_from..at.links_to);
+                    let xs = x.get_unchecked(at.x..at.x + ls.len());
+                    for (&q, &x0) in ls.iter().zip(xs) {
+                        y0 = y0 - x0 * get(border, q);
                     }
-                    rhs[i0] = y0;
-                }
-                (&[i0, i1], &mut [mut y0, mut y1]) => {
-                    for (&q, xc) in links.iter().zip(x.chunks_exact(2)) {
-                        let v = border[q];
+                    *get_mut(rhs, get(perm, st)) = y0;
+                },
+                // SAFETY: as in the forward pass, with x.len() = c.len().
+                2 => unsafe {
+                    let (mut y0, mut y1) = (get(blocks, st), get(blocks, st + 1));
+                    let ls = links.get_unchecked(at.links_from..at.links_to);
+                    let xs = x.get_unchecked(at.x..at.x + 2 * ls.len());
+                    for (&q, xc) in ls.iter().zip(xs.chunks_exact(2)) {
+                        let v = get(border, q);
                         y0 = y0 - xc[0] * v;
                         y1 = y1 - xc[1] * v;
                     }
-                    (rhs[i0], rhs[i1]) = (y0, y1);
-                }
-                (_, y) => {
-                    for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
-                        let v = border[q];
-                        for i in 0..k {
-                            y[i] = y[i] - xc[i] * v;
-                        }
-                    }
-                    for (&yi, &i) in y.iter().zip(idx) {
-                        rhs[i] = yi;
+                    *get_mut(rhs, get(perm, st)) = y0;
+                    *get_mut(rhs, get(perm, st + 1)) = y1;
+                },
+                _ => {
+                    let links = &links[at.links_from..at.links_to];
+                    let x = &x[at.x..at.x + k * links.len()];
+                    let (idx, y) = (&perm[st..st + k], &mut blocks[st..st + k]);
+                    match k {
+                        3 => back(3, idx, y, links, x, border, rhs),
+                        4 => back(4, idx, y, links, x, border, rhs),
+                        _ => back(k, idx, y, links, x, border, rhs),
                     }
                 }
             }
         }
-        for (&v, &i) in border.iter().zip(&p.perm[nb..]) {
-            rhs[i] = v;
+        for (&v, &i) in border.iter().zip(border_states) {
+            // SAFETY: i < n = rhs.len() (`Partition::with` checked `perm`).
+            unsafe { *get_mut(rhs, i) = v };
         }
         // x_b = A_b⁻¹ r_b for the blocks without a border link (the dense partition's one
         // block among them).
         for at in &p.free {
             let (st, k) = (at.start, at.size);
-            let lu = &self.lu[at.lu..at.lu + k * k];
-            match (lu, &p.perm[st..st + k]) {
-                (&[inv_u00], &[i0]) => rhs[i0] = rhs[i0] * inv_u00,
-                (&[inv_u00, l10, u01, inv_u11], &[i0, i1]) => {
-                    let swap = self.piv[st] != 0;
-                    (rhs[i0], rhs[i1]) =
-                        solve_2x2(inv_u00, l10, u01, inv_u11, swap, rhs[i0], rhs[i1]);
-                }
-                (_, idx) => {
+            match k {
+                // SAFETY: st < nb = perm.len(), perm's entries below n = rhs.len(),
+                // at.lu < lu_len = lu.len() (`Partition::with` checked them).
+                1 => unsafe {
+                    let r = get_mut(rhs, get(perm, st));
+                    *r = *r * get(lu, at.lu);
+                },
+                // SAFETY: as for the block of one state, with st + 1 < nb, at.lu + 4 ≤ lu.len()
+                // and st < n = piv.len().
+                2 => unsafe {
+                    let a = at.lu;
+                    let (i0, i1) = (get(perm, st), get(perm, st + 1));
+                    let (v0, v1) = solve_2x2(
+                        get(lu, a),
+                        get(lu, a + 1),
+                        get(lu, a + 2),
+                        get(lu, a + 3),
+                        get(piv, st) != 0,
+                        get(rhs, i0),
+                        get(rhs, i1),
+                    );
+                    *get_mut(rhs, i0) = v0;
+                    *get_mut(rhs, i1) = v1;
+                },
+                _ => {
+                    let idx = &perm[st..st + k];
                     let y = &mut blocks[st..st + k];
                     for (dst, &i) in y.iter_mut().zip(idx) {
                         *dst = rhs[i];
                     }
-                    lu_solve(lu, k, &self.piv[st..st + k], y);
+                    lu_solve(&lu[at.lu..at.lu + k * k], k, &piv[st..st + k], y);
                     for (&yi, &i) in y.iter().zip(idx) {
                         rhs[i] = yi;
                     }
@@ -373,6 +415,108 @@ impl<T: Scalar> Factorisation<T> {
             }
         }
     }
+}
+
+/// A block's share of [`Factorisation::solve`]'s forward pass: y = A⁻¹ r for its states `idx`
+/// (into `y`), and border[q] -= C_b's row of q times y for each of its links q, the dot product
+/// over the block's states in order, from zero. Inlined, so that a constant k unrolls the loops
+/// (the same operations in the same order for every k, so the same bits).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn forward<T: Scalar>(
+    k: usize,
+    lu: &[T],
+    piv: &[usize],
+    idx: &[usize],
+    rhs: &[T],
+    y: &mut [T],
+    links: &[usize],
+    c: &[T],
+    border: &mut [T],
+) {
+    let (idx, y) = (&idx[..k], &mut y[..k]);
+    for (dst, &i) in y.iter_mut().zip(idx) {
+        *dst = rhs[i];
+    }
+    if k <= 4 {
+        // Inlined (for a constant k, unrolled): the bits of `lu_solve`'s unrolled solves
+        // (`small_block_solves_match_the_loops_bit_for_bit`).
+        lu_solve_loops(lu, k, piv, y);
+    } else {
+        lu_solve(lu, k, piv, y);
+    }
+    for (&q, cr) in links.iter().zip(c.chunks_exact(k)) {
+        let mut acc = T::ZERO;
+        for i in 0..k {
+            acc = acc + cr[i] * y[i];
+        }
+        border[q] = border[q] - acc;
+    }
+}
+
+/// A block's share of [`Factorisation::solve`]'s pass back: x_b = y_b − X_b x_B, the links in
+/// order, written to its states `idx` in `rhs`. Inlined, so that a constant k unrolls the
+/// loops.
+#[inline(always)]
+fn back<T: Scalar>(
+    k: usize,
+    idx: &[usize],
+    y: &mut [T],
+    links: &[usize],
+    x: &[T],
+    border: &[T],
+    rhs: &mut [T],
+) {
+    let mut acc = [T::ZERO; 4];
+    if k <= 4 {
+        // In registers, with k known.
+        acc[..k].copy_from_slice(&y[..k]);
+        for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
+            let v = border[q];
+            for i in 0..k {
+                acc[i] = acc[i] - xc[i] * v;
+            }
+        }
+        for (&v, &i) in acc[..k].iter().zip(&idx[..k]) {
+            rhs[i] = v;
+        }
+        return;
+    }
+    let y = &mut y[..k];
+    for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
+        let v = border[q];
+        for i in 0..k {
+            y[i] = y[i] - xc[i] * v;
+        }
+    }
+    for (&yi, &i) in y.iter().zip(idx) {
+        rhs[i] = yi;
+    }
+}
+
+/// `s[i]` without the bounds check, for the solve's indices that the partition's construction
+/// checked ([`Factorisation::solve`]).
+///
+/// # Safety
+///
+/// `i < s.len()`.
+#[inline(always)]
+unsafe fn get<T: Copy>(s: &[T], i: usize) -> T {
+    debug_assert!(i < s.len());
+    // SAFETY: i < s.len() (the caller's promise).
+    unsafe { *s.get_unchecked(i) }
+}
+
+/// `&mut s[i]` without the bounds check ([`get`]).
+///
+/// # Safety
+///
+/// `i < s.len()`.
+#[inline(always)]
+unsafe fn get_mut<T>(s: &mut [T], i: usize) -> &mut T {
+    debug_assert!(i < s.len());
+    // SAFETY: i < s.len() (the caller's promise).
+    unsafe { s.get_unchecked_mut(i) }
 }
 
 /// M[rows, cols] into `out`, column-major (`out[r + c * rows.len()]` = M_{rows[r], cols[c]}),

@@ -226,6 +226,13 @@ fn lu_solve_large<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
     #[cfg(target_arch = "x86_64")]
     {
         if k >= VECTOR_FROM && !portable_only() && std::arch::is_x86_feature_detected!("avx2") {
+            if let (true, Some(ra), Some(rx)) =
+                (k <= SMALL_REAL, T::as_reals(a), T::as_reals_mut(x))
+            {
+                // SAFETY: the processor has AVX2 (checked just above), and k ≤ SMALL_REAL.
+                unsafe { lu_solve_small_real_avx2(ra, k, piv, rx) };
+                return;
+            }
             // SAFETY: the processor has AVX2 (checked just above).
             unsafe { lu_solve_avx2(a, k, piv, x) };
             return;
@@ -238,6 +245,87 @@ fn lu_solve_large<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
 #[target_feature(enable = "avx2")]
 unsafe fn lu_solve_avx2<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]) {
     lu_solve_loops(a, k, piv, x);
+}
+
+/// The largest real block [`lu_solve_small_real_avx2`] solves: its right-hand side is copied
+/// to a buffer of this many entries (and three more) on the stack. Above it the columns are long
+/// enough for the loops' vectors to pay.
+#[cfg(target_arch = "x86_64")]
+const SMALL_REAL: usize = 64;
+
+/// [`lu_solve_loops`] for a real block of [`VECTOR_FROM`] to [`SMALL_REAL`] states (the servo
+/// valve's border: 19), with the same bits.
+///
+/// The loops' columns are short here, 18 rows and fewer, and the compiled loops do most of
+/// their rows one by one after the last whole vector. This kernel does every column's rows in
+/// vectors of four, the last one partial: its lanes past the column's rows are loaded as zeros
+/// from the matrix and keep the right-hand side's entries as they were (a blend), so that every
+/// entry is updated by the same multiplication and subtraction, never fused, as in the loops,
+/// and a zero multiplier still skips its column. The right-hand side is worked on in a copy with
+/// three entries of room after it, which the partial vectors read and write back unchanged.
+///
+/// # Safety
+///
+/// The processor has AVX2, and `k ≤ SMALL_REAL`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn lu_solve_small_real_avx2(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
+    use std::arch::x86_64::*;
+    assert!(k <= SMALL_REAL);
+    let (a, piv, x) = (&a[..k * k], &piv[..k], &mut x[..k]);
+    let mut buf = [0.0f64; SMALL_REAL + 3];
+    buf[..k].copy_from_slice(x);
+    for j in 0..k {
+        if piv[j] != j {
+            buf[..k].swap(j, piv[j]);
+        }
+    }
+    // The partial vectors' masks by their number of lanes (1 to 3): all bits set in a lane
+    // that is in.
+    const MASKS: [[i64; 4]; 4] = [[0; 4], [-1, 0, 0, 0], [-1, -1, 0, 0], [-1, -1, -1, 0]];
+    // Rows from..to of the right-hand side less v times the same rows of column j.
+    let update = |buf: &mut [f64; SMALL_REAL + 3], j: usize, from: usize, to: usize, v: f64| {
+        debug_assert!(from <= to && to <= k && j < k);
+        // SAFETY: column j's entries are a[j k .. j k + k], within a (j < k, a's length k²);
+        // rows r..r + 4 of it are read only where r + 4 ≤ to ≤ k, and the partial vector's
+        // lanes past `to` are masked off (not read); the buffer's entries r..r + 4 lie within
+        // its SMALL_REAL + 3 (r < to ≤ k ≤ SMALL_REAL). AVX2 is enabled in this function.
+        unsafe {
+            let vv = _mm256_set1_pd(v);
+            let (c, b) = (a.as_ptr().add(j * k), buf.as_mut_ptr());
+            let mut r = from;
+            while r + 4 <= to {
+                let t = _mm256_mul_pd(_mm256_loadu_pd(c.add(r)), vv);
+                let y = _mm256_loadu_pd(b.add(r));
+                _mm256_storeu_pd(b.add(r), _mm256_sub_pd(y, t));
+                r += 4;
+            }
+            if r < to {
+                let mask = _mm256_loadu_si256(MASKS[to - r].as_ptr().cast());
+                let t = _mm256_mul_pd(_mm256_maskload_pd(c.add(r), mask), vv);
+                let y = _mm256_loadu_pd(b.add(r));
+                let new = _mm256_sub_pd(y, t);
+                _mm256_storeu_pd(
+                    b.add(r),
+                    _mm256_blendv_pd(y, new, _mm256_castsi256_pd(mask)),
+                );
+            }
+        }
+    };
+    for j in 0..k {
+        let v = buf[j];
+        if v != 0.0 {
+            update(&mut buf, j, j + 1, k, v);
+        }
+    }
+    for j in (0..k).rev() {
+        let v = buf[j] * a[j * k + j];
+        buf[j] = v;
+        if v != 0.0 {
+            update(&mut buf, j, 0, j, v);
+        }
+    }
+    x.copy_from_slice(&buf[..k]);
 }
 
 /// [`lu_solve`] for k = 2, from the factors `[inv_u00, l10, u01, inv_u11]` (column-major), the
@@ -431,6 +519,10 @@ mod tests {
 
     use super::super::testing::Rng;
     use super::*;
+
+    /// The smallest block the vector kernels take (on x86-64; on other processors every size is
+    /// the loops').
+    const VECTOR_FROM_ALL: usize = 9;
 
     thread_local! {
         /// The kernels take the portable loops even where AVX2 is available.
@@ -680,6 +772,38 @@ mod tests {
             let rc: Vec<Complex<f64>> = rhs.iter().map(|&v| Complex::new(v, 0.5 - v)).collect();
             let [vector, portable] = both(&ac, k, &rc);
             assert_eq!(vector, portable, "complex, k = {k}");
+        }
+    }
+
+    /// The AVX2 kernel for small real blocks ([`lu_solve_small_real_avx2`], where the processor
+    /// has AVX2) gives the loops' bits for every size it takes, every length of its partial
+    /// vectors: right-hand sides with zeros of both signs (a zero multiplier skips its column,
+    /// a negative zero left in place stays one) and exactly zero factors.
+    #[test]
+    fn the_small_real_kernel_has_the_loops_bits() {
+        let mut rng = Rng(0x1405_7b7e_f767_814f);
+        for k in VECTOR_FROM_ALL..=70 {
+            for trial in 0..6 {
+                let a: Vec<f64> = (0..k * k)
+                    .map(|_| rng.next())
+                    .map(|v| if v.abs() < 0.1 { 0.0 } else { v })
+                    .collect();
+                let mut lu = a.clone();
+                let mut piv = vec![0; k];
+                assert!(lu_in_place_loops(&mut lu, k, &mut piv));
+                let rhs: Vec<f64> = (0..k)
+                    .map(|i| match (i + trial) % 6 {
+                        0 => 0.0,
+                        1 if trial % 2 == 0 => -0.0,
+                        _ => rng.next(),
+                    })
+                    .collect();
+                let (mut fast, mut loops) = (rhs.clone(), rhs);
+                lu_solve(&lu, k, &piv, &mut fast);
+                lu_solve_loops(&lu, k, &piv, &mut loops);
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&loops), "k = {k}, trial {trial}");
+            }
         }
     }
 

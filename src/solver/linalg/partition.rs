@@ -102,6 +102,12 @@ pub(super) struct BlockAt {
 
 impl Partition {
     /// The partition with these fields, and the offsets derived from them.
+    ///
+    /// Panics unless the fields are consistent: `perm` n states below n, `starts` rising from 0
+    /// to at most n, `link_starts` as many, rising to at most `links.len()`, and every link
+    /// below the border's size. [`super::Factorisation::solve`] indexes with them without
+    /// bounds checks, relying on this check (the blocks' offsets into the factors are derived
+    /// here, within `lu_len` and `x_len` by their construction).
     pub(super) fn with(
         n: usize,
         perm: Vec<usize>,
@@ -109,6 +115,14 @@ impl Partition {
         links: Vec<usize>,
         link_starts: Vec<usize>,
     ) -> Partition {
+        let rising = |v: &[usize], to: usize| {
+            v.first() == Some(&0) && v.windows(2).all(|w| w[0] <= w[1]) && v[v.len() - 1] <= to
+        };
+        assert!(perm.len() == n && perm.iter().all(|&i| i < n), "perm");
+        assert!(rising(&starts, n) && starts.len() == link_starts.len());
+        assert!(rising(&link_starts, links.len()));
+        let m = n - starts[starts.len() - 1];
+        assert!(links.iter().all(|&q| q < m), "a link outside the border");
         let (mut linked, mut free) = (Vec::new(), Vec::new());
         let (mut lu, mut x) = (0, 0);
         for b in 0..starts.len() - 1 {

@@ -20,6 +20,19 @@ pub trait Scalar:
     const ONE: Self;
     /// |re| + |im|, the pivot size LAPACK's `izamax` uses.
     fn norm1(self) -> f64;
+    /// The entries as f64s if they are (`Some` for f64 only): the dense solve's AVX2 kernel
+    /// for small real blocks is written for them, the other scalars take the loops.
+    #[doc(hidden)]
+    fn as_reals(s: &[Self]) -> Option<&[f64]> {
+        let _ = s;
+        None
+    }
+    /// [`Scalar::as_reals`], mutable.
+    #[doc(hidden)]
+    fn as_reals_mut(s: &mut [Self]) -> Option<&mut [f64]> {
+        let _ = s;
+        None
+    }
 }
 
 impl Scalar for f64 {
@@ -28,6 +41,14 @@ impl Scalar for f64 {
     #[inline]
     fn norm1(self) -> f64 {
         self.abs()
+    }
+    #[inline]
+    fn as_reals(s: &[f64]) -> Option<&[f64]> {
+        Some(s)
+    }
+    #[inline]
+    fn as_reals_mut(s: &mut [f64]) -> Option<&mut [f64]> {
+        Some(s)
     }
 }
 
