@@ -298,7 +298,7 @@ impl NonaffineForms {
     /// into sum `l`), added pairwise at the end, then to the terms after the last four and `c`:
     /// the drag points' forms read a dozen states each, and one running sum would make each
     /// product wait on the addition before it.
-    #[inline]
+    #[inline(always)]
     fn dot(&self, w: &[f64], f: &Form) -> f64 {
         let e = &self.entries[f.start as usize..f.end as usize];
         let term = |&(v, a): &(u32, f64)| a * w[v as usize];
