@@ -228,6 +228,22 @@ pub(super) fn max_abs(v: &[f64], keep: impl Fn(usize) -> bool) -> f64 {
         })
 }
 
+/// [`max_abs`] of every entry of `v` (the same value), in a loop without branches that
+/// vectorises: a communication point bounds its state with it.
+pub(super) fn max_abs_all(v: &[f64]) -> f64 {
+    let (mut m, mut finite) = (0.0f64, true);
+    for &x in v {
+        finite &= x.is_finite();
+        let a = x.abs();
+        m = if a > m { a } else { m };
+    }
+    if finite {
+        m
+    } else {
+        f64::INFINITY
+    }
+}
+
 impl Affine {
     /// From the Jacobian's constant entries `jac` (all of J when it is constant); the output
     /// matrix `C` from the linearisation at `(rest, inputs)`, `at_rest`, computed there if it
@@ -365,6 +381,24 @@ impl Affine {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The branch-free maximum is the filtered one's, with non-finite entries anywhere.
+    #[test]
+    fn max_abs_all_is_max_abs_of_every_entry() {
+        let cases: [&[f64]; 7] = [
+            &[],
+            &[-0.0],
+            &[1.0, -3.5, 2.0],
+            &[1.0, f64::NAN, 2.0],
+            &[f64::NEG_INFINITY, 1.0],
+            &[1e300, -1e308, 5.0, 0.0],
+            &[2.0, 3.0, f64::INFINITY, f64::NAN],
+        ];
+        for v in cases {
+            let (a, b) = (max_abs_all(v), max_abs(v, |_| true));
+            assert_eq!(a.to_bits(), b.to_bits(), "{v:?}");
+        }
+    }
 
     /// The blocked product is the plain dense one, to the bit, for rows that are not a
     /// multiple of four and columns that no row of a block reads.

@@ -24,7 +24,7 @@ use super::compose::bond_graph_and_plate;
 use ode::stamp;
 use outputs::on_demand;
 
-use super::affine::{max_abs, Affine, FINITE_BOUND, MAX_AFFINE_OUTPUTS};
+use super::affine::{max_abs_all, Affine, FINITE_BOUND, MAX_AFFINE_OUTPUTS};
 use super::parameters::{HydraulicsModel, Parameters};
 use super::variables::{idx, CONTINUOUS_STATES, VARIABLES};
 

@@ -119,7 +119,7 @@ impl Assembled {
         let Some(affine) = &self.affine else {
             return false;
         };
-        let x_max = max_abs(x, |_| true);
+        let x_max = max_abs_all(x);
         let energy_finite = self
             .energy_bound
             .is_none_or(|(k, c)| k * x_max * x_max + c < FINITE_BOUND);
@@ -130,7 +130,7 @@ impl Assembled {
         // With no radius (a law without a bound) nothing that is not affine waits, not even at
         // a state and inputs of exactly zero: those values are not left to be read.
         let point_waits = affine.point_radius > 0.0
-            && x_max.max(max_abs(&self.inputs, |_| true)) <= affine.point_radius;
+            && x_max.max(max_abs_all(&self.inputs)) <= affine.point_radius;
         if affine.partial && !point_waits {
             self.write_plan_values(values, |output, derivative| {
                 affine
