@@ -268,6 +268,13 @@ impl NonaffineForms {
         &self.entries[f.start as usize..f.end as usize]
     }
 
+    /// Numbers of nonlinear operations whose operands, and of rows, that are summed four at a
+    /// time ([`lanes`]).
+    pub fn side_by_side(&self) -> (usize, usize) {
+        let count = |runs: &[Run]| runs.iter().map(|r| r.forms().len()).sum();
+        (count(&self.operation_runs), count(&self.row_runs))
+    }
+
     /// Number of nonlinear operations and of coefficients: the work of one evaluation.
     pub fn size(&self) -> (usize, usize) {
         (self.nonlinear.len(), self.entries.len())

@@ -17,10 +17,12 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
     let varying: usize = m.jacobian_varying_pattern().iter().map(Vec::len).sum();
     // What each step evaluates: the varying entries by the chain rule through the forms of the
     // rows that are not affine (`FormsJacobian`), a multiply-add per link.
-    let (_, chain_links) = m
-        .nonaffine_forms()
+    let forms = m.nonaffine_forms();
+    let (_, chain_links) = forms
         .jacobian(m.n_states(), m.jacobian_varying_pattern())
         .size();
+    let (nonlinear, coefficients) = forms.size();
+    let (operations_in_lanes, rows_in_lanes) = forms.side_by_side();
     serde_json::json!({
         "states": m.n_states(),
         "inputs": m.input_names(),
@@ -31,6 +33,12 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
         "nonaffine_operations": m.nonaffine_plan_len(),
         "nonaffine_outputs": m.nonaffine_outputs().len(),
         "communication_point_operations": m.nonaffine_point_plan_len(),
+        "forms": {
+            "nonlinear_operations": nonlinear,
+            "coefficients": coefficients,
+            "operands_four_at_a_time": operations_in_lanes,
+            "rows_four_at_a_time": rows_in_lanes,
+        },
         "jacobian": {
             "nonzeros": nonzeros,
             "varying_entries": varying,
@@ -76,6 +84,15 @@ pub fn text(system: &Assembled) -> String {
         n - m.nonaffine_rows().len(),
         m.nonaffine_rows().len(),
         m.nonaffine_plan_len()
+    ));
+    let forms = &f["forms"];
+    s.push_str(&format!(
+        "forms      the rows not affine: {} nonlinear operations and {} coefficients; {} \
+         operands and {} rows of one length summed four at a time\n",
+        forms["nonlinear_operations"],
+        forms["coefficients"],
+        forms["operands_four_at_a_time"],
+        forms["rows_four_at_a_time"]
     ));
     s.push_str(&format!(
         "points     {} of {} outputs affine in x (C x + y(0, u)); the others and the rows \
@@ -159,6 +176,24 @@ mod tests {
                 || c.as_str().unwrap() == "controller.p_f"));
         let t = text(&system);
         assert!(t.contains(&format!("{} dual-number passes", m.jacobian_colours())));
+        assert!(t.contains("forms      the rows not affine: "), "{t}");
         assert!(t.contains("variable   servo_valve."), "{t}");
+    }
+
+    /// The default plant's air drag gives runs of forms of one length: its points' operands
+    /// (the air speeds over the same momenta) and the rows of the modes it reaches are summed
+    /// four at a time.
+    #[test]
+    fn the_default_plants_drag_forms_are_summed_four_at_a_time() {
+        let values = Values::from_start(&VARIABLES);
+        let p = Parameters::from_values(&values, &Experiment::default()).unwrap();
+        let system = Assembled::new(&p).unwrap();
+        let forms = &facts(&system)["forms"];
+        let operands = forms["operands_four_at_a_time"].as_u64().unwrap();
+        assert!(operands >= 4, "{forms}");
+        assert!(
+            forms["rows_four_at_a_time"].as_u64().unwrap() >= 2,
+            "{forms}"
+        );
     }
 }
