@@ -14,7 +14,8 @@
 //!
 //! A form is summed in one of two orders ([`Summation`]), the order its alone evaluation uses;
 //! the lanes keep it, without fused multiply-adds, so the bits are those of the form alone on
-//! every platform (`tests/plan_kernels.rs`).
+//! every platform (the unit test `each_lane_is_its_form_alone_to_the_bit`, with the AVX2
+//! kernel and with the portable loops the browser build uses).
 
 use std::ops::Range;
 
