@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
-use super::lu::{lu_in_place, lu_solve, lu_solve_loops, pivots_clear, scales, solve_2x2};
+use super::lu::{
+    factor_one, lu_in_place, lu_solve, lu_solve_loops, pivots_clear, scales, solve_2x2,
+};
 use super::partition::Partition;
 use super::scalar::Scalar;
 
@@ -232,7 +234,7 @@ impl<T: Scalar> Factorisation<T> {
             let schur = &mut self.schur[..m * m];
             // With k known the loops unroll (the plate's modes are blocks of one state).
             match k {
-                1 => couple(1, a, piv, x, c, links, schur, m),
+                1 => couple_one(a[0], x, c, links, schur, m),
                 2 => couple(2, a, piv, x, c, links, schur, m),
                 3 => couple(3, a, piv, x, c, links, schur, m),
                 4 => couple(4, a, piv, x, c, links, schur, m),
@@ -582,6 +584,35 @@ fn couple<T: Scalar>(
     }
 }
 
+/// [`couple`] for a block of one state (the plate's modes, twenty of the default plant's
+/// blocks): the same operations in the same order, X_b's entries scaled by the block's one
+/// factor `inv_a` (the pivot's reciprocal) and S's entries (r, q) less `0 + C_r X_q`, with S
+/// indexed without a bounds check per entry: the links are below m, which `Partition::with`
+/// checked when it made the partition, and `schur` is m × m (checked here).
+#[inline(always)]
+fn couple_one<T: Scalar>(
+    inv_a: T,
+    x: &mut [T],
+    c: &[T],
+    links: &[usize],
+    schur: &mut [T],
+    m: usize,
+) {
+    for v in x.iter_mut() {
+        *v = *v * inv_a;
+    }
+    let schur = &mut schur[..m * m];
+    for (&q, &xq) in links.iter().zip(x.iter()) {
+        debug_assert!(q < m);
+        for (&r, &cr) in links.iter().zip(c) {
+            // SAFETY: q, r < m (`Partition::with` checked every link against the border's
+            // size), so q m + r < m² = schur.len().
+            let s = unsafe { get_mut(schur, q * m + r) };
+            *s = *s - (T::ZERO + cr * xq);
+        }
+    }
+}
+
 /// The LU of one block or of the Schur complement in place ([`lu_in_place`]); with a `floor`
 /// (a structured partition), false unless every pivot is above `floor` in the equilibrated
 /// block ([`pivots_clear`]; `scratch` holds at least 3k entries).
@@ -592,6 +623,10 @@ fn factor_block<T: Scalar>(
     floor: f64,
     scratch: &mut [f64],
 ) -> bool {
+    if let ([a], [piv]) = (&mut *a, &mut *piv) {
+        // A block of one state (the plate's modes): the same verdict and bits, directly.
+        return factor_one(a, piv, floor);
+    }
     if floor == 0.0 {
         return lu_in_place(a, k, piv);
     }
