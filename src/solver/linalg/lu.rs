@@ -580,8 +580,10 @@ fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, piv: &mut [usize]) -> bool 
         return false;
     }
     if p != j {
-        for c in 0..k {
-            a.swap(j + c * k, p + c * k);
+        // Column by column, so that the indices' checks (j, p < k) do not depend on the column
+        // and leave the loop.
+        for column in a[..k * k].chunks_exact_mut(k) {
+            column.swap(j, p);
         }
     }
     true
