@@ -5,7 +5,9 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
-use super::lu::{lu_in_place, lu_solve, lu_solve_loops, pivots_clear, scales, solve_2x2};
+use super::lu::{
+    factor_one, lu_in_place, lu_solve, lu_solve_loops, pivots_clear, scales, solve_2x2,
+};
 use super::partition::Partition;
 use super::scalar::Scalar;
 
@@ -232,7 +234,7 @@ impl<T: Scalar> Factorisation<T> {
             let schur = &mut self.schur[..m * m];
             // With k known the loops unroll (the plate's modes are blocks of one state).
             match k {
-                1 => couple(1, a, piv, x, c, links, schur, m),
+                1 => couple_one(a[0], x, c, links, schur, m),
                 2 => couple(2, a, piv, x, c, links, schur, m),
                 3 => couple(3, a, piv, x, c, links, schur, m),
                 4 => couple(4, a, piv, x, c, links, schur, m),
@@ -570,6 +572,25 @@ fn couple<T: Scalar>(
             lu_solve(a, k, piv, column);
         }
     }
+    #[cfg(target_arch = "x86_64")]
+    if (k == 3 || k == 4) && std::arch::is_x86_feature_detected!("avx2") {
+        if let (Some(xr), Some(cr), Some(sr)) =
+            (T::as_reals(x), T::as_reals(c), T::as_reals_mut(schur))
+        {
+            assert!(xr.len() == k * links.len() && cr.len() == k * links.len());
+            assert!(sr.len() >= m * m);
+            // SAFETY: the processor has AVX2 (checked just above), the lengths are checked
+            // just above, and every link is below m (`Partition::with` checked them).
+            unsafe {
+                if k == 3 {
+                    schur_update_small_real_avx2::<3>(xr, cr, links, sr, m);
+                } else {
+                    schur_update_small_real_avx2::<4>(xr, cr, links, sr, m);
+                }
+            }
+            return;
+        }
+    }
     for (&q, xc) in links.iter().zip(x.chunks_exact(k)) {
         let s = &mut schur[q * m..q * m + m];
         for (&r, cr) in links.iter().zip(c.chunks_exact(k)) {
@@ -578,6 +599,109 @@ fn couple<T: Scalar>(
                 acc = acc + cr[i] * xc[i];
             }
             s[r] = s[r] - acc;
+        }
+    }
+}
+
+/// [`couple`]'s update of S for a real block of K = 3 or 4 states (the servo valve's blocks,
+/// with 10 and 15 links: a dot product of K terms for each of up to 225 entries of S), four
+/// links r at a time, with the same bits.
+///
+/// Each entry (r, q) is still `S_rq − (((0 + C_r0 X_q0) + C_r1 X_q1) + …)`, the same
+/// multiplications and additions in the same order, never fused, only four r side by side in
+/// a vector: C's entries of four rows are laid across the lanes once for all q, S's four entries
+/// of column q are gathered and stored back one by one (they lie at the links' rows, not next
+/// to each other). Every entry of S is updated once, so the order of the entries does not
+/// matter. The last links, fewer than four, take the loops.
+///
+/// # Safety
+///
+/// The processor has AVX2, `x` and `c` hold K × links.len() entries, every link is below m, and
+/// `schur` holds at least m × m entries.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn schur_update_small_real_avx2<const K: usize>(
+    x: &[f64],
+    c: &[f64],
+    links: &[usize],
+    schur: &mut [f64],
+    m: usize,
+) {
+    use std::arch::x86_64::*;
+    let l = links.len();
+    let full = l - l % 4;
+    for r0 in (0..full).step_by(4) {
+        let rows = [links[r0], links[r0 + 1], links[r0 + 2], links[r0 + 3]];
+        let mut cv = [_mm256_setzero_pd(); K];
+        for (i, v) in cv.iter_mut().enumerate() {
+            *v = _mm256_setr_pd(
+                c[r0 * K + i],
+                c[(r0 + 1) * K + i],
+                c[(r0 + 2) * K + i],
+                c[(r0 + 3) * K + i],
+            );
+        }
+        let idx = _mm256_setr_epi64x(
+            rows[0] as i64,
+            rows[1] as i64,
+            rows[2] as i64,
+            rows[3] as i64,
+        );
+        for (&q, xq) in links.iter().zip(x.chunks_exact(K)) {
+            let mut acc = _mm256_setzero_pd();
+            for i in 0..K {
+                acc = _mm256_add_pd(acc, _mm256_mul_pd(cv[i], _mm256_set1_pd(xq[i])));
+            }
+            // SAFETY: q and the rows are links, below m (the caller's promise), so column q's
+            // entries q m + row lie below m² ≤ schur.len().
+            unsafe {
+                let base = schur.as_mut_ptr().add(q * m);
+                let new = _mm256_sub_pd(_mm256_i64gather_pd::<8>(base, idx), acc);
+                let (lo, hi) = (_mm256_castpd256_pd128(new), _mm256_extractf128_pd::<1>(new));
+                _mm_storel_pd(base.add(rows[0]), lo);
+                _mm_storeh_pd(base.add(rows[1]), lo);
+                _mm_storel_pd(base.add(rows[2]), hi);
+                _mm_storeh_pd(base.add(rows[3]), hi);
+            }
+        }
+    }
+    for (&q, xc) in links.iter().zip(x.chunks_exact(K)) {
+        let s = &mut schur[q * m..q * m + m];
+        for (&r, cr) in links[full..].iter().zip(c[full * K..].chunks_exact(K)) {
+            let mut acc = 0.0;
+            for i in 0..K {
+                acc += cr[i] * xc[i];
+            }
+            s[r] -= acc;
+        }
+    }
+}
+
+/// [`couple`] for a block of one state (the plate's modes, twenty of the default plant's
+/// blocks): the same operations in the same order, X_b's entries scaled by the block's one
+/// factor `inv_a` (the pivot's reciprocal) and S's entries (r, q) less `0 + C_r X_q`, with S
+/// indexed without a bounds check per entry: the links are below m, which `Partition::with`
+/// checked when it made the partition, and `schur` is m × m (checked here).
+#[inline(always)]
+fn couple_one<T: Scalar>(
+    inv_a: T,
+    x: &mut [T],
+    c: &[T],
+    links: &[usize],
+    schur: &mut [T],
+    m: usize,
+) {
+    for v in x.iter_mut() {
+        *v = *v * inv_a;
+    }
+    let schur = &mut schur[..m * m];
+    for (&q, &xq) in links.iter().zip(x.iter()) {
+        debug_assert!(q < m);
+        for (&r, &cr) in links.iter().zip(c) {
+            // SAFETY: q, r < m (`Partition::with` checked every link against the border's
+            // size), so q m + r < m² = schur.len().
+            let s = unsafe { get_mut(schur, q * m + r) };
+            *s = *s - (T::ZERO + cr * xq);
         }
     }
 }
@@ -592,6 +716,10 @@ fn factor_block<T: Scalar>(
     floor: f64,
     scratch: &mut [f64],
 ) -> bool {
+    if let ([a], [piv]) = (&mut *a, &mut *piv) {
+        // A block of one state (the plate's modes): the same verdict and bits, directly.
+        return factor_one(a, piv, floor);
+    }
     if floor == 0.0 {
         return lu_in_place(a, k, piv);
     }
@@ -873,6 +1001,58 @@ mod tests {
             [false, true, true, true, true, true],
             "block sizes covered"
         );
+    }
+
+    /// [`couple`] gives the loops' bits for real blocks of three and four states (whose update
+    /// of S is [`schur_update_small_real_avx2`]'s where the processor has AVX2), for every
+    /// number of links from none to 19, with exact zeros among X's and C's entries.
+    #[test]
+    fn the_small_blocks_coupling_has_the_loops_bits() {
+        let mut rng = Rng(0x510e_527f_ade6_82d1);
+        let m = 23;
+        for k in [3, 4] {
+            for l in 0..=19 {
+                let mut a: Vec<f64> = (0..k * k).map(|_| rng.next()).collect();
+                let mut piv = vec![0; k];
+                assert!(super::super::lu::lu_in_place_loops(&mut a, k, &mut piv));
+                let mut links: Vec<usize> = (0..m).collect();
+                for i in (1..m).rev() {
+                    let j = ((rng.next() + 1.0) / 2.0 * (i + 1) as f64) as usize % (i + 1);
+                    links.swap(i, j);
+                }
+                links.truncate(l);
+                links.sort_unstable();
+                let zeroed = |rng: &mut Rng| {
+                    let v = rng.next();
+                    if v.abs() < 0.15 {
+                        0.0
+                    } else {
+                        v
+                    }
+                };
+                let x: Vec<f64> = (0..k * l).map(|_| zeroed(&mut rng)).collect();
+                let c: Vec<f64> = (0..k * l).map(|_| zeroed(&mut rng)).collect();
+                let schur: Vec<f64> = (0..m * m).map(|_| zeroed(&mut rng)).collect();
+                let (mut x_fast, mut s_fast) = (x.clone(), schur.clone());
+                couple(k, &a, &piv, &mut x_fast, &c, &links, &mut s_fast, m);
+                let (mut x_loops, mut s_loops) = (x, schur);
+                for column in x_loops.chunks_exact_mut(k) {
+                    super::super::lu::lu_solve_loops(&a, k, &piv, column);
+                }
+                for (&q, xc) in links.iter().zip(x_loops.chunks_exact(k)) {
+                    for (&r, cr) in links.iter().zip(c.chunks_exact(k)) {
+                        let mut acc = 0.0;
+                        for i in 0..k {
+                            acc += cr[i] * xc[i];
+                        }
+                        s_loops[r + q * m] -= acc;
+                    }
+                }
+                let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&x_fast), bits(&x_loops), "k = {k}, {l} links");
+                assert_eq!(bits(&s_fast), bits(&s_loops), "k = {k}, {l} links");
+            }
+        }
     }
 
     /// `c I − J` entry by entry with a complex shift (Radau5's complex matrix).

@@ -39,6 +39,12 @@ pub(super) fn lu_in_place<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) -
     #[cfg(target_arch = "x86_64")]
     {
         if k >= VECTOR_FROM && !portable_only() && std::arch::is_x86_feature_detected!("avx2") {
+            if k <= SMALL_REAL {
+                if let Some(ra) = T::as_reals_mut(a) {
+                    // SAFETY: the processor has AVX2 (checked just above), and k ≤ SMALL_REAL.
+                    return unsafe { lu_in_place_small_real_avx2(ra, k, piv) };
+                }
+            }
             // SAFETY: the processor has AVX2 (checked just above).
             return unsafe { lu_in_place_avx2(a, k, piv) };
         }
@@ -166,6 +172,103 @@ unsafe fn lu_in_place_avx2<T: Scalar>(a: &mut [T], k: usize, piv: &mut [usize]) 
     lu_in_place_large(a, k, piv)
 }
 
+/// [`lu_in_place_loops`] for a real block of [`VECTOR_FROM`] to [`SMALL_REAL`] states (the
+/// servo valve's border's Schur complement: 19), with the same bits.
+///
+/// As in [`lu_solve_small_real_avx2`], the loops' columns are short here and their compiled
+/// vectors leave most rows to the scalar remainder: this kernel divides the pivot's column by
+/// the pivot and subtracts its multiples from the columns after it in vectors of four rows, the
+/// last one partial (masked loads and stores, so that nothing past a column's end, nor past the
+/// matrix, is read or written). Every entry is updated by the same division, or the same
+/// multiplication and subtraction, never fused, as in the loops, in the same order, and a zero
+/// multiplier still skips its column; the pivot search and the row interchanges are the loops'.
+///
+/// # Safety
+///
+/// The processor has AVX2, and `k ≤ SMALL_REAL`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn lu_in_place_small_real_avx2(a: &mut [f64], k: usize, piv: &mut [usize]) -> bool {
+    use std::arch::x86_64::*;
+    assert!(k <= SMALL_REAL);
+    let (a, piv) = (&mut a[..k * k], &mut piv[..k]);
+    for j in 0..k {
+        if !pivot(a, k, j, piv) {
+            return false;
+        }
+        let (left, right) = a.split_at_mut((j + 1) * k);
+        let column = &mut left[j * k..];
+        let d = column[j];
+        let (from, to) = (j + 1, k);
+        // SAFETY: rows r..r + 4 of the column (k entries) are read and written only where
+        // r + 4 ≤ to = k, and the partial vector's lanes past `to` are masked off (neither read
+        // nor written). AVX2 is enabled in this function.
+        unsafe {
+            let (dd, c) = (_mm256_set1_pd(d), column.as_mut_ptr());
+            let mut r = from;
+            while r + 4 <= to {
+                _mm256_storeu_pd(c.add(r), _mm256_div_pd(_mm256_loadu_pd(c.add(r)), dd));
+                r += 4;
+            }
+            if r < to {
+                let mask = _mm256_loadu_si256(PARTIAL_MASKS[to - r].as_ptr().cast());
+                let y = _mm256_maskload_pd(c.add(r), mask);
+                _mm256_maskstore_pd(c.add(r), mask, _mm256_div_pd(y, dd));
+            }
+        }
+        column[j] = 1.0 / d;
+        let l = &column[..k];
+        for col in right.chunks_exact_mut(k) {
+            let f = col[j];
+            if f != 0.0 {
+                // SAFETY: rows from..to of column j (l, k entries) and of `col` (k entries)
+                // lie within them (to = k); AVX2 is enabled in this function.
+                unsafe { sub_multiple(l.as_ptr(), col.as_mut_ptr(), from, to, f) };
+            }
+        }
+    }
+    true
+}
+
+/// `y[r] - l[r] f` into `y[r]` for the rows r in from..to, in vectors of four, the last one
+/// partial (masked loads and stores: nothing outside those rows is read or written): the small
+/// real kernels' updates, each entry by a multiplication and a subtraction, never fused, as in
+/// the loops.
+///
+/// # Safety
+///
+/// The processor has AVX2, and `l` and `y` are valid for reads (and `y` writes) of their
+/// entries from..to.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn sub_multiple(l: *const f64, y: *mut f64, from: usize, to: usize, f: f64) {
+    use std::arch::x86_64::*;
+    // SAFETY: whole vectors read and write rows r..r + 4 only where r + 4 ≤ to, the partial
+    // vector's lanes past `to` are masked off (the caller's promise covers from..to).
+    unsafe {
+        let ff = _mm256_set1_pd(f);
+        let mut r = from;
+        while r + 4 <= to {
+            let t = _mm256_mul_pd(_mm256_loadu_pd(l.add(r)), ff);
+            let v = _mm256_loadu_pd(y.add(r));
+            _mm256_storeu_pd(y.add(r), _mm256_sub_pd(v, t));
+            r += 4;
+        }
+        if r < to {
+            let mask = _mm256_loadu_si256(PARTIAL_MASKS[to - r].as_ptr().cast());
+            let t = _mm256_mul_pd(_mm256_maskload_pd(l.add(r), mask), ff);
+            let v = _mm256_maskload_pd(y.add(r), mask);
+            _mm256_maskstore_pd(y.add(r), mask, _mm256_sub_pd(v, t));
+        }
+    }
+}
+
+/// The masks of the small real kernels' partial vectors by their number of lanes (1 to 3): all
+/// bits set in a lane that is in.
+#[cfg(target_arch = "x86_64")]
+const PARTIAL_MASKS: [[i64; 4]; 4] = [[0; 4], [-1, 0, 0, 0], [-1, -1, 0, 0], [-1, -1, -1, 0]];
+
 /// Whether the tests asked for the portable loops only (always false outside the tests).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
@@ -248,7 +351,7 @@ unsafe fn lu_solve_avx2<T: Scalar>(a: &[T], k: usize, piv: &[usize], x: &mut [T]
 }
 
 /// The largest real block [`lu_solve_small_real_avx2`] solves: its right-hand side is copied
-/// to a buffer of this many entries (and three more) on the stack. Above it the columns are long
+/// to a buffer of this many entries on the stack. Above it the columns are long
 /// enough for the loops' vectors to pay.
 #[cfg(target_arch = "x86_64")]
 const SMALL_REAL: usize = 64;
@@ -258,11 +361,10 @@ const SMALL_REAL: usize = 64;
 ///
 /// The loops' columns are short here, 18 rows and fewer, and the compiled loops do most of
 /// their rows one by one after the last whole vector. This kernel does every column's rows in
-/// vectors of four, the last one partial: its lanes past the column's rows are loaded as zeros
-/// from the matrix and keep the right-hand side's entries as they were (a blend), so that every
-/// entry is updated by the same multiplication and subtraction, never fused, as in the loops,
-/// and a zero multiplier still skips its column. The right-hand side is worked on in a copy with
-/// three entries of room after it, which the partial vectors read and write back unchanged.
+/// vectors of four, the last one partial, its lanes past the column's rows masked off
+/// ([`sub_multiple`]), so that every entry is updated by the same multiplication and
+/// subtraction, never fused, as in the loops, and a zero multiplier still skips its column. The
+/// right-hand side is worked on in a copy on the stack.
 ///
 /// # Safety
 ///
@@ -270,47 +372,22 @@ const SMALL_REAL: usize = 64;
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn lu_solve_small_real_avx2(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
-    use std::arch::x86_64::*;
     assert!(k <= SMALL_REAL);
     let (a, piv, x) = (&a[..k * k], &piv[..k], &mut x[..k]);
-    let mut buf = [0.0f64; SMALL_REAL + 3];
+    let mut buf = [0.0f64; SMALL_REAL];
     buf[..k].copy_from_slice(x);
     for j in 0..k {
         if piv[j] != j {
             buf[..k].swap(j, piv[j]);
         }
     }
-    // The partial vectors' masks by their number of lanes (1 to 3): all bits set in a lane
-    // that is in.
-    const MASKS: [[i64; 4]; 4] = [[0; 4], [-1, 0, 0, 0], [-1, -1, 0, 0], [-1, -1, -1, 0]];
     // Rows from..to of the right-hand side less v times the same rows of column j.
-    let update = |buf: &mut [f64; SMALL_REAL + 3], j: usize, from: usize, to: usize, v: f64| {
+    let update = |buf: &mut [f64; SMALL_REAL], j: usize, from: usize, to: usize, v: f64| {
         debug_assert!(from <= to && to <= k && j < k);
-        // SAFETY: column j's entries are a[j k .. j k + k], within a (j < k, a's length k²);
-        // rows r..r + 4 of it are read only where r + 4 ≤ to ≤ k, and the partial vector's
-        // lanes past `to` are masked off (not read); the buffer's entries r..r + 4 lie within
-        // its SMALL_REAL + 3 (r < to ≤ k ≤ SMALL_REAL). AVX2 is enabled in this function.
-        unsafe {
-            let vv = _mm256_set1_pd(v);
-            let (c, b) = (a.as_ptr().add(j * k), buf.as_mut_ptr());
-            let mut r = from;
-            while r + 4 <= to {
-                let t = _mm256_mul_pd(_mm256_loadu_pd(c.add(r)), vv);
-                let y = _mm256_loadu_pd(b.add(r));
-                _mm256_storeu_pd(b.add(r), _mm256_sub_pd(y, t));
-                r += 4;
-            }
-            if r < to {
-                let mask = _mm256_loadu_si256(MASKS[to - r].as_ptr().cast());
-                let t = _mm256_mul_pd(_mm256_maskload_pd(c.add(r), mask), vv);
-                let y = _mm256_loadu_pd(b.add(r));
-                let new = _mm256_sub_pd(y, t);
-                _mm256_storeu_pd(
-                    b.add(r),
-                    _mm256_blendv_pd(y, new, _mm256_castsi256_pd(mask)),
-                );
-            }
-        }
+        // SAFETY: column j's entries are a[j k .. j k + k], within a (j < k, a's length k²),
+        // and the buffer's entries from..to within its SMALL_REAL (to ≤ k ≤ SMALL_REAL);
+        // AVX2 is enabled in this function.
+        unsafe { sub_multiple(a.as_ptr().add(j * k), buf.as_mut_ptr(), from, to, v) };
     };
     for j in 0..k {
         let v = buf[j];
@@ -437,6 +514,35 @@ pub(super) fn pivots_clear<T: Scalar>(
     true
 }
 
+/// The LU of a block of one state `a` in place and its pivot test, with the verdict and the
+/// bits of [`scales`], [`lu_in_place`] and [`pivots_clear`] (with `floor`; none if it is 0):
+/// the plate's modes are such blocks, twenty of them in every factorisation of the default
+/// plant, and the general path's slices, scratch and loops cost several times the few
+/// operations they come to for k = 1.
+///
+/// For k = 1 those come to: the pivot's size `|a|` ([`Scalar::norm1`]), refused if zero or not
+/// finite; `1/a` in place; the row's scale `r = |a|` and the column's `min(|a| (1/r), 1)`, and
+/// the test `|1/(1/a)| > floor r c` (false, as there, if the pivot is not above it).
+pub(super) fn factor_one<T: Scalar>(a: &mut T, piv: &mut usize, floor: f64) -> bool {
+    let v = *a;
+    let size = v.norm1();
+    *piv = 0;
+    if size == 0.0 || !size.is_finite() {
+        return false;
+    }
+    *a = T::ONE / v;
+    if floor == 0.0 {
+        return true;
+    }
+    let row = size;
+    let column = larger(0.0, size * (1.0 / row)).min(1.0);
+    let pivot = (T::ONE / *a).norm1();
+    if pivot <= floor * row * column {
+        return false;
+    }
+    true
+}
+
 /// Step j's pivot ([`pivot`]) and column j made into multipliers: its entries below the
 /// diagonal divided by the pivot, the pivot's reciprocal on the diagonal. False if the pivot is
 /// refused.
@@ -474,8 +580,10 @@ fn pivot<T: Scalar>(a: &mut [T], k: usize, j: usize, piv: &mut [usize]) -> bool 
         return false;
     }
     if p != j {
-        for c in 0..k {
-            a.swap(j + c * k, p + c * k);
+        // Column by column, so that the indices' checks (j, p < k) do not depend on the column
+        // and leave the loop.
+        for column in a[..k * k].chunks_exact_mut(k) {
+            column.swap(j, p);
         }
     }
     true
@@ -772,6 +880,91 @@ mod tests {
             let rc: Vec<Complex<f64>> = rhs.iter().map(|&v| Complex::new(v, 0.5 - v)).collect();
             let [vector, portable] = both(&ac, k, &rc);
             assert_eq!(vector, portable, "complex, k = {k}");
+        }
+    }
+
+    /// The AVX2 kernel for the LU of small real blocks ([`lu_in_place_small_real_avx2`], where
+    /// the processor has AVX2) gives the loops' bits for every size it takes, every length of
+    /// its partial vectors: matrices with exact zeros (a zero multiplier skips its column),
+    /// some with a zero column (refused at the same step, the entries left as the loops leave
+    /// them).
+    #[test]
+    fn the_small_real_lu_kernel_has_the_loops_bits() {
+        let mut rng = Rng(0x7137_449d_23ef_65cd);
+        for k in VECTOR_FROM_ALL..=70 {
+            for trial in 0..6 {
+                let mut a: Vec<f64> = (0..k * k)
+                    .map(|_| rng.next())
+                    .map(|v| if v.abs() < 0.1 { 0.0 } else { v })
+                    .collect();
+                if trial == 5 {
+                    let c = k / 2;
+                    a[c * k..c * k + k].fill(0.0);
+                }
+                let (mut fast, mut loops) = (a.clone(), a);
+                let (mut pf, mut pl) = (vec![0; k], vec![0; k]);
+                let ok = lu_in_place(&mut fast, k, &mut pf);
+                assert_eq!(ok, lu_in_place_loops(&mut loops, k, &mut pl));
+                assert_eq!(ok, trial != 5, "k = {k}, trial {trial}");
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&loops), "k = {k}, trial {trial}");
+                assert_eq!(pf, pl);
+            }
+        }
+    }
+
+    /// [`factor_one`] gives the verdict and the bits of the general path for a block of one
+    /// state, with and without a floor, real and complex: ordinary values, values whose
+    /// reciprocal's reciprocal is not exact, subnormals (whose reciprocal overflows), the
+    /// largest and smallest normal numbers, zeros, infinities and NaN.
+    #[test]
+    fn the_block_of_one_state_has_the_general_paths_bits() {
+        fn general<T: Scalar>(v: T, floor: f64) -> (bool, T, usize) {
+            let (mut a, mut piv, mut scratch) = ([v], [7usize], [f64::NAN; 3]);
+            let ok = if floor == 0.0 {
+                lu_in_place(&mut a, 1, &mut piv)
+            } else {
+                scales(&a, 1, &mut scratch);
+                lu_in_place(&mut a, 1, &mut piv) && pivots_clear(&a, 1, &piv, &mut scratch, floor)
+            };
+            (ok, a[0], piv[0])
+        }
+        fn check<T: Scalar>(v: T) {
+            for floor in [0.0, 1e-10, 0.5, 1.0, 2.0] {
+                let (mut a, mut piv) = (v, 7usize);
+                let ok = factor_one(&mut a, &mut piv, floor);
+                let (ok_ref, a_ref, piv_ref) = general(v, floor);
+                assert_eq!(ok, ok_ref, "{v:?}, floor {floor}");
+                if ok {
+                    assert_eq!(format!("{a:?} {piv}"), format!("{a_ref:?} {piv_ref}"));
+                }
+            }
+        }
+        let mut rng = Rng(0x3c6e_f372_fe94_f82b);
+        let mut values = vec![
+            0.0,
+            -0.0,
+            1.0,
+            3.0,
+            -7.0,
+            f64::MIN_POSITIVE,
+            f64::MIN_POSITIVE / 3.0,
+            -5e-324,
+            f64::MAX,
+            -f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1e308 * 1.7,
+            1e-308 * 1.3,
+        ];
+        values.extend((0..500).map(|i| rng.next() * 10f64.powi(i % 600 - 300)));
+        for &v in &values {
+            check(v);
+            for &w in &values[..20] {
+                check(Complex::new(v, w));
+                check(Complex::new(w, v));
+            }
         }
     }
 
