@@ -299,36 +299,31 @@ impl NonaffineForms {
         self.evaluate_each(m, x, u, |i, v| out[i as usize] = v);
     }
 
-    /// `c + Σ a_v w_v` of `f` (the same sum, in the same order, wherever it is evaluated).
-    ///
-    /// A form of [`DOT_SPLIT`] terms or more is summed in four running sums (terms `4i + l`
-    /// into sum `l`), added pairwise at the end, then to the terms after the last four and `c`:
-    /// the drag points' forms read a dozen states each, and one running sum would make each
-    /// product wait on the addition before it.
+    /// `c + Σ a_v w_v` of `f` (the same sum, in the same order, wherever it is evaluated):
+    /// a form of [`DOT_SPLIT`] terms or more in four running sums ([`Summation::Split`]; the
+    /// drag points' forms read a dozen states each, and one running sum would make each
+    /// product wait on the addition before it).
     #[inline(always)]
     fn dot(&self, w: &[f64], f: &Form) -> f64 {
-        let e = &self.entries[f.start as usize..f.end as usize];
-        let term = |&(v, a): &(u32, f64)| a * w[v as usize];
-        if e.len() < DOT_SPLIT {
-            return e.iter().fold(f.c, |acc, t| acc + term(t));
+        SUMMATION.sum(w, f.c, &self.entries[f.start as usize..f.end as usize])
+    }
+
+    /// The values of the `c`-th nonlinear operation's operands from the variables before it
+    /// in `w` (`b` 0 without a second one).
+    #[inline(always)]
+    fn operands(&self, w: &[f64], c: usize) -> (f64, f64) {
+        let op = &self.nonlinear[c];
+        let a = self.dot(w, &op.a);
+        match &op.b {
+            Some(b) => (a, self.dot(w, b)),
+            None => (a, 0.0),
         }
-        let (body, tail) = e.split_at(e.len() - e.len() % 4);
-        let mut sums = [0.0; 4];
-        for four in body.chunks_exact(4) {
-            for (s, t) in sums.iter_mut().zip(four) {
-                *s += term(t);
-            }
-        }
-        let rest = tail.iter().fold(f.c, |acc, t| acc + term(t));
-        rest + ((sums[0] + sums[1]) + (sums[2] + sums[3]))
     }
 
     /// The `c`-th nonlinear result from the variables before it in `w`.
     #[inline]
     fn nonlinear_value(&self, m: &CompiledModel, w: &[f64], c: usize) -> f64 {
-        let op = &self.nonlinear[c];
-        let a = self.dot(w, &op.a);
-        let b = op.b.as_ref().map_or(0.0, |b| self.dot(w, b));
+        let (a, b) = self.operands(w, c);
         self.law_value(m, c, a, b)
     }
 
@@ -343,36 +338,34 @@ impl NonaffineForms {
     }
 
     /// Every nonlinear result into its place in `w` (whose states and inputs are set), in plan
-    /// order: `alone(c, w)` gives the `c`-th from the variables before it; the operations of a
-    /// run (see [`lanes`]), whose first operands are computed four at a time, give theirs by
-    /// `from_operand(c, a)` (a law without modulator: `b` is 0).
+    /// order, `result(c, a, b)` giving the `c`-th from the values of its operands (`b` 0
+    /// without a second one). The operands of a run (see [`lanes`]) are computed four at a
+    /// time, the others alone.
     #[inline]
-    fn operations(
-        &self,
-        w: &mut [f64],
-        mut alone: impl FnMut(usize, &[f64]) -> f64,
-        mut from_operand: impl FnMut(usize, f64) -> f64,
-    ) {
+    fn operations(&self, w: &mut [f64], mut result: impl FnMut(usize, f64, f64) -> f64) {
         let known = self.known;
         let mut c = 0;
         for run in &self.operation_runs {
             for c in c..run.forms().start {
-                w[known + c] = alone(c, w);
+                let (a, b) = self.operands(w, c);
+                w[known + c] = result(c, a, b);
             }
             // A run reads no result of its own: its operands are known at its start (the
-            // results go to a scratch first, `w` being read meanwhile).
+            // results go to a scratch first, `w` being read meanwhile). Its laws have no
+            // modulator.
             let mut results = [0.0; MAX_RUN];
             let constant = |c: usize| self.nonlinear[c].a.c;
             let first = run.forms().start;
             self.lanes.each_value(w, run, constant, |c, a| {
-                results[c - first] = from_operand(c, a);
+                results[c - first] = result(c, a, 0.0);
             });
             w[known + first..known + run.forms().end]
                 .copy_from_slice(&results[..run.forms().len()]);
             c = run.forms().end;
         }
         for c in c..self.nonlinear.len() {
-            w[known + c] = alone(c, w);
+            let (a, b) = self.operands(w, c);
+            w[known + c] = result(c, a, b);
         }
     }
 
@@ -397,11 +390,7 @@ impl NonaffineForms {
                 None => w[..n].fill(0.0),
             }
             w[n..self.known].copy_from_slice(u);
-            self.operations(
-                w,
-                |c, w| self.nonlinear_value(m, w, c),
-                |c, a| self.law_value(m, c, a, 0.0),
-            );
+            self.operations(w, |c, a, b| self.law_value(m, c, a, b));
             let mut r = 0;
             for run in &self.row_runs {
                 for (i, f) in &self.rows[r..run.forms().start] {

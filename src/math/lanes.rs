@@ -38,6 +38,25 @@ pub enum Summation {
 }
 
 impl Summation {
+    /// The form `c + Σ a_t w_{v_t}` over `terms` (variable, coefficient) alone, summed in this
+    /// order: the value a lane of a run repeats to the bit.
+    #[inline(always)]
+    pub fn sum(self, w: &[f64], c: f64, terms: &[(u32, f64)]) -> f64 {
+        let term = |&(v, a): &(u32, f64)| a * w[v as usize];
+        let (body, tail) = terms.split_at(self.body(terms.len()));
+        let rest = tail.iter().fold(c, |acc, t| acc + term(t));
+        if body.is_empty() {
+            return rest;
+        }
+        let mut sums = [0.0; 4];
+        for four in body.chunks_exact(4) {
+            for (s, t) in sums.iter_mut().zip(four) {
+                *s += term(t);
+            }
+        }
+        rest + ((sums[0] + sums[1]) + (sums[2] + sums[3]))
+    }
+
     /// The number of leading terms of a form of `len` terms that go to the four running sums.
     fn body(self, len: usize) -> usize {
         match self {
@@ -314,28 +333,32 @@ unsafe fn values_avx2(
 mod tests {
     use super::*;
 
-    /// A form alone, summed as [`Summation`] says: the reference the lanes must repeat.
-    fn alone(w: &[f64], c: f64, terms: &[(u32, f64)], summation: Summation) -> f64 {
-        let term = |&(v, a): &(u32, f64)| a * w[v as usize];
-        let body = summation.body(terms.len());
-        let mut sums = [0.0; 4];
-        for four in terms[..body].chunks_exact(4) {
-            for (s, t) in sums.iter_mut().zip(four) {
-                *s += term(t);
-            }
-        }
-        let rest = terms[body..].iter().fold(c, |acc, t| acc + term(t));
-        if body == 0 {
-            rest
-        } else {
-            rest + ((sums[0] + sums[1]) + (sums[2] + sums[3]))
-        }
-    }
-
     /// Pseudo-random doubles of mixed magnitudes and signs (no rounding-free sums).
     fn value(i: usize) -> f64 {
         let x = ((i as f64 + 1.0) * 0.618_033_988_749_895).fract();
         (x - 0.5) * 10f64.powi((i % 7) as i32 - 3)
+    }
+
+    /// The two orders as their documentation writes them, term by term.
+    #[test]
+    fn the_summations_are_the_documented_orders() {
+        let w: Vec<f64> = (0..12).map(|i| value(5 * i + 2)).collect();
+        let terms: Vec<(u32, f64)> = (0..9).map(|t| ((11 - t) as u32, value(t + 40))).collect();
+        let p: Vec<f64> = terms.iter().map(|&(v, a)| a * w[v as usize]).collect();
+        let c = value(77);
+        let fold = ((c + p[0]) + p[1]) + p[2];
+        assert_eq!(
+            Summation::Fold.sum(&w, c, &terms[..3]).to_bits(),
+            fold.to_bits()
+        );
+        // Split from 8: terms 0..8 into four sums (term 4i + s into sum s), term 8 onto c.
+        let s: Vec<f64> = (0..4).map(|k| (0.0 + p[k]) + p[k + 4]).collect();
+        let split = (c + p[8]) + ((s[0] + s[1]) + (s[2] + s[3]));
+        let summation = Summation::Split { from: 8 };
+        assert_eq!(summation.sum(&w, c, &terms).to_bits(), split.to_bits());
+        // Below `from`, a split summation folds.
+        let fold7 = p[..7].iter().fold(c, |acc, &t| acc + t);
+        assert_eq!(summation.sum(&w, c, &terms[..7]).to_bits(), fold7.to_bits());
     }
 
     /// Every run length (1 to 9 forms, so full and padded chunks), form length (1 to 13, both
@@ -379,7 +402,7 @@ mod tests {
                     assert_eq!(order, (5..5 + count).collect::<Vec<_>>());
                     for ((i, got), (_, portable)) in got.into_iter().zip(portable) {
                         let f = i - 5;
-                        let want = alone(&w, constants[f], &forms[f], summation);
+                        let want = summation.sum(&w, constants[f], &forms[f]);
                         assert_eq!(got.to_bits(), want.to_bits(), "{count} {len} {f}");
                         assert_eq!(portable.to_bits(), want.to_bits());
                         checked += 1;

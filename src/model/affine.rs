@@ -91,9 +91,11 @@ impl SparseRows {
     /// `offset_i + (row i) x`.
     #[inline]
     pub(super) fn row_times(&self, i: usize, x: &[f64], offset: f64) -> f64 {
-        self.entries[self.row_start[i]..self.row_start[i + 1]]
-            .iter()
-            .fold(offset, |acc, &(j, a)| acc + a * x[j as usize])
+        Summation::Fold.sum(
+            x,
+            offset,
+            &self.entries[self.row_start[i]..self.row_start[i + 1]],
+        )
     }
 }
 

@@ -233,7 +233,7 @@ impl FormsJacobian {
             w[..x.len()].copy_from_slice(x);
             w[x.len()..known].copy_from_slice(u);
             // Each result and its gradient from its operands' values.
-            let mut result = |c: usize, a: f64, b: f64| -> f64 {
+            let result = |c: usize, a: f64, b: f64| -> f64 {
                 let (y, ga, gb) = match forms.nonlinear[c].kind {
                     Kind::Law { law, ki, ko } => {
                         let (y, dx, dm) = (m.laws[law as usize].f)(a * ki, b);
@@ -259,17 +259,7 @@ impl FormsJacobian {
                 }
                 y
             };
-            let result = std::cell::RefCell::new(&mut result);
-            forms.operations(
-                w,
-                |c, w| {
-                    let op = &forms.nonlinear[c];
-                    let a = forms.dot(w, &op.a);
-                    let b = op.b.as_ref().map_or(0.0, |b| forms.dot(w, b));
-                    (result.borrow_mut())(c, a, b)
-                },
-                |c, a| (result.borrow_mut())(c, a, 0.0),
-            );
+            forms.operations(w, result);
             let mut finite = true;
             let mut write = |i: usize, v: f64| {
                 let e = &self.entries[i];
@@ -277,9 +267,8 @@ impl FormsJacobian {
                 jac[(e.row as usize, e.column as usize)] = v;
             };
             let alone = |e: &Entry| {
-                self.terms[e.start as usize..e.end as usize]
-                    .iter()
-                    .fold(e.direct, |acc, &(p, a)| acc + a * grad[p as usize])
+                let terms = &self.terms[e.start as usize..e.end as usize];
+                Summation::Fold.sum(grad, e.direct, terms)
             };
             let mut i = 0;
             for run in &self.entry_runs {

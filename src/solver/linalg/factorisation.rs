@@ -298,16 +298,8 @@ impl<T: Scalar> Factorisation<T> {
                 },
                 // SAFETY: as for the block of one state, and st + 1 < n = piv.len().
                 2 => unsafe {
-                    let a = at.lu;
-                    let (v0, v1) = solve_2x2(
-                        get(lu, a),
-                        get(lu, a + 1),
-                        get(lu, a + 2),
-                        get(lu, a + 3),
-                        get(piv, st) != 0,
-                        get(rhs, get(perm, st)),
-                        get(rhs, get(perm, st + 1)),
-                    );
+                    let r = (get(rhs, get(perm, st)), get(rhs, get(perm, st + 1)));
+                    let (v0, v1) = block_2x2(lu, piv, at.lu, st, r);
                     (*get_mut(blocks, st), *get_mut(blocks, st + 1)) = (v0, v1);
                     let ls = links.get_unchecked(at.links_from..at.links_to);
                     let cs = c.get_unchecked(at.x..at.x + 2 * ls.len());
@@ -389,17 +381,8 @@ impl<T: Scalar> Factorisation<T> {
                 // SAFETY: as for the block of one state, with st + 1 < nb, at.lu + 4 ≤ lu.len()
                 // and st < n = piv.len().
                 2 => unsafe {
-                    let a = at.lu;
                     let (i0, i1) = (get(perm, st), get(perm, st + 1));
-                    let (v0, v1) = solve_2x2(
-                        get(lu, a),
-                        get(lu, a + 1),
-                        get(lu, a + 2),
-                        get(lu, a + 3),
-                        get(piv, st) != 0,
-                        get(rhs, i0),
-                        get(rhs, i1),
-                    );
+                    let (v0, v1) = block_2x2(lu, piv, at.lu, st, (get(rhs, i0), get(rhs, i1)));
                     *get_mut(rhs, i0) = v0;
                     *get_mut(rhs, i1) = v1;
                 },
@@ -507,6 +490,21 @@ unsafe fn get<T: Copy>(s: &[T], i: usize) -> T {
     debug_assert!(i < s.len());
     // SAFETY: i < s.len() (the caller's promise).
     unsafe { *s.get_unchecked(i) }
+}
+
+/// The solve of a block of two states whose factors `[inv_u00, l10, u01, inv_u11]` start at
+/// `lu[a]`, its interchange flag at `piv[st]`, for the right-hand side `r` ([`solve_2x2`]).
+///
+/// # Safety
+///
+/// `a + 4 <= lu.len()` and `st < piv.len()`.
+#[inline(always)]
+unsafe fn block_2x2<T: Scalar>(lu: &[T], piv: &[usize], a: usize, st: usize, r: (T, T)) -> (T, T) {
+    // SAFETY: a + 3 < lu.len() and st < piv.len() (the caller's promise).
+    unsafe {
+        let f = (get(lu, a), get(lu, a + 1), get(lu, a + 2), get(lu, a + 3));
+        solve_2x2(f.0, f.1, f.2, f.3, get(piv, st) != 0, r.0, r.1)
+    }
 }
 
 /// `&mut s[i]` without the bounds check ([`get`]).
