@@ -191,6 +191,8 @@ pub(super) struct Affine {
     pub(super) offset: Vec<f64>,
     /// The largest `|f_i(0, u)|` of the affine rows (+inf if one is not finite).
     offset_max: f64,
+    /// The affine rows, ascending (the complement of the compiled model's nonaffine rows).
+    affine_rows: Vec<u32>,
     /// The largest Σ_j |J_ij| of the affine rows.
     jac_row_sum: f64,
     /// The affine outputs, if there are at most [`MAX_AFFINE_OUTPUTS`] outputs.
@@ -208,6 +210,8 @@ pub(super) struct AffineOutputs {
     pub(super) y0: Vec<f64>,
     /// The largest `|y_k(0, u)|` of the affine outputs (+inf if one is not finite).
     y0_max: f64,
+    /// The affine outputs, ascending.
+    affine: Vec<u32>,
     /// The largest Σ_j |C_kj|.
     row_sum: f64,
 }
@@ -216,18 +220,23 @@ pub(super) struct AffineOutputs {
 /// double that the rounding of a sum of up to a few hundred products cannot reach it.
 pub(super) const FINITE_BOUND: f64 = f64::MAX / 16.0;
 
-/// The largest magnitude among `v` at `keep`ing positions, +inf if one of them is not finite.
-pub(super) fn max_abs(v: &[f64], keep: impl Fn(usize) -> bool) -> f64 {
-    v.iter()
-        .enumerate()
-        .filter(|&(i, _)| keep(i))
-        .fold(0.0, |m, (_, &x)| {
-            if x.is_finite() {
-                m.max(x.abs())
-            } else {
-                f64::INFINITY
-            }
-        })
+/// The largest magnitude among the entries of `v` at `at`, +inf if one of them is not finite.
+pub(super) fn max_abs(v: &[f64], at: &[u32]) -> f64 {
+    at.iter().fold(0.0, |m, &i| {
+        let x = v[i as usize];
+        if x.is_finite() {
+            m.max(x.abs())
+        } else {
+            f64::INFINITY
+        }
+    })
+}
+
+/// The positions `0..n` not in the ascending list `skip`.
+fn complement(n: usize, skip: &[u32]) -> Vec<u32> {
+    (0..n as u32)
+        .filter(|i| skip.binary_search(i).is_err())
+        .collect()
 }
 
 /// [`max_abs`] of every entry of `v` (the same value), in a loop without branches that
@@ -275,6 +284,7 @@ impl Affine {
                 rows,
                 y0: vec![0.0; c.nrows()],
                 y0_max: 0.0,
+                affine: complement(c.nrows(), compiled.nonaffine_outputs()),
             }
         });
         let affine_row = |i: usize| {
@@ -308,6 +318,7 @@ impl Affine {
             offsets: compiled.affine_offset_forms(),
             offset: vec![0.0; jac_rows],
             offset_max: 0.0,
+            affine_rows: complement(jac_rows, compiled.nonaffine_rows()),
             outputs,
         };
         affine.set_inputs(compiled, inputs);
@@ -316,12 +327,10 @@ impl Affine {
 
     pub(super) fn set_inputs(&mut self, compiled: &CompiledModel, inputs: &[f64]) {
         self.offsets.rows(compiled, inputs, &mut self.offset);
-        let rows = compiled.nonaffine_rows();
-        self.offset_max = max_abs(&self.offset, |i| rows.binary_search(&(i as u32)).is_err());
+        self.offset_max = max_abs(&self.offset, &self.affine_rows);
         if let Some(o) = &mut self.outputs {
             self.offsets.outputs(compiled, inputs, &mut o.y0);
-            let outputs = compiled.nonaffine_outputs();
-            o.y0_max = max_abs(&o.y0, |k| outputs.binary_search(&(k as u32)).is_err());
+            o.y0_max = max_abs(&o.y0, &o.affine);
         }
     }
 
@@ -397,9 +406,21 @@ mod tests {
             &[2.0, 3.0, f64::INFINITY, f64::NAN],
         ];
         for v in cases {
-            let (a, b) = (max_abs_all(v), max_abs(v, |_| true));
+            let every: Vec<u32> = (0..v.len() as u32).collect();
+            let (a, b) = (max_abs_all(v), max_abs(v, &every));
             assert_eq!(a.to_bits(), b.to_bits(), "{v:?}");
         }
+    }
+
+    /// The affine positions are those not listed as nonaffine.
+    #[test]
+    fn the_complement_leaves_out_the_listed_positions() {
+        assert_eq!(complement(6, &[1, 4]), vec![0, 2, 3, 5]);
+        assert_eq!(complement(3, &[]), vec![0, 1, 2]);
+        assert_eq!(complement(2, &[0, 1]), Vec::<u32>::new());
+        let v = [9.0, -1.0, 4.0, f64::NAN];
+        assert_eq!(max_abs(&v, &complement(4, &[0, 3])), 4.0);
+        assert_eq!(max_abs(&v, &complement(4, &[0])), f64::INFINITY);
     }
 
     /// The blocked product is the plain dense one, to the bit, for rows that are not a
