@@ -36,8 +36,11 @@ pub(crate) fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     }
 }
 
+/// Whether every entry of `v` is finite: without an early exit, so that the loop has no branch
+/// and vectorises (the stages of a step are finite but for a failure; a stage of the complete
+/// system is tested in a few vector operations instead of a branch per entry).
 pub(crate) fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
+    v.iter().fold(true, |all, x| all & x.is_finite())
 }
 
 /// The method's factorisations kept in `slot` from the last call, for a call with Jacobian stamp
