@@ -16,13 +16,104 @@ pub(crate) fn product(lin: &[f64], rows: usize, a: Option<&[f64]>, x: &[f64], y:
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked just above).
-            unsafe { product_avx2(lin, rows, a, x, y) };
+            let (lin, y) = (&lin[..lin.len() / rows.max(1) * rows], &mut y[..rows]);
+            let a = a.map(|a| &a[..rows]);
+            // SAFETY: the processor has AVX2 (checked just above); `lin` holds whole columns of
+            // `rows` entries, `y` and `a` (if any) `rows` entries, and the kernel of V vectors
+            // gets 4 (V − 1) < rows ≤ 4 V.
+            unsafe {
+                match rows.div_ceil(4) {
+                    0 => product_loop(lin, rows, a, x, y),
+                    1 => product_small_avx2::<1>(lin, rows, a, x, y),
+                    2 => product_small_avx2::<2>(lin, rows, a, x, y),
+                    3 => product_small_avx2::<3>(lin, rows, a, x, y),
+                    4 => product_small_avx2::<4>(lin, rows, a, x, y),
+                    5 => product_small_avx2::<5>(lin, rows, a, x, y),
+                    6 => product_small_avx2::<6>(lin, rows, a, x, y),
+                    7 => product_small_avx2::<7>(lin, rows, a, x, y),
+                    8 => product_small_avx2::<8>(lin, rows, a, x, y),
+                    _ => product_avx2(lin, rows, a, x, y),
+                }
+            }
             return;
         }
     }
     product_loop(lin, rows, a, x, y);
 }
+
+/// [`product_loop`] for `4 (V − 1) < rows ≤ 4 V`, V ≤ 8, with the same bits: `y` is held in V
+/// registers of four lanes through all the columns (the last one's lanes past `rows` masked off
+/// when loading and storing), so that each column costs V multiplications and V additions of
+/// vectors instead of a load and a store of `y`, which made every column wait on the one
+/// before. Each entry still starts at `a_i` (or 0) and adds `l_ij x_j` column after column,
+/// multiplied and added apart (never fused), a zero `x_j` skipping its column: the loop's
+/// operations in its order. The real-time mode's solve with the varying rows (29 kept rows on
+/// the complete system) and the inverses of small constant systems take this path.
+///
+/// # Safety
+///
+/// The processor has AVX2; `lin.len()` is a multiple of `rows`, `y.len() == rows`, `a` (if
+/// any) holds `rows` entries, and `4 (V − 1) < rows ≤ 4 V`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn product_small_avx2<const V: usize>(
+    lin: &[f64],
+    rows: usize,
+    a: Option<&[f64]>,
+    x: &[f64],
+    y: &mut [f64],
+) {
+    use std::arch::x86_64::*;
+    debug_assert!(4 * (V - 1) < rows && rows <= 4 * V && y.len() == rows);
+    debug_assert!(lin.len() % rows == 0 && a.is_none_or(|a| a.len() == rows));
+    let last = rows - 4 * (V - 1);
+    // SAFETY: the full vectors cover entries 4v..4v + 4 ≤ 4 (V − 1) < rows of a column (or of
+    // `a`, `y`), the last one only its `last` ≤ 4 entries from 4 (V − 1), the lanes past them
+    // masked off; every column lies within `lin` (its length is a multiple of `rows`).
+    unsafe {
+        let mask = _mm256_loadu_si256(LANES_IN[last].as_ptr().cast());
+        let load = |p: *const f64, v: usize| {
+            if v + 1 < V {
+                _mm256_loadu_pd(p.add(4 * v))
+            } else {
+                _mm256_maskload_pd(p.add(4 * v), mask)
+            }
+        };
+        let mut acc = [_mm256_setzero_pd(); V];
+        if let Some(a) = a {
+            for (v, acc) in acc.iter_mut().enumerate() {
+                *acc = load(a.as_ptr(), v);
+            }
+        }
+        for (column, &xj) in lin.chunks_exact(rows).zip(x) {
+            if xj != 0.0 {
+                let xj = _mm256_set1_pd(xj);
+                for (v, acc) in acc.iter_mut().enumerate() {
+                    let l = load(column.as_ptr(), v);
+                    *acc = _mm256_add_pd(*acc, _mm256_mul_pd(l, xj));
+                }
+            }
+        }
+        for (v, acc) in acc.iter().enumerate() {
+            if v + 1 < V {
+                _mm256_storeu_pd(y.as_mut_ptr().add(4 * v), *acc);
+            } else {
+                _mm256_maskstore_pd(y.as_mut_ptr().add(4 * v), mask, *acc);
+            }
+        }
+    }
+}
+
+/// The masks of [`product_small_avx2`]'s last vector by its number of lanes in (1 to 4): all
+/// bits set in a lane that is in.
+#[cfg(target_arch = "x86_64")]
+const LANES_IN: [[i64; 4]; 5] = [
+    [0; 4],
+    [-1, 0, 0, 0],
+    [-1, -1, 0, 0],
+    [-1, -1, -1, 0],
+    [-1, -1, -1, -1],
+];
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -100,6 +191,45 @@ mod tests {
     use crate::solver::linalg::Partition;
     use nalgebra::DMatrix;
     use std::sync::Arc;
+
+    /// The kernels with `y` in registers give the portable loop's bits for every number of
+    /// rows they take (1 to 32) and the ones around them (33 to 37, the columns' loop), with
+    /// zero, signed-zero and non-finite entries, with and without `a`.
+    #[test]
+    fn the_small_products_have_the_loops_bits() {
+        let special = [0.0, -0.0, f64::INFINITY, f64::NAN, -1e-310, 1e300];
+        let value = |k: usize| match k % 11 {
+            4 => special[(k / 11) % special.len()],
+            _ => ((k * 2654435761) % 2000) as f64 / 97.0 - 10.0,
+        };
+        // A NaN's sign and payload depend on which operand the processor saw first, which the
+        // compiler may swap in a commutative operation: NaNs compare as NaN.
+        let bits = |v: &[f64]| {
+            v.iter()
+                .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() })
+                .collect::<Vec<_>>()
+        };
+        for rows in 1..=37 {
+            for columns in [0, 1, 2, 5, 15, 16] {
+                let lin: Vec<f64> = (0..rows * columns).map(|k| value(k + 3)).collect();
+                // Every third x is zero (its column skipped), one of them −0.
+                let x: Vec<f64> = (0..columns)
+                    .map(|j| match j % 3 {
+                        0 if j % 2 == 0 => 0.0,
+                        0 => -0.0,
+                        _ => value(7 * j + rows),
+                    })
+                    .collect();
+                let a: Vec<f64> = (0..rows).map(|i| value(5 * i + 1)).collect();
+                for a in [Some(&a[..]), None] {
+                    let (mut y, mut y_loop) = (vec![f64::NAN; rows], vec![f64::NAN; rows]);
+                    product(&lin, rows, a, &x, &mut y);
+                    product_loop(&lin, rows, a, &x, &mut y_loop);
+                    assert_eq!(bits(&y), bits(&y_loop), "{rows} rows, {columns} columns");
+                }
+            }
+        }
+    }
 
     /// The vectorised product gives the portable loop's bits, and the inverse solves.
     #[test]
