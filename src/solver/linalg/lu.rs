@@ -364,7 +364,8 @@ const SMALL_REAL: usize = 64;
 /// vectors of four, the last one partial, its lanes past the column's rows masked off
 /// ([`sub_multiple`]), so that every entry is updated by the same multiplication and
 /// subtraction, never fused, as in the loops, and a zero multiplier still skips its column. The
-/// right-hand side is worked on in a copy on the stack.
+/// right-hand side is worked on in a copy on the stack; up to [`IN_REGISTERS`] states (the
+/// border), in registers instead ([`lu_solve_in_registers`]).
 ///
 /// # Safety
 ///
@@ -373,6 +374,13 @@ const SMALL_REAL: usize = 64;
 #[target_feature(enable = "avx2")]
 unsafe fn lu_solve_small_real_avx2(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
     assert!(k <= SMALL_REAL);
+    // SAFETY (each): the processor has AVX2 (the caller's promise), and N = ⌈k/4⌉.
+    match k {
+        9..=12 => return unsafe { lu_solve_in_registers::<3>(a, k, piv, x) },
+        13..=16 => return unsafe { lu_solve_in_registers::<4>(a, k, piv, x) },
+        17..=IN_REGISTERS => return unsafe { lu_solve_in_registers::<5>(a, k, piv, x) },
+        _ => {}
+    }
     let (a, piv, x) = (&a[..k * k], &piv[..k], &mut x[..k]);
     let mut buf = [0.0f64; SMALL_REAL];
     buf[..k].copy_from_slice(x);
@@ -403,6 +411,192 @@ unsafe fn lu_solve_small_real_avx2(a: &[f64], k: usize, piv: &[usize], x: &mut [
         }
     }
     x.copy_from_slice(&buf[..k]);
+}
+
+/// The largest real block [`lu_solve_small_real_avx2`] solves with its right-hand side in
+/// registers ([`lu_solve_in_registers`]): five vectors of four rows, which leave the sixteen
+/// AVX2 registers room for the column's vectors, the multiplier and the partial results.
+#[cfg(target_arch = "x86_64")]
+const IN_REGISTERS: usize = 20;
+
+/// [`lu_solve_small_real_avx2`] for a block of at most [`IN_REGISTERS`] states (the servo
+/// valve's border), in N = ⌈k/4⌉ vectors of four rows, with the same bits.
+///
+/// Column by column, a solve is a chain: row j's value, once its column's updates are all in,
+/// is the multiplier of the next column's. Through a buffer in memory that chain reloads each
+/// row's value right after storing it, often from a masked store, which the processor cannot
+/// forward to the load. Here the right-hand side stays in N vectors, every column's updates are
+/// unrolled over them (monomorphised on N, the lanes' indices constants), and row j's value is
+/// taken from its vector by a lane broadcast: nothing in the chain goes through memory.
+///
+/// The bits are the loops': every row in j+1..k (forward) or 0..j (back) is updated by the
+/// same multiplication, then subtraction, never fused, in the same order as in the loops, and
+/// a zero multiplier still skips its column. The vector that holds row j is updated in all its
+/// lanes but takes back, by a blend, only the rows the loops update: the others keep their
+/// bits exactly (a zero multiple subtracted instead would turn a -0 into a +0, and with an
+/// infinite or NaN multiplier any row into NaN). Row j's own value is the loops' too: in the
+/// back substitution, x_j times the diagonal's reciprocal, blended into its lane whether or
+/// not it is zero. The lanes past k (the last vector's, if k is not a multiple of four) hold
+/// whatever they hold, affect no row and are never stored back.
+///
+/// # Safety
+///
+/// The processor has AVX2 (k and N are checked: N = ⌈k/4⌉, k ≤ `IN_REGISTERS`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+// The unrolled steps' constants make some of their tests always true or false (L > 0 for
+// L = 0), and their last column's `src` is never read.
+#[allow(unused_assignments, clippy::absurd_extreme_comparisons)]
+unsafe fn lu_solve_in_registers<const N: usize>(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
+    use std::arch::x86_64::*;
+    // `$body` once for each constant `$c` of the list (the unrolling that keeps the right-hand
+    // side's vectors, indexed by constants, in registers).
+    macro_rules! unrolled {
+        ($c:ident in [$($n:literal),*] $body:block) => {
+            $({
+                const $c: usize = $n;
+                $body
+            })*
+        };
+    }
+    assert!(k <= IN_REGISTERS && N >= 1 && k.div_ceil(4) == N);
+    let (a, piv, x) = (&a[..k * k], &piv[..k], &mut x[..k]);
+    // The interchanges, on the rows' indices: row r of the interchanged right-hand side is
+    // x[rows[r]] (the rows past k, the last vector's padding, read x[0]). They do not wait for
+    // the right-hand side.
+    let mut rows = [0usize; IN_REGISTERS];
+    for (r, row) in rows[..k].iter_mut().enumerate() {
+        *row = r;
+    }
+    for (j, &p) in piv.iter().enumerate() {
+        if p != j {
+            rows[..k].swap(j, p);
+        }
+    }
+    // The lanes of the last vector that are rows (1 to 4).
+    let m = k - 4 * (N - 1);
+    // SAFETY: AVX2 is enabled in this function. Column j's vector i is read at a[j k + 4 i ..
+    // j k + 4 i + 4]; with 4 (N - 1) < k, that lies within a (k² entries) for every i < N - 1
+    // and every j < k, and also for i = N - 1 if j ≤ k - 2 (j k + 4 N - 1 ≤ (k - 2) k + k + 2
+    // < k²). The forward pass reads only columns j ≤ k - 2; the back pass reads column k - 1's
+    // last vector, the one read that could pass the end of a, with its lanes past k masked off
+    // (`tail`). The diagonal's entry j k + j < k², and the stores write x's k entries only.
+    unsafe {
+        let tail = _mm256_castsi256_pd(_mm256_cmpgt_epi64(
+            _mm256_set1_epi64x(m as i64),
+            _mm256_setr_epi64x(0, 1, 2, 3),
+        ));
+        let mut v = [_mm256_setzero_pd(); N];
+        unrolled!(I in [0, 1, 2, 3, 4] {
+            if I < N {
+                let at = |l: usize| x[rows[4 * I + l]];
+                v[I] = _mm256_setr_pd(at(0), at(1), at(2), at(3));
+            }
+        });
+        // Forward substitution. `src` is a vector whose lanes from j's on hold rows' values
+        // with all of the columns before j in (row j's vector, or the unblended result of the
+        // column before it): the chain runs through it, the blends into `v` stay off it.
+        let mut src = v[0];
+        'forward: {
+            unrolled!(B in [0, 1, 2, 3, 4] {
+                if B < N {
+                    unrolled!(L in [0, 1, 2, 3] {
+                        let j = 4 * B + L;
+                        if j + 1 >= k {
+                            break 'forward;
+                        }
+                        let f = _mm256_permute4x64_pd::<{ 0x55 * L as i32 }>(src);
+                        if _mm256_cvtsd_f64(f) != 0.0 {
+                            let c = a.as_ptr().add(j * k);
+                            if L < 3 {
+                                // Rows j + 1 .. 4 B + 4: the lanes above L.
+                                let t = _mm256_sub_pd(
+                                    src,
+                                    _mm256_mul_pd(_mm256_loadu_pd(c.add(4 * B)), f),
+                                );
+                                v[B] = _mm256_blend_pd::<{ (0b1110 << L) & 0b1111 }>(v[B], t);
+                                src = t;
+                            }
+                            unrolled!(I in [1, 2, 3, 4] {
+                                if B + I < N {
+                                    let l = _mm256_loadu_pd(c.add(4 * (B + I)));
+                                    v[B + I] = _mm256_sub_pd(v[B + I], _mm256_mul_pd(l, f));
+                                }
+                            });
+                        }
+                        if L == 3 && B + 1 < N {
+                            src = v[B + 1];
+                        }
+                    });
+                }
+            });
+        }
+        // Back substitution, from row k - 1 (the last vector's lane m - 1) up. `src`: a vector
+        // whose lanes up to j's hold rows' values with all of the columns after j in.
+        let mut src = v[N - 1];
+        unrolled!(BB in [0, 1, 2, 3, 4] {
+            const B: usize = 4 - BB;
+            if B < N {
+                unrolled!(LL in [0, 1, 2, 3] {
+                    const L: usize = 3 - LL;
+                    let j = 4 * B + L;
+                    if j < k {
+                        let c = a.as_ptr().add(j * k);
+                        let d = _mm256_broadcast_sd(&*c.add(j));
+                        let f = _mm256_mul_pd(
+                            _mm256_permute4x64_pd::<{ 0x55 * L as i32 }>(src),
+                            d,
+                        );
+                        v[B] = _mm256_blend_pd::<{ 1 << L }>(v[B], f);
+                        if _mm256_cvtsd_f64(f) != 0.0 {
+                            if L > 0 {
+                                // Rows 4 B .. j: the lanes below L.
+                                let l = if B + 1 < N {
+                                    _mm256_loadu_pd(c.add(4 * B))
+                                } else {
+                                    _mm256_maskload_pd(c.add(4 * B), _mm256_castpd_si256(tail))
+                                };
+                                let t = _mm256_sub_pd(src, _mm256_mul_pd(l, f));
+                                v[B] = _mm256_blend_pd::<{ (1 << L) - 1 }>(v[B], t);
+                                src = t;
+                            }
+                            unrolled!(I in [1, 2, 3, 4] {
+                                if I <= B {
+                                    let l = _mm256_loadu_pd(c.add(4 * (B - I)));
+                                    v[B - I] = _mm256_sub_pd(v[B - I], _mm256_mul_pd(l, f));
+                                }
+                            });
+                        }
+                        if L == 0 && B > 0 {
+                            src = v[B - 1];
+                        }
+                    }
+                });
+            }
+        });
+        unrolled!(I in [0, 1, 2, 3] {
+            if I + 1 < N {
+                _mm256_storeu_pd(x.as_mut_ptr().add(4 * I), v[I]);
+            }
+        });
+        // The last vector's rows one by one (a masked store would not forward to the caller's
+        // loads).
+        let (lo, hi) = (
+            _mm256_castpd256_pd128(v[N - 1]),
+            _mm256_extractf128_pd::<1>(v[N - 1]),
+        );
+        let last = &mut x[4 * (N - 1)..];
+        _mm_store_sd(&mut last[0], lo);
+        if m > 1 {
+            _mm_storeh_pd(&mut last[1], lo);
+        }
+        if m > 2 {
+            _mm_store_sd(&mut last[2], hi);
+        }
+        if m > 3 {
+            _mm_storeh_pd(&mut last[3], hi);
+        }
+    }
 }
 
 /// [`lu_solve`] for k = 2, from the factors `[inv_u00, l10, u01, inv_u11]` (column-major), the
@@ -968,10 +1162,15 @@ mod tests {
         }
     }
 
-    /// The AVX2 kernel for small real blocks ([`lu_solve_small_real_avx2`], where the processor
-    /// has AVX2) gives the loops' bits for every size it takes, every length of its partial
-    /// vectors: right-hand sides with zeros of both signs (a zero multiplier skips its column,
-    /// a negative zero left in place stays one) and exactly zero factors.
+    /// The AVX2 kernels for small real blocks ([`lu_solve_small_real_avx2`], and
+    /// [`lu_solve_in_registers`] up to [`IN_REGISTERS`] states, where the processor has AVX2)
+    /// give the loops' bits for every size they take, every length of their partial vectors:
+    /// right-hand sides with zeros of both signs (a zero multiplier skips its column, a
+    /// negative zero left in place stays one) and exactly zero factors; then made-up factors,
+    /// mostly zeros (zero multipliers in the middle of the chains, zeros on the diagonal) with
+    /// random interchanges, right-hand sides of negative zeros but for one row, and infinite
+    /// and NaN entries (infinite factors; NaN only in the right-hand side, since of a product
+    /// of two NaNs the loops' own bits are the compiler's choice of operand order).
     #[test]
     fn the_small_real_kernel_has_the_loops_bits() {
         let mut rng = Rng(0x1405_7b7e_f767_814f);
@@ -996,6 +1195,54 @@ mod tests {
                 lu_solve_loops(&lu, k, &piv, &mut loops);
                 let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&fast), bits(&loops), "k = {k}, trial {trial}");
+            }
+            for trial in 0..24 {
+                let mut lu: Vec<f64> = (0..k * k)
+                    .map(|_| rng.next())
+                    .map(|v| if v.abs() < 0.7 { 0.0 } else { v * 3.0 })
+                    .collect();
+                let piv: Vec<usize> = (0..k)
+                    .map(|j| j + ((rng.next() + 1.0) * k as f64) as usize % (k - j))
+                    .collect();
+                let mut rhs: Vec<f64> = (0..k)
+                    .map(|_| rng.next())
+                    .map(|v| {
+                        if v.abs() < 0.3 {
+                            [0.0, -0.0][trial % 2]
+                        } else {
+                            v
+                        }
+                    })
+                    .collect();
+                let at = |r: f64| ((r + 1.0) * k as f64) as usize % k;
+                match trial % 8 {
+                    0 => rhs.fill(-0.0),
+                    1 => {
+                        rhs.fill(-0.0);
+                        rhs[at(rng.next())] = rng.next();
+                    }
+                    2 => rhs[at(rng.next())] = f64::INFINITY,
+                    3 => {
+                        rhs[at(rng.next())] = f64::NEG_INFINITY;
+                        rhs[at(rng.next())] = f64::NAN;
+                    }
+                    4 => {
+                        for _ in 0..3 {
+                            lu[at(rng.next()) * k + at(rng.next())] = f64::INFINITY;
+                        }
+                    }
+                    5 => {
+                        let j = at(rng.next());
+                        lu[j * k + j] = f64::NEG_INFINITY;
+                        rhs[at(rng.next())] = f64::INFINITY;
+                    }
+                    _ => {}
+                }
+                let (mut fast, mut loops) = (rhs.clone(), rhs);
+                lu_solve(&lu, k, &piv, &mut fast);
+                lu_solve_loops(&lu, k, &piv, &mut loops);
+                let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&loops), "k = {k}, made-up trial {trial}");
             }
         }
     }
