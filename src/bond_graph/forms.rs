@@ -269,10 +269,18 @@ impl NonaffineForms {
     }
 
     /// Numbers of nonlinear operations whose operands, and of rows, that are summed four at a
-    /// time ([`lanes`]).
-    pub fn side_by_side(&self) -> (usize, usize) {
+    /// time ([`lanes`]), and of those operations whose four forms of a chunk read the same
+    /// variables (the kernel loads each once instead of gathering it).
+    pub fn side_by_side(&self) -> (usize, usize, usize) {
         let count = |runs: &[Run]| runs.iter().map(|r| r.forms().len()).sum();
-        (count(&self.operation_runs), count(&self.row_runs))
+        let shared = (self.operation_runs.iter())
+            .flat_map(|r| {
+                (0..r.chunks())
+                    .filter(|&k| r.is_shared(k))
+                    .map(|k| r.chunk(k).len())
+            })
+            .sum();
+        (count(&self.operation_runs), count(&self.row_runs), shared)
     }
 
     /// Number of nonlinear operations and of coefficients: the work of one evaluation.

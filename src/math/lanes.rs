@@ -77,6 +77,10 @@ pub struct Run {
     /// Chunk `k`'s term `t` of lane `l` is at `at + (k len + t) LANES + l` of the layout.
     at: u32,
     summation: Summation,
+    /// Bit `k` set: in every term of chunk `k` the four lanes read one variable (the drag
+    /// points' air speeds over the same momenta), which the AVX2 kernel then loads once and
+    /// broadcasts instead of gathering it. Chunks from the 32nd on are gathered.
+    shared: u32,
 }
 
 impl Run {
@@ -95,6 +99,12 @@ impl Run {
     /// The forms of the run.
     pub fn forms(&self) -> Range<usize> {
         self.first as usize..(self.first + self.count) as usize
+    }
+
+    /// Whether the lanes of chunk `k` read one variable in every term (see `shared`): the AVX2
+    /// kernel loads each once and broadcasts it.
+    pub fn is_shared(&self, k: usize) -> bool {
+        k < 32 && self.shared >> k & 1 == 1
     }
 }
 
@@ -135,14 +145,19 @@ impl Lanes {
             forms.iter().all(|f| f.len() == len),
             "a run's forms have one length"
         );
-        let run = Run {
+        let mut run = Run {
             first: first as u32,
             count: forms.len() as u32,
             len: len as u32,
             at: self.variable.len() as u32,
             summation,
+            shared: 0,
         };
-        for chunk in forms.chunks(LANES) {
+        for (k, chunk) in forms.chunks(LANES).enumerate() {
+            let shared = (0..len).all(|t| chunk.iter().all(|f| f[t].0 == chunk[0][t].0));
+            if shared && k < 32 {
+                run.shared |= 1 << k;
+            }
             for t in 0..len {
                 // Padding lanes read the first lane's variable with a zero coefficient.
                 let lane = |l: usize| chunk.get(l).map_or((chunk[0][t].0, 0.0), |f| f[t]);
@@ -233,7 +248,12 @@ impl Lanes {
                     // SAFETY: the caller has checked that the processor has AVX2 and that
                     // `w` is long enough for every variable of the lanes; the slices hold
                     // `len` rows of terms.
-                    unsafe { values_avx2(w, variable, coefficient, body, c) }
+                    unsafe {
+                        match run.is_shared(k) {
+                            true => values_avx2::<true>(w, variable, coefficient, body, c),
+                            false => values_avx2::<false>(w, variable, coefficient, body, c),
+                        }
+                    }
                 }
                 #[cfg(not(target_arch = "x86_64"))]
                 unreachable!("AVX2 is an x86-64 extension")
@@ -274,17 +294,19 @@ fn values_loops(
     })
 }
 
-/// A chunk's values with AVX2: a row of four terms is one gather of its variables, one vector
-/// product and one vector sum. (A row whose four lanes read one variable is gathered too: a
-/// branch to a broadcast for it cost more instructions than it saved, by callgrind on the
-/// default plant.)
+/// A chunk's values with AVX2: a row of four terms is one gather of its variables (with
+/// `SHARED`, a chunk whose lanes read one variable in every row, one load of it broadcast to
+/// the four lanes: the same four values, so the same bits), one vector product and one vector
+/// sum. (The choice is made per chunk when the chunks are laid out: a branch per row cost more
+/// instructions than the broadcast saved, by callgrind on the default plant.)
 ///
 /// # Safety
 /// The processor has AVX2; `variable` and `coefficient` hold the same number of rows of
-/// [`LANES`] terms; every variable is below `w.len()` (and below 2^31).
+/// [`LANES`] terms; every variable is below `w.len()` (and below 2^31); with `SHARED`, the four
+/// variables of each row are one.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn values_avx2(
+unsafe fn values_avx2<const SHARED: bool>(
     w: &[f64],
     variable: &[u32],
     coefficient: &[f64],
@@ -298,8 +320,12 @@ unsafe fn values_avx2(
         // SAFETY: row `t < len` of `variable` and `coefficient` is at `t · LANES`; a variable
         // read is below `w`'s length (the caller's contract).
         unsafe {
-            let index = _mm_loadu_si128(v.add(t * LANES) as *const __m128i);
-            let x = _mm256_i32gather_pd::<8>(w, index);
+            let x = if SHARED {
+                _mm256_broadcast_sd(&*w.add(*v.add(t * LANES) as usize))
+            } else {
+                let index = _mm_loadu_si128(v.add(t * LANES) as *const __m128i);
+                _mm256_i32gather_pd::<8>(w, index)
+            };
             _mm256_mul_pd(_mm256_loadu_pd(a.add(t * LANES)), x)
         }
     };
@@ -369,15 +395,21 @@ mod tests {
     fn each_lane_is_its_form_alone_to_the_bit() {
         let w: Vec<f64> = (0..40).map(|i| value(3 * i + 1)).collect();
         let mut checked = 0;
-        for summation in [Summation::Fold, Summation::Split { from: 8 }] {
+        for (summation, all_shared) in [
+            (Summation::Fold, false),
+            (Summation::Split { from: 8 }, false),
+            (Summation::Fold, true),
+            (Summation::Split { from: 8 }, true),
+        ] {
             for count in 1..=9 {
                 for len in 1..=13 {
                     let forms: Vec<Vec<(u32, f64)>> = (0..count)
                         .map(|f| {
                             (0..len)
                                 .map(|t| {
-                                    // Every other term reads the same variable in all forms.
-                                    let v = if t % 2 == 0 {
+                                    // Every other term reads the same variable in all forms
+                                    // (with `all_shared` every term: the kernel broadcasts).
+                                    let v = if t % 2 == 0 || all_shared {
                                         t * 3
                                     } else {
                                         (f * 7 + t * 5) % 40
@@ -393,6 +425,13 @@ mod tests {
                     lanes.add(0, &[&[(0, 1.0)]], summation);
                     let run = lanes.add(5, &refs, summation);
                     assert_eq!(run.forms(), 5..5 + count);
+                    // A chunk of one form (its padding lanes read its variables) is shared.
+                    let shared = match all_shared || len == 1 {
+                        true => run.chunks(),
+                        false => usize::from(count % LANES == 1),
+                    };
+                    let chunks = (0..run.chunks()).filter(|&k| run.is_shared(k)).count();
+                    assert_eq!(chunks, shared, "{count} {len}");
                     let constant = |i: usize| constants[i - 5];
                     let mut got = Vec::new();
                     lanes.each_value(&w, &run, constant, |i, v| got.push((i, v)));
@@ -410,7 +449,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(checked, 2 * 13 * 45);
+        assert_eq!(checked, 4 * 13 * 45);
     }
 
     #[test]

@@ -65,7 +65,7 @@ unsafe fn product_small_avx2<const V: usize>(
 ) {
     use std::arch::x86_64::*;
     debug_assert!(4 * (V - 1) < rows && rows <= 4 * V && y.len() == rows);
-    debug_assert!(lin.len() % rows == 0 && a.is_none_or(|a| a.len() == rows));
+    debug_assert!(lin.len().is_multiple_of(rows) && a.is_none_or(|a| a.len() == rows));
     let last = rows - 4 * (V - 1);
     // SAFETY: the full vectors cover entries 4v..4v + 4 ≤ 4 (V − 1) < rows of a column (or of
     // `a`, `y`), the last one only its `last` ≤ 4 entries from 4 (V − 1), the lanes past them

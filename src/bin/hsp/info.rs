@@ -22,7 +22,7 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
         .jacobian(m.n_states(), m.jacobian_varying_pattern())
         .size();
     let (nonlinear, coefficients) = forms.size();
-    let (operations_in_lanes, rows_in_lanes) = forms.side_by_side();
+    let (operations_in_lanes, rows_in_lanes, operations_shared) = forms.side_by_side();
     serde_json::json!({
         "states": m.n_states(),
         "inputs": m.input_names(),
@@ -37,6 +37,7 @@ pub fn facts(system: &Assembled) -> serde_json::Value {
             "nonlinear_operations": nonlinear,
             "coefficients": coefficients,
             "operands_four_at_a_time": operations_in_lanes,
+            "operands_reading_one_variable_per_lane": operations_shared,
             "rows_four_at_a_time": rows_in_lanes,
         },
         "jacobian": {
@@ -88,10 +89,12 @@ pub fn text(system: &Assembled) -> String {
     let forms = &f["forms"];
     s.push_str(&format!(
         "forms      the rows not affine: {} nonlinear operations and {} coefficients; {} \
-         operands and {} rows of one length summed four at a time\n",
+         operands ({} of them in fours over the same variables, each loaded once) and {} rows \
+         of one length summed four at a time\n",
         forms["nonlinear_operations"],
         forms["coefficients"],
         forms["operands_four_at_a_time"],
+        forms["operands_reading_one_variable_per_lane"],
         forms["rows_four_at_a_time"]
     ));
     s.push_str(&format!(
@@ -191,6 +194,11 @@ mod tests {
         let forms = &facts(&system)["forms"];
         let operands = forms["operands_four_at_a_time"].as_u64().unwrap();
         assert!(operands >= 4, "{forms}");
+        // The air speeds read the same momenta: loaded once, not gathered.
+        let shared = forms["operands_reading_one_variable_per_lane"]
+            .as_u64()
+            .unwrap();
+        assert!(shared >= 4, "{forms}");
         assert!(
             forms["rows_four_at_a_time"].as_u64().unwrap() >= 2,
             "{forms}"
