@@ -25,6 +25,14 @@ pub struct Partition {
     /// finishes in one go (a plate mode that no force of the hub excites is one).
     pub(super) linked: Vec<BlockAt>,
     pub(super) free: Vec<BlockAt>,
+    /// The linked blocks again, split for the solves (see [`OneAt`] and [`Term`]): those of one
+    /// state, and those of more.
+    pub(super) ones: Vec<OneAt>,
+    pub(super) multi: Vec<BlockAt>,
+    /// The border's right-hand side's terms, border state after border state (q's are
+    /// `terms[term_starts[q]..term_starts[q + 1]]`), each state's in block order.
+    pub(super) terms: Vec<Term>,
+    pub(super) term_starts: Vec<usize>,
     /// Numbers of the blocks' LUs (Σ k²) and of their X_b (and C_b) (Σ k × links), which
     /// [`BlockAt::lu`] and [`BlockAt::x`] lay out one block after the other.
     pub(super) lu_len: usize,
@@ -100,6 +108,32 @@ pub(super) struct BlockAt {
     pub(super) links_to: usize,
 }
 
+/// A linked block of one state (the plate's modes, most of the blocks): its place in the
+/// partition and in the factors, for the solves' written-out passes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct OneAt {
+    /// Its state, `perm[pos]`.
+    pub(super) state: usize,
+    /// Its position in `perm`.
+    pub(super) pos: usize,
+    /// Offset of its one factor (the pivot's reciprocal) in the LU.
+    pub(super) lu: usize,
+    /// Offset of its X_b and C_b (one number per link each).
+    pub(super) x: usize,
+    /// Its border links: `links[links_from..links_to]`.
+    pub(super) links_from: usize,
+    pub(super) links_to: usize,
+}
+
+/// One term C_b[q, :] y_b of border state q's right-hand side r_q − Σ_b C_b[q, :] y_b: the row
+/// of C_b at `c` (k numbers), y_b at position `y` of the elimination order (k numbers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Term {
+    pub(super) c: usize,
+    pub(super) y: usize,
+    pub(super) k: usize,
+}
+
 impl Partition {
     /// The partition with these fields, and the offsets derived from them.
     ///
@@ -145,6 +179,41 @@ impl Partition {
             x += size * (links_to - links_from);
         }
         let nb = starts[starts.len() - 1];
+        let (mut ones, mut multi) = (Vec::new(), Vec::new());
+        // Each link's term with its border state, in block order; sorted stably by border
+        // state, every state's terms stay in block order.
+        let mut by_state = Vec::with_capacity(links.len());
+        for at in &linked {
+            if at.size == 1 {
+                ones.push(OneAt {
+                    state: perm[at.start],
+                    pos: at.start,
+                    lu: at.lu,
+                    x: at.x,
+                    links_from: at.links_from,
+                    links_to: at.links_to,
+                });
+            } else {
+                multi.push(*at);
+            }
+            for (li, &q) in links[at.links_from..at.links_to].iter().enumerate() {
+                let term = Term {
+                    c: at.x + li * at.size,
+                    y: at.start,
+                    k: at.size,
+                };
+                by_state.push((q, term));
+            }
+        }
+        by_state.sort_by_key(|&(q, _)| q);
+        let mut term_starts = vec![0; m + 1];
+        for &(q, _) in &by_state {
+            term_starts[q + 1] += 1;
+        }
+        for q in 0..m {
+            term_starts[q + 1] += term_starts[q];
+        }
+        let terms = by_state.into_iter().map(|(_, t)| t).collect();
         let link_states: Vec<usize> = links.iter().map(|&q| perm[nb + q]).collect();
         let dense = starts.len() == 2 && nb == n;
         let gather = if dense {
@@ -163,6 +232,10 @@ impl Partition {
             gather,
             linked,
             free,
+            ones,
+            multi,
+            terms,
+            term_starts,
             lu_len: lu,
             x_len: x,
         }
