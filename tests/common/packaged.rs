@@ -55,9 +55,17 @@ pub fn packaged_hash(version: Version) -> Option<String> {
     Some(String::from_utf8_lossy(hash).into_owned())
 }
 
+/// One check-and-package at a time: the tests of a binary run on threads, and two `hsp package`
+/// runs writing the same archives at once leave a corrupt one ("corrupt deflate stream" in the
+/// next test that opens it).
+static PACKAGING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// The packaged FMU of `version`, built from this build's sources: rebuilt with `hsp package`
 /// when missing or stale.
 pub fn fresh_fmu(version: Version) -> PathBuf {
+    // A test that failed while holding the lock leaves it poisoned; the archives are checked
+    // again below all the same.
+    let _one = PACKAGING.lock().unwrap_or_else(|e| e.into_inner());
     let this = SOURCE_HASH;
     if packaged_hash(version).as_deref() != Some(this) {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -374,7 +374,7 @@ const SMALL_REAL: usize = 64;
 #[target_feature(enable = "avx2")]
 unsafe fn lu_solve_small_real_avx2(a: &[f64], k: usize, piv: &[usize], x: &mut [f64]) {
     assert!(k <= SMALL_REAL);
-    // SAFETY (each): the processor has AVX2 (the caller's promise), and N = ⌈k/4⌉.
+    // SAFETY: (each arm) the processor has AVX2 (the caller's promise), and N = ⌈k/4⌉.
     match k {
         9..=12 => return unsafe { lu_solve_in_registers::<3>(a, k, piv, x) },
         13..=16 => return unsafe { lu_solve_in_registers::<4>(a, k, piv, x) },
@@ -475,12 +475,13 @@ unsafe fn lu_solve_in_registers<const N: usize>(a: &[f64], k: usize, piv: &[usiz
     }
     // The lanes of the last vector that are rows (1 to 4).
     let m = k - 4 * (N - 1);
-    // SAFETY: AVX2 is enabled in this function. Column j's vector i is read at a[j k + 4 i ..
-    // j k + 4 i + 4]; with 4 (N - 1) < k, that lies within a (k² entries) for every i < N - 1
-    // and every j < k, and also for i = N - 1 if j ≤ k - 2 (j k + 4 N - 1 ≤ (k - 2) k + k + 2
-    // < k²). The forward pass reads only columns j ≤ k - 2; the back pass reads column k - 1's
-    // last vector, the one read that could pass the end of a, with its lanes past k masked off
-    // (`tail`). The diagonal's entry j k + j < k², and the stores write x's k entries only.
+    // Column j's vector i is read at a[j k + 4 i .. j k + 4 i + 4]; with 4 (N - 1) < k, that
+    // lies within a (k² entries) for every i < N - 1 and every j < k, and also for i = N - 1 if
+    // j ≤ k - 2 (j k + 4 N - 1 ≤ (k - 2) k + k + 2 < k²). The forward pass reads only columns
+    // j ≤ k - 2; the back pass reads column k - 1's last vector, the one read that could pass
+    // the end of a, with its lanes past k masked off (`tail`). The diagonal's entry j k + j < k².
+    // SAFETY: AVX2 is enabled in this function; every read is within a (above), and the stores
+    // write x's k entries only.
     unsafe {
         let tail = _mm256_castsi256_pd(_mm256_cmpgt_epi64(
             _mm256_set1_epi64x(m as i64),

@@ -36,8 +36,9 @@
 //! [`Factorisation::solve`] takes the caller's scratch vector, so neither allocates once warm.
 //!
 //! The module is split by job: [`Scalar`] (the entries' type), the partition's layout
-//! (`partition`) and its search ([`Partition::detect`], `detect`), the block elimination and
-//! solves ([`Factorisation`], `factorisation`), the dense LU kernels of a block (`lu`), and the
+//! (`partition`) and its search ([`Partition::detect`], `detect`), the block elimination
+//! ([`Factorisation`], `factorisation`) and the solve with its factors (`factorisation::solve`),
+//! the dense LU kernels of a block (`lu`), and the
 //! cache of the last Jacobian's partition (`pattern`). [`VaryingRows`] is the other
 //! elimination, for a fixed step size whose Jacobian varies in a few rows only: the constant
 //! rows eliminated once, a small Schur complement of the varying ones at every step.
