@@ -522,140 +522,7 @@ mod tests {
     use nalgebra::{Complex, DMatrix};
 
     use super::super::testing::{arrowhead, arrowhead_with_free, residual, Rng};
-    use super::solve::{back, block_2x2, block_solve, scatter_border_and_free_blocks};
     use super::*;
-
-    /// The solve as it was written before the border's right-hand side was made border state
-    /// by border state ([`Factorisation::solve`]): block after block, each block's terms
-    /// subtracted from the border states it links to in memory. The reference for the solve's
-    /// bits.
-    fn solve_blocks_first<T: Scalar>(f: &Factorisation<T>, rhs: &mut [T], scratch: &mut [T]) {
-        let p = &*f.part;
-        let (n, nb) = (p.n, p.starts[p.blocks()]);
-        let m = n - nb;
-        let rhs = &mut rhs[..n];
-        let (lu, x, c) = (&f.lu[..p.lu_len], &f.x[..p.x_len], &f.c[..p.x_len]);
-        let (piv, links) = (&f.piv[..n], &p.links[..]);
-        let (blocks, border) = scratch[..n].split_at_mut(nb);
-        let (perm, border_states) = p.perm.split_at(nb);
-        for (dst, &i) in border.iter_mut().zip(border_states) {
-            // SAFETY: i < n = rhs.len() (`Partition::with` checked `perm`).
-            *dst = unsafe { get(rhs, i) };
-        }
-        // y_b = A_b⁻¹ r_b, and the border's right-hand side r_B - Σ C_b y_b.
-        for at in &p.linked {
-            let (st, k) = (at.start, at.size);
-            match k {
-                // SAFETY: `Partition::with` checked: st + k ≤ nb = blocks.len() = perm.len(),
-                // perm's entries < n = rhs.len(), at.lu + k² ≤ lu.len(), at.x + k × links ≤
-                // c.len(), links_to ≤ links.len(), links < m = border.len().
-                1 => unsafe {
-                    let v = get(rhs, get(perm, st)) * get(lu, at.lu);
-                    *get_mut(blocks, st) = v;
-                    let ls = links.get_unchecked(at.links_from..at.links_to);
-                    let cs = c.get_unchecked(at.x..at.x + ls.len());
-                    for (&q, &c0) in ls.iter().zip(cs) {
-                        let b = get_mut(border, q);
-                        *b = *b - (T::ZERO + c0 * v);
-                    }
-                },
-                // SAFETY: as for the block of one state, and st + 1 < n = piv.len().
-                2 => unsafe {
-                    let r = (get(rhs, get(perm, st)), get(rhs, get(perm, st + 1)));
-                    let (v0, v1) = block_2x2(lu, piv, at.lu, st, r);
-                    (*get_mut(blocks, st), *get_mut(blocks, st + 1)) = (v0, v1);
-                    let ls = links.get_unchecked(at.links_from..at.links_to);
-                    let cs = c.get_unchecked(at.x..at.x + 2 * ls.len());
-                    for (&q, cr) in ls.iter().zip(cs.chunks_exact(2)) {
-                        let b = get_mut(border, q);
-                        *b = *b - (T::ZERO + cr[0] * v0 + cr[1] * v1);
-                    }
-                },
-                _ => {
-                    let links = &links[at.links_from..at.links_to];
-                    let c = &c[at.x..at.x + k * links.len()];
-                    let (lu, piv) = (&lu[at.lu..at.lu + k * k], &piv[st..st + k]);
-                    let (idx, y) = (&perm[st..st + k], &mut blocks[st..st + k]);
-                    // The servo valve's blocks of three and four states: with k known, the
-                    // loops unroll.
-                    match k {
-                        3 => forward_blocks_first(3, lu, piv, idx, rhs, y, links, c, border),
-                        4 => forward_blocks_first(4, lu, piv, idx, rhs, y, links, c, border),
-                        _ => forward_blocks_first(k, lu, piv, idx, rhs, y, links, c, border),
-                    }
-                }
-            }
-        }
-        lu_solve(&f.schur[..m * m], m, &f.schur_piv[..m], border);
-        // x_b = y_b - X_b x_B.
-        for at in &p.linked {
-            let (st, k) = (at.start, at.size);
-            match k {
-                // SAFETY: as in the forward pass, with x.len() = c.len().
-                1 => unsafe {
-                    let mut y0 = get(blocks, st);
-                    let ls = links.get_unchecked(at.links_from..at.links_to);
-                    let xs = x.get_unchecked(at.x..at.x + ls.len());
-                    for (&q, &x0) in ls.iter().zip(xs) {
-                        y0 = y0 - x0 * get(border, q);
-                    }
-                    *get_mut(rhs, get(perm, st)) = y0;
-                },
-                // SAFETY: as in the forward pass, with x.len() = c.len().
-                2 => unsafe {
-                    let (mut y0, mut y1) = (get(blocks, st), get(blocks, st + 1));
-                    let ls = links.get_unchecked(at.links_from..at.links_to);
-                    let xs = x.get_unchecked(at.x..at.x + 2 * ls.len());
-                    for (&q, xc) in ls.iter().zip(xs.chunks_exact(2)) {
-                        let v = get(border, q);
-                        y0 = y0 - xc[0] * v;
-                        y1 = y1 - xc[1] * v;
-                    }
-                    *get_mut(rhs, get(perm, st)) = y0;
-                    *get_mut(rhs, get(perm, st + 1)) = y1;
-                },
-                _ => {
-                    let links = &links[at.links_from..at.links_to];
-                    let x = &x[at.x..at.x + k * links.len()];
-                    let (idx, y) = (&perm[st..st + k], &mut blocks[st..st + k]);
-                    match k {
-                        3 => back(3, idx, y, links, x, border, rhs),
-                        4 => back(4, idx, y, links, x, border, rhs),
-                        _ => back(k, idx, y, links, x, border, rhs),
-                    }
-                }
-            }
-        }
-        scatter_border_and_free_blocks(p, lu, piv, border, blocks, rhs);
-    }
-
-    /// A block's share of [`solve_blocks_first`]'s forward pass: y = A⁻¹ r for its states `idx`
-    /// (into `y`), and border[q] -= C_b's row of q times y for each of its links q, the dot product
-    /// over the block's states in order, from zero. Inlined, so that a constant k unrolls the loops
-    /// (the same operations in the same order for every k, so the same bits).
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn forward_blocks_first<T: Scalar>(
-        k: usize,
-        lu: &[T],
-        piv: &[usize],
-        idx: &[usize],
-        rhs: &[T],
-        y: &mut [T],
-        links: &[usize],
-        c: &[T],
-        border: &mut [T],
-    ) {
-        block_solve(k, lu, piv, idx, rhs, y);
-        let y = &y[..k];
-        for (&q, cr) in links.iter().zip(c.chunks_exact(k)) {
-            let mut acc = T::ZERO;
-            for i in 0..k {
-                acc = acc + cr[i] * y[i];
-            }
-            border[q] = border[q] - acc;
-        }
-    }
 
     /// The solve as it was written before [`Factorisation::solve`] was flattened: block by
     /// block through [`Partition::block`] and [`lu_solve`], gathering into and scattering from
@@ -959,7 +826,7 @@ mod tests {
     }
 
     /// The solve with the border's right-hand side made border state by border state gives
-    /// the bits of the block after block one ([`solve_blocks_first`]), compiled for AVX2 and
+    /// the bits of the block after block one (`solve_blockwise`), compiled for AVX2 and
     /// not: random partitions (blocks of one to five states, up to a dozen, borders of none to
     /// twenty states, each block linked to a random subset of the border, some to none),
     /// random factors with exact zeros and negative zeros (mostly zeros in every third round,
@@ -1036,7 +903,7 @@ mod tests {
             let n = b.len();
             let (mut reference, mut solved, mut portable) = (b.to_vec(), b.to_vec(), b.to_vec());
             let mut scratch = vec![T::ZERO; n];
-            solve_blocks_first(f, &mut reference, &mut scratch);
+            solve_blockwise(f, &mut reference, &mut scratch);
             f.solve(&mut solved, &mut scratch);
             f.solve_passes(&mut portable, &mut scratch);
             assert_eq!(bits(&solved), bits(&reference), "{:?}", f.part);

@@ -170,7 +170,7 @@ impl<T: Scalar> Factorisation<T> {
 /// `y`). Inlined, so that a constant k unrolls the loops (the same operations in the same
 /// order for every k, so the same bits).
 #[inline(always)]
-pub(super) fn block_solve<T: Scalar>(
+fn block_solve<T: Scalar>(
     k: usize,
     lu: &[T],
     piv: &[usize],
@@ -199,7 +199,7 @@ pub(super) fn block_solve<T: Scalar>(
 ///
 /// `c` and `y` point to k numbers each.
 #[inline(always)]
-pub(super) unsafe fn dot<T: Scalar>(k: usize, c: *const T, y: *const T) -> T {
+unsafe fn dot<T: Scalar>(k: usize, c: *const T, y: *const T) -> T {
     let mut acc = T::ZERO;
     for i in 0..k {
         // SAFETY: i < k (the caller's promise).
@@ -212,7 +212,7 @@ pub(super) unsafe fn dot<T: Scalar>(k: usize, c: *const T, y: *const T) -> T {
 /// order, written to its states `idx` in `rhs`. Inlined, so that a constant k unrolls the
 /// loops.
 #[inline(always)]
-pub(super) fn back<T: Scalar>(
+fn back<T: Scalar>(
     k: usize,
     idx: &[usize],
     y: &mut [T],
@@ -255,13 +255,7 @@ pub(super) fn back<T: Scalar>(
 ///
 /// `a + 4 <= lu.len()` and `st < piv.len()`.
 #[inline(always)]
-pub(super) unsafe fn block_2x2<T: Scalar>(
-    lu: &[T],
-    piv: &[usize],
-    a: usize,
-    st: usize,
-    r: (T, T),
-) -> (T, T) {
+unsafe fn block_2x2<T: Scalar>(lu: &[T], piv: &[usize], a: usize, st: usize, r: (T, T)) -> (T, T) {
     // SAFETY: a + 3 < lu.len() and st < piv.len() (the caller's promise).
     unsafe {
         let f = (get(lu, a), get(lu, a + 1), get(lu, a + 2), get(lu, a + 3));
@@ -269,11 +263,10 @@ pub(super) unsafe fn block_2x2<T: Scalar>(
     }
 }
 
-/// The solve's last pass (the tests' reference solve ends with it too): the border's values
-/// into their states, and x_b = A_b⁻¹ r_b for the blocks without a border link (the dense
-/// partition's one block among them), from `rhs`.
+/// The solve's last pass: the border's values into their states, and x_b = A_b⁻¹ r_b for the
+/// blocks without a border link (the dense partition's one block among them), from `rhs`.
 #[inline(always)]
-pub(super) fn scatter_border_and_free_blocks<T: Scalar>(
+fn scatter_border_and_free_blocks<T: Scalar>(
     p: &Partition,
     lu: &[T],
     piv: &[usize],
