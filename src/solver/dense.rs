@@ -63,6 +63,7 @@ unsafe fn product_small_avx2<const V: usize>(
     x: &[f64],
     y: &mut [f64],
 ) {
+    use super::linalg::PARTIAL_MASKS;
     use std::arch::x86_64::*;
     debug_assert!(4 * (V - 1) < rows && rows <= 4 * V && y.len() == rows);
     debug_assert!(lin.len().is_multiple_of(rows) && a.is_none_or(|a| a.len() == rows));
@@ -71,7 +72,7 @@ unsafe fn product_small_avx2<const V: usize>(
     // `a`, `y`), the last one only its `last` ≤ 4 entries from 4 (V − 1), the lanes past them
     // masked off; every column lies within `lin` (its length is a multiple of `rows`).
     unsafe {
-        let mask = _mm256_loadu_si256(LANES_IN[last].as_ptr().cast());
+        let mask = _mm256_loadu_si256(PARTIAL_MASKS[last].as_ptr().cast());
         let load = |p: *const f64, v: usize| {
             if v + 1 < V {
                 _mm256_loadu_pd(p.add(4 * v))
@@ -103,17 +104,6 @@ unsafe fn product_small_avx2<const V: usize>(
         }
     }
 }
-
-/// The masks of [`product_small_avx2`]'s last vector by its number of lanes in (1 to 4): all
-/// bits set in a lane that is in.
-#[cfg(target_arch = "x86_64")]
-const LANES_IN: [[i64; 4]; 5] = [
-    [0; 4],
-    [-1, 0, 0, 0],
-    [-1, -1, 0, 0],
-    [-1, -1, -1, 0],
-    [-1, -1, -1, -1],
-];
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]

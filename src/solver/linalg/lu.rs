@@ -264,10 +264,17 @@ unsafe fn sub_multiple(l: *const f64, y: *mut f64, from: usize, to: usize, f: f6
     }
 }
 
-/// The masks of the small real kernels' partial vectors by their number of lanes (1 to 3): all
-/// bits set in a lane that is in.
+/// The masks of the small real kernels' partial vectors by their number of lanes in (0 to 4):
+/// all bits set in a lane that is in. Also the dense products' last vector's
+/// (`solver::dense`).
 #[cfg(target_arch = "x86_64")]
-const PARTIAL_MASKS: [[i64; 4]; 4] = [[0; 4], [-1, 0, 0, 0], [-1, -1, 0, 0], [-1, -1, -1, 0]];
+pub(crate) const PARTIAL_MASKS: [[i64; 4]; 5] = [
+    [0; 4],
+    [-1, 0, 0, 0],
+    [-1, -1, 0, 0],
+    [-1, -1, -1, 0],
+    [-1, -1, -1, -1],
+];
 
 /// Whether the tests asked for the portable loops only (always false outside the tests).
 #[cfg(target_arch = "x86_64")]

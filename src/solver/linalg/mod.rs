@@ -58,6 +58,8 @@ mod varying_rows;
 
 pub(crate) use factorisation::factor_with_fallback;
 pub use factorisation::{Entries, Factorisation, Shifted};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use lu::PARTIAL_MASKS;
 pub use partition::Partition;
 pub(crate) use pattern::PatternCache;
 pub use scalar::Scalar;
