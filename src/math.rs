@@ -16,6 +16,7 @@
 //!
 //! `tests/portable_math.rs` checks that the library calls no platform function but `sqrt`.
 
+pub mod dual;
 pub mod lanes;
 
 use nalgebra::DMatrix;

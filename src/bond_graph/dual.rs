@@ -35,64 +35,9 @@ impl Scalar for f64 {
     }
 }
 
-/// A dual number `v + d eps`, `eps^2 = 0`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Dual {
-    pub v: f64,
-    pub d: f64,
-}
+/// The dual number of [`crate::math::dual`]: its arithmetic is the Jacobian passes'.
+pub(crate) use crate::math::dual::Dual;
 
-impl Add for Dual {
-    type Output = Dual;
-    #[inline]
-    fn add(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v + o.v,
-            d: self.d + o.d,
-        }
-    }
-}
-impl Sub for Dual {
-    type Output = Dual;
-    #[inline]
-    fn sub(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v - o.v,
-            d: self.d - o.d,
-        }
-    }
-}
-impl Mul for Dual {
-    type Output = Dual;
-    #[inline]
-    fn mul(self, o: Dual) -> Dual {
-        Dual {
-            v: self.v * o.v,
-            d: self.d * o.v + self.v * o.d,
-        }
-    }
-}
-impl Div for Dual {
-    type Output = Dual;
-    #[inline]
-    fn div(self, o: Dual) -> Dual {
-        let v = self.v / o.v;
-        Dual {
-            v,
-            d: (self.d - v * o.d) / o.v,
-        }
-    }
-}
-impl Neg for Dual {
-    type Output = Dual;
-    #[inline]
-    fn neg(self) -> Dual {
-        Dual {
-            v: -self.v,
-            d: -self.d,
-        }
-    }
-}
 impl Scalar for Dual {
     #[inline]
     fn cst(c: f64) -> Self {

@@ -5,6 +5,8 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
+use crate::math::dual::HyperDual;
+
 /// Identifier of a bond-graph element (source, storage, resistor, two-port, junction, field).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ElementId(pub(crate) usize);
@@ -63,7 +65,14 @@ pub struct NonlinearLaw {
     /// `s <= VALUE_BOUND_RANGE`, if the law's author shows one
     /// ([`NonlinearLaw::with_value_bound`]).
     pub(crate) value_bound: Option<(f64, f64)>,
+    /// The law in hyper-dual numbers ([`NonlinearLaw::with_hyper`]), if its author gave it: what
+    /// the parameter sensitivities of the linearisation need where a law's argument or its own
+    /// constants move with the parameter.
+    pub(crate) hyper: Option<Arc<HyperLawFn>>,
 }
+
+/// A law `phi(x, m)` in hyper-dual numbers ([`NonlinearLaw::with_hyper`]).
+pub type HyperLawFn = dyn Fn(HyperDual, HyperDual) -> HyperDual + Send + Sync;
 
 /// How far a law's declared value bound ([`NonlinearLaw::with_value_bound`]) must hold: for
 /// every argument and modulator up to 2^500 in magnitude, well below where a square of them
@@ -89,6 +98,7 @@ impl NonlinearLaw {
             energy: None,
             energy_bound: None,
             value_bound: None,
+            hyper: None,
         }
     }
 
@@ -106,6 +116,7 @@ impl NonlinearLaw {
             energy: None,
             energy_bound: None,
             value_bound: None,
+            hyper: None,
         }
     }
 
@@ -147,6 +158,23 @@ impl NonlinearLaw {
             Some((k, c)) => self.with_value_bound(k, c),
             None => self,
         }
+    }
+
+    /// Gives the law in hyper-dual numbers: `phi(x, m)` with `x` and `m` carrying derivatives
+    /// along two directions (`ε₁` a state's, `ε₂` a parameter's), and the law's own constants
+    /// entering with their derivatives along `ε₂` (captured as [`crate::math::dual::Dual`]s, the
+    /// derivatives with respect to the parameter the model was built for). Written once,
+    /// generic in [`crate::math::dual::Real`], its value must be the law's own to the bit; its
+    /// `a` part the closure's derivatives. The parameter sensitivities of the linearisation
+    /// ([`super::CompiledModel::linearize_with_sensitivity`]) need it wherever the law's
+    /// argument, modulator or constants move with the parameter, and refuse, naming the law,
+    /// where it is missing.
+    pub fn with_hyper<F>(mut self, phi: F) -> Self
+    where
+        F: Fn(HyperDual, HyperDual) -> HyperDual + Send + Sync + 'static,
+    {
+        self.hyper = Some(Arc::new(phi));
+        self
     }
 
     /// The bound declared by [`NonlinearLaw::with_value_bound`], if any.
