@@ -53,6 +53,9 @@ pub struct CompiledModel {
     /// The Jacobian's constant entries (zero elsewhere) once
     /// [`CompiledModel::fix_constant_entries`] has evaluated them.
     pub(super) constant_entries: Option<DMatrix<f64>>,
+    /// The derivatives of the plan's constants with respect to the parameter the model was
+    /// built for, when one is nonzero ([`CompiledModel::linearize_with_sensitivity`]).
+    pub(super) constant_derivatives: Option<super::plan::ConstantDerivatives>,
 }
 
 /// The offsets `f_i(0, u)` of the affine rows and `y_k(0, u)` of the affine outputs as forms

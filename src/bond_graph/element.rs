@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
-use crate::math::dual::HyperDual;
+use crate::math::dual::{Dual, HyperDual};
 
 /// Identifier of a bond-graph element (source, storage, resistor, two-port, junction, field).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -208,8 +208,10 @@ impl fmt::Debug for NonlinearLaw {
 /// the stored energy is a state function.
 #[derive(Clone, Debug)]
 pub enum Law {
-    /// Linear law with the given parameter (inertance, capacitance or resistance).
-    Linear(f64),
+    /// Linear law with the given parameter (inertance, capacitance or resistance), and its
+    /// derivative with respect to the parameter the model is built for (0 unless the fragment
+    /// gave one, [`crate::math::dual`]).
+    Linear(Dual),
     /// Nonlinear law in the element's "natural" form (see the table).
     Nonlinear(NonlinearLaw),
     /// Nonlinear R law in conductance form `f = phi(e)` (e.g. an orifice `Q = g(dp)`).
@@ -218,6 +220,11 @@ pub enum Law {
 
 impl From<f64> for Law {
     fn from(v: f64) -> Self {
+        Law::Linear(v.into())
+    }
+}
+impl From<Dual> for Law {
+    fn from(v: Dual) -> Self {
         Law::Linear(v)
     }
 }
@@ -225,14 +232,19 @@ impl From<f64> for Law {
 /// A source value: constant or modulated by a signal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SourceValue {
-    /// A constant effort or flow.
-    Constant(f64),
+    /// A constant effort or flow (with its derivative, as [`Law::Linear`]'s).
+    Constant(Dual),
     /// The value of a signal (a modulated source, `MSe` / `MSf`).
     Signal(SignalId),
 }
 
 impl From<f64> for SourceValue {
     fn from(v: f64) -> Self {
+        SourceValue::Constant(v.into())
+    }
+}
+impl From<Dual> for SourceValue {
+    fn from(v: Dual) -> Self {
         SourceValue::Constant(v)
     }
 }
@@ -338,12 +350,12 @@ pub enum Quantity {
 pub enum SignalKind {
     /// External input `u[i]`, in creation order of inputs.
     Input,
-    /// A constant.
-    Constant(f64),
+    /// A constant (constants and gains carry their derivatives, as [`Law::Linear`]'s).
+    Constant(Dual),
     /// `y = k * u`.
-    Gain(f64, Option<SignalId>),
+    Gain(Dual, Option<SignalId>),
     /// `y = sum(k_i * u_i)`.
-    Sum(Vec<(f64, SignalId)>),
+    Sum(Vec<(Dual, SignalId)>),
     /// `y = u1 * u2`.
     Product(SignalId, SignalId),
     /// `dy/dt = u`; `y` is a state of the model.

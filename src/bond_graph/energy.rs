@@ -95,7 +95,7 @@ impl CompiledModel {
                 Storage::One {
                     law: Law::Linear(k),
                     ..
-                } => Some((0.5 / k.abs(), 0.0)),
+                } => Some((0.5 / k.v.abs(), 0.0)),
                 Storage::One {
                     law: Law::Nonlinear(l) | Law::Conductance(l),
                     ..
@@ -196,7 +196,7 @@ fn storage_rate(st: &Storage, x: &[f64], v: &[f64]) -> f64 {
     match st {
         Storage::One { state, law, .. } => {
             let co = match law {
-                Law::Linear(k) => x[*state] / k,
+                Law::Linear(k) => x[*state] / k.v,
                 Law::Nonlinear(l) | Law::Conductance(l) => l.eval(x[*state], 0.0).0,
             };
             co * v[*state]
@@ -222,7 +222,7 @@ fn storage_energy(st: &Storage, x: &[f64]) -> f64 {
         Storage::One { state, law, .. } => {
             let v = x[*state];
             match law {
-                Law::Linear(k) => 0.5 * v * v / k,
+                Law::Linear(k) => 0.5 * v * v / k.v,
                 Law::Nonlinear(l) | Law::Conductance(l) => match &l.energy {
                     Some(e) => e(v),
                     None => quad_energy(l, v),

@@ -5,6 +5,7 @@ use std::collections::HashMap;
 use nalgebra::DMatrix;
 
 use super::element::*;
+use crate::math::dual::Dual;
 use super::units::{Domain, StateUnits};
 
 /// A bond graph under construction: elements, bonds, signal blocks and outputs.
@@ -29,6 +30,9 @@ pub struct BondGraph {
     nominals: Vec<(StateOwner, Vec<f64>)>,
     /// The units of states, set by the fragment that owns them (see [`BondGraph::set_domains`]).
     units: Vec<(StateOwner, Vec<StateUnits>)>,
+    /// The derivatives of fields' matrices with respect to the parameter the model is built
+    /// for, where a fragment gave them ([`BondGraph::set_field_derivative`]).
+    pub(crate) field_derivatives: Vec<(ElementId, DMatrix<f64>)>,
 }
 
 /// An item that carries states: a storage element or an integrator.
@@ -58,6 +62,7 @@ impl BondGraph {
             state_order: Vec::new(),
             nominals: Vec::new(),
             units: Vec::new(),
+            field_derivatives: Vec::new(),
         }
     }
 
@@ -381,6 +386,35 @@ impl BondGraph {
         self.push(name, ElementKind::CField(stiffness, port_laws))
     }
 
+    /// Gives the derivative of a field's matrix (`M` of an I-field, `K` of a C-field) with
+    /// respect to the parameter the model is built for, as the scalars' [`Dual`] parts give
+    /// theirs: the parameter sensitivities of the compiled model
+    /// ([`super::CompiledModel::linearize_with_sensitivity`]) carry it. Panics if `element` is
+    /// not a field or the sizes differ.
+    pub fn set_field_derivative(&mut self, element: ElementId, derivative: DMatrix<f64>) {
+        let e = &self.elements[element.0];
+        let n = match &e.kind {
+            ElementKind::IField(m) | ElementKind::CField(m, _) => m.nrows(),
+            _ => panic!("set_field_derivative: element '{}' is not a field", e.name),
+        };
+        assert_eq!(
+            derivative.shape(),
+            (n, n),
+            "set_field_derivative: the derivative of '{}' is not {n} x {n}",
+            e.name
+        );
+        self.field_derivatives.retain(|(id, _)| *id != element);
+        self.field_derivatives.push((element, derivative));
+    }
+
+    /// The derivative [`BondGraph::set_field_derivative`] gave for `element`, if any.
+    pub(crate) fn field_derivative(&self, element: ElementId) -> Option<&DMatrix<f64>> {
+        self.field_derivatives
+            .iter()
+            .find(|(id, _)| *id == element)
+            .map(|(_, d)| d)
+    }
+
     /// Sets or replaces the modulating signal of a source, TF or GY (making it `MSe`, `MSf`,
     /// `MTF`, `MGY`). Panics if the element is of another kind.
     pub fn set_modulation(&mut self, element: ElementId, signal: SignalId) {
@@ -439,18 +473,28 @@ impl BondGraph {
     }
 
     /// A constant signal.
-    pub fn add_constant(&mut self, name: impl Into<String>, value: f64) -> SignalId {
-        self.push_signal(name, SignalKind::Constant(value))
+    pub fn add_constant(&mut self, name: impl Into<String>, value: impl Into<Dual>) -> SignalId {
+        self.push_signal(name, SignalKind::Constant(value.into()))
     }
 
     /// `y = k u`.
-    pub fn add_gain(&mut self, name: impl Into<String>, k: f64, input: SignalId) -> SignalId {
-        self.push_signal(name, SignalKind::Gain(k, Some(input)))
+    pub fn add_gain(
+        &mut self,
+        name: impl Into<String>,
+        k: impl Into<Dual>,
+        input: SignalId,
+    ) -> SignalId {
+        self.push_signal(name, SignalKind::Gain(k.into(), Some(input)))
     }
 
     /// `y = sum k_i u_i`, terms given as `(k_i, u_i)`, e.g. `&[(1.0, r), (-1.0, y)]`.
-    pub fn add_sum(&mut self, name: impl Into<String>, terms: &[(f64, SignalId)]) -> SignalId {
-        self.push_signal(name, SignalKind::Sum(terms.to_vec()))
+    pub fn add_sum<K: Copy + Into<Dual>>(
+        &mut self,
+        name: impl Into<String>,
+        terms: &[(K, SignalId)],
+    ) -> SignalId {
+        let terms = terms.iter().map(|&(k, s)| (k.into(), s)).collect();
+        self.push_signal(name, SignalKind::Sum(terms))
     }
 
     /// `y = a b`.

@@ -23,6 +23,12 @@ use super::plan::{effort_slot, eliminate_copies, flatten, Equation, Expr, SlotNa
 use super::sort::sort_equations;
 use super::structure::analyse;
 use super::validate::validate;
+use crate::math::dual::Dual;
+
+/// A coefficient that does not move with the parameter (a sign, a one).
+fn fixed(v: f64) -> Dual {
+    Dual::from(v)
+}
 
 /// The equations written so far, and the slot numbering.
 struct Builder<'a> {
@@ -140,8 +146,8 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     }
     let value = |v: &SourceValue, k: f64| -> Expr {
         match v {
-            SourceValue::Constant(c) => Expr::Const(k * c),
-            SourceValue::Signal(s) => Expr::Lin(vec![(k, sig_slot[s.0])]),
+            SourceValue::Constant(c) => Expr::Const(*c * k),
+            SourceValue::Signal(s) => Expr::Lin(vec![(fixed(k), sig_slot[s.0])]),
         }
     };
 
@@ -188,7 +194,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 // I: f_b = sigma phi(p), dp = e_b.  C: e_b = phi(q), dq = sigma f_b.
                 let (out, ko) = if is_i { (b.f(bd), sg) } else { (b.e(bd), 1.0) };
                 let expr = match law {
-                    Law::Linear(k) => Expr::Lin(vec![(ko / k, st)]),
+                    Law::Linear(c) => Expr::Lin(vec![(ko / *c, st)]),
                     Law::Nonlinear(l) | Law::Conductance(l) => Expr::Law {
                         law: b.law(l),
                         arg: st,
@@ -199,9 +205,9 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 };
                 b.eq(out, expr, name);
                 let d = if is_i {
-                    Expr::Lin(vec![(1.0, b.e(bd))])
+                    Expr::Lin(vec![(fixed(1.0), b.e(bd))])
                 } else {
-                    Expr::Lin(vec![(sg, b.f(bd))])
+                    Expr::Lin(vec![(fixed(sg), b.f(bd))])
                 };
                 b.eq(deriv_slots[st], d, name);
                 storages.push(Storage::One {
@@ -216,7 +222,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 if b.receives(bd, id) {
                     // conductance causality: f_b = sigma phi(e_b)
                     let expr = match law {
-                        Law::Linear(r) => Expr::Lin(vec![(sg / r, b.e(bd))]),
+                        Law::Linear(r) => Expr::Lin(vec![(sg / *r, b.e(bd))]),
                         Law::Conductance(l) => Expr::Law {
                             law: b.law(l),
                             arg: b.e(bd),
@@ -235,7 +241,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 } else {
                     // resistance causality: e_b = phi(sigma f_b)
                     let expr = match law {
-                        Law::Linear(r) => Expr::Lin(vec![(sg * r, b.f(bd))]),
+                        Law::Linear(r) => Expr::Lin(vec![(*r * sg, b.f(bd))]),
                         Law::Nonlinear(l) => Expr::Law {
                             law: b.law(l),
                             arg: b.f(bd),
@@ -268,7 +274,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 let mul = |b: &mut Builder, dst: usize, x: usize, divide: bool| {
                     let expr = match modulus {
                         SourceValue::Constant(c) => {
-                            Expr::Lin(vec![(if divide { 1.0 / c } else { *c }, x)])
+                            Expr::Lin(vec![(if divide { 1.0 / *c } else { *c }, x)])
                         }
                         SourceValue::Signal(s) => {
                             if divide {
@@ -333,8 +339,8 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                     } else {
                         (b.f(bj), b.e(bj))
                     };
-                    b.eq(common_j, Expr::Lin(vec![(1.0, common_k)]), name);
-                    terms.push((-sk * sj, sum_j));
+                    b.eq(common_j, Expr::Lin(vec![(fixed(1.0), common_k)]), name);
+                    terms.push((fixed(-sk * sj), sum_j));
                 }
                 b.eq(sum_k, Expr::Lin(terms), name);
             }
@@ -350,15 +356,24 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 } else {
                     mm.clone()
                 };
+                // The derivative of W along the parameter: dK, or -M^-1 dM M^-1.
+                let dw = g.field_derivative(id).map(|dm| {
+                    if is_i {
+                        -crate::math::product(&crate::math::product(&w, dm), &w)
+                    } else {
+                        dm.clone()
+                    }
+                });
+                let dw_at = |r: usize, c: usize| dw.as_ref().map_or(0.0, |d| d[(r, c)]);
                 let states: Vec<usize> = (0..ports.len()).map(|k| st0 + k).collect();
                 let mut law_storages = Vec::new();
                 for (r, &(bd, sg)) in ports.iter().enumerate() {
                     let ko = if is_i { sg } else { 1.0 };
-                    let mut terms: Vec<(f64, usize)> = states
+                    let mut terms: Vec<(Dual, usize)> = states
                         .iter()
                         .enumerate()
-                        .filter(|(c, _)| w[(r, *c)] != 0.0)
-                        .map(|(c, &s)| (ko * w[(r, c)], s))
+                        .filter(|(c, _)| w[(r, *c)] != 0.0 || dw_at(r, *c) != 0.0)
+                        .map(|(c, &s)| (Dual::new(w[(r, c)], dw_at(r, c)) * ko, s))
                         .collect();
                     // A port's own nonlinear law: phi_r(q_r) in a slot of its own, added to the
                     // row, and its energy a one-port storage on the same state.
@@ -372,7 +387,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                             modulator: None,
                         };
                         b.eq(slot, expr, name);
-                        terms.push((1.0, slot));
+                        terms.push((fixed(1.0), slot));
                         law_storages.push(Storage::One {
                             name: format!("{name}.law[{}]", r + 1),
                             state: states[r],
@@ -380,9 +395,9 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                         });
                     }
                     let (out, d) = if is_i {
-                        (b.f(bd), Expr::Lin(vec![(1.0, b.e(bd))]))
+                        (b.f(bd), Expr::Lin(vec![(fixed(1.0), b.e(bd))]))
                     } else {
-                        (b.e(bd), Expr::Lin(vec![(sg, b.f(bd))]))
+                        (b.e(bd), Expr::Lin(vec![(fixed(sg), b.f(bd))]))
                     };
                     b.eq(out, Expr::Lin(terms), name);
                     b.eq(deriv_slots[states[r]], d, name);
@@ -404,12 +419,14 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         match &s.kind {
             SignalKind::Input | SignalKind::Sensor(_) => {}
             SignalKind::Constant(c) => b.eq(dst, Expr::Const(*c), name),
-            SignalKind::Gain(k, input) => {
-                b.eq(dst, Expr::Lin(vec![(*k, sig_slot[input.unwrap().0])]), name)
-            }
+            SignalKind::Gain(gain, input) => b.eq(
+                dst,
+                Expr::Lin(vec![(*gain, sig_slot[input.unwrap().0])]),
+                name,
+            ),
             SignalKind::Sum(terms) => b.eq(
                 dst,
-                Expr::Lin(terms.iter().map(|(k, s)| (*k, sig_slot[s.0])).collect()),
+                Expr::Lin(terms.iter().map(|(c, s)| (*c, sig_slot[s.0])).collect()),
                 name,
             ),
             SignalKind::Product(a, c) => b.eq(
@@ -425,12 +442,12 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                 let st = sig_state[i].unwrap();
                 b.eq(
                     deriv_slots[st],
-                    Expr::Lin(vec![(1.0, sig_slot[input.unwrap().0])]),
+                    Expr::Lin(vec![(fixed(1.0), sig_slot[input.unwrap().0])]),
                     name,
                 )
             }
             SignalKind::Port(src) => {
-                b.eq(dst, Expr::Lin(vec![(1.0, sig_slot[src.unwrap().0])]), name)
+                b.eq(dst, Expr::Lin(vec![(fixed(1.0), sig_slot[src.unwrap().0])]), name)
             }
             SignalKind::Function(law, input) => {
                 let law = b.law(law);
@@ -478,7 +495,7 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
     };
 
     // --- flatten, then alias the copies away (the listing shows the plan with its copies)
-    let (ops, mut terms) = flatten(&b.eqs, &order);
+    let (ops, mut terms, derivatives) = flatten(&b.eqs, &order);
     let listing_ops = ops.clone();
     let listing_terms = terms.clone();
     let (ops, alias) = eliminate_copies(ops, &mut terms, n_slots);
@@ -522,5 +539,6 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
         listing_ops,
         listing_terms,
         constant_entries: None,
+        constant_derivatives: (!derivatives.all_zero()).then_some(derivatives),
     })
 }

@@ -113,6 +113,7 @@ mod discretisation;
 mod dual;
 mod energy;
 mod linearization;
+mod sensitivity;
 // Drawing.
 mod dot;
 
@@ -127,4 +128,5 @@ pub use error::BondGraphError;
 pub use forms::{FormsJacobian, NonaffineForms, PointCache, PointForms};
 pub use graph::BondGraph;
 pub use linearization::Linearization;
+pub use sensitivity::LinearizationDerivative;
 pub use units::{Domain, StateUnits};

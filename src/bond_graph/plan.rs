@@ -11,6 +11,7 @@
 //! numbers; [`listing`] prints them for people to read.
 
 use super::element::NonlinearLaw;
+use crate::math::dual::Dual;
 
 /// The slot of the effort of bond `b` in the layout above, `first` the number of states and
 /// inputs before the bonds; its flow is the next slot.
@@ -24,8 +25,10 @@ pub(super) const NONE: u32 = u32::MAX;
 /// The right-hand side of an [`Equation`].
 #[derive(Clone, Debug)]
 pub(super) enum Expr {
-    Const(f64),
-    Lin(Vec<(f64, usize)>),
+    /// A constant, with its derivative along the parameter the model is built for.
+    Const(Dual),
+    /// `Σ k s`, each coefficient with its derivative.
+    Lin(Vec<(Dual, usize)>),
     Law {
         law: usize,
         arg: usize,
@@ -109,24 +112,52 @@ pub(super) enum Op {
     },
 }
 
-/// The sorted equations `eqs[order[..]]` as operations, and the terms `(k, slot)` that the
-/// [`Op::Lin`] operations index. A linear combination with the single term `1 * src` becomes an
+/// The derivatives of the plan's constants with respect to the parameter the model was built
+/// for (the [`Dual`] parts of the equations' constants), beside the plan's `f64` operations.
+#[derive(Clone, Debug, Default)]
+pub(super) struct ConstantDerivatives {
+    /// `(dst, dc)` for each [`Op::Const`] whose constant has a nonzero derivative.
+    pub(super) consts: Vec<(u32, f64)>,
+    /// The derivative of each term's coefficient, in the order of the terms.
+    pub(super) terms: Vec<f64>,
+}
+
+impl ConstantDerivatives {
+    /// Whether every constant's derivative is zero (a model not built for a parameter).
+    pub(super) fn all_zero(&self) -> bool {
+        self.consts.is_empty() && self.terms.iter().all(|&d| d == 0.0)
+    }
+}
+
+/// The sorted equations `eqs[order[..]]` as operations, the terms `(k, slot)` that the
+/// [`Op::Lin`] operations index, and the constants' derivatives. A linear combination with the
+/// single term `1 * src`, whose coefficient does not move with the parameter, becomes an
 /// [`Op::Copy`].
-pub(super) fn flatten(eqs: &[Equation], order: &[usize]) -> (Vec<Op>, Vec<(f64, u32)>) {
+pub(super) fn flatten(
+    eqs: &[Equation],
+    order: &[usize],
+) -> (Vec<Op>, Vec<(f64, u32)>, ConstantDerivatives) {
     let mut ops = Vec::with_capacity(order.len());
     let mut terms: Vec<(f64, u32)> = Vec::new();
+    let mut derivatives = ConstantDerivatives::default();
     for &k in order {
         let eq = &eqs[k];
         let dst = eq.dst as u32;
         ops.push(match &eq.expr {
-            Expr::Const(c) => Op::Const { dst, c: *c },
-            Expr::Lin(t) if t.len() == 1 && t[0].0 == 1.0 => Op::Copy {
+            Expr::Const(c) => {
+                if c.d != 0.0 {
+                    derivatives.consts.push((dst, c.d));
+                }
+                Op::Const { dst, c: c.v }
+            }
+            Expr::Lin(t) if t.len() == 1 && t[0].0 == Dual::new(1.0, 0.0) => Op::Copy {
                 dst,
                 src: t[0].1 as u32,
             },
             Expr::Lin(t) => {
                 let start = terms.len() as u32;
-                terms.extend(t.iter().map(|(k, s)| (*k, *s as u32)));
+                terms.extend(t.iter().map(|(k, s)| (k.v, *s as u32)));
+                derivatives.terms.extend(t.iter().map(|(k, _)| k.d));
                 Op::Lin {
                     dst,
                     start,
@@ -161,7 +192,7 @@ pub(super) fn flatten(eqs: &[Equation], order: &[usize]) -> (Vec<Op>, Vec<(f64, 
             },
         });
     }
-    (ops, terms)
+    (ops, terms, derivatives)
 }
 
 /// Copy elimination: a copied slot becomes an alias of its source. Every slot is written once,

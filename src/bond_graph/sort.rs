@@ -98,7 +98,7 @@ mod tests {
         // slots: 0 = state; 1..=4 computed. 1 = x; 2 = 3 + 1; 3 = 2; 4 = 3 (downstream of the cycle)
         let eq = |dst, t: Vec<(f64, usize)>, o: &str| Equation {
             dst,
-            expr: Expr::Lin(t),
+            expr: Expr::Lin(t.into_iter().map(|(k, s)| (k.into(), s)).collect()),
             owner: o.into(),
         };
         let eqs = vec![

@@ -127,7 +127,7 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
             ElementKind::Se(v) | ElementKind::Sf(v) => {
                 one_port(el.kind.label())?;
                 if let SourceValue::Constant(c) = v {
-                    finite(name, "source value", *c)?;
+                    finite(name, "source value", c.v)?;
                 }
             }
             ElementKind::I(law) | ElementKind::C(law) => {
@@ -138,7 +138,7 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
                 };
                 one_port(el.kind.label())?;
                 match law {
-                    Law::Linear(v) => positive(name, what, *v)?,
+                    Law::Linear(v) => positive(name, what, v.v)?,
                     Law::Nonlinear(_) => {}
                     Law::Conductance(_) => {
                         return Err(structure(
@@ -151,7 +151,7 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
             ElementKind::R(law, m) => {
                 one_port("R")?;
                 if let Law::Linear(v) = law {
-                    positive(name, "resistance", *v)?;
+                    positive(name, "resistance", v.v)?;
                     if m.is_some() {
                         return Err(structure(
                             name,
@@ -174,7 +174,7 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
                     ));
                 }
                 if let SourceValue::Constant(c) = m {
-                    if !c.is_finite() || *c == 0.0 {
+                    if !c.v.is_finite() || c.v == 0.0 {
                         return Err(param(
                             name,
                             format!("modulus must be finite and non-zero, got {c:e}"),
@@ -258,16 +258,16 @@ pub(crate) fn validate(g: &BondGraph) -> Result<(), BondGraphError> {
         let name = s.name.as_str();
         match &s.kind {
             SignalKind::Input => {}
-            SignalKind::Constant(c) => finite(name, "constant", *c)?,
+            SignalKind::Constant(c) => finite(name, "constant", c.v)?,
             SignalKind::Gain(k, input) => {
-                finite(name, "gain", *k)?;
+                finite(name, "gain", k.v)?;
                 if input.is_none() {
                     return Err(structure(name, "gain input is not connected"));
                 }
             }
             SignalKind::Sum(terms) => {
                 for (k, _) in terms {
-                    finite(name, "sum coefficient", *k)?;
+                    finite(name, "sum coefficient", k.v)?;
                 }
             }
             SignalKind::Product(..) => {}

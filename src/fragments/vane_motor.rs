@@ -108,7 +108,7 @@ pub fn add_vane_motor(
     let rotor = g.add_one(format!("{prefix}.rotor"));
     g.bond(load, d_m);
     g.bond(d_m, rotor);
-    let i_m = g.add_i(format!("{prefix}.I_m"), Law::Linear(p.i_m));
+    let i_m = g.add_i(format!("{prefix}.I_m"), p.i_m);
     let b_m = g.add_r(format!("{prefix}.b_m"), p.b_m);
     let i_m_bond = g.bond(rotor, i_m);
     g.bond(rotor, b_m);

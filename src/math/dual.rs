@@ -216,6 +216,71 @@ impl Div<f64> for Dual {
     }
 }
 
+// A constant on the left, for code written in `Dual` alone (the fragments building the model
+// for one parameter's derivative): the same operation on the value as in `f64`.
+impl Add<Dual> for f64 {
+    type Output = Dual;
+    #[inline]
+    fn add(self, x: Dual) -> Dual {
+        Dual {
+            v: self + x.v,
+            d: x.d,
+        }
+    }
+}
+impl Sub<Dual> for f64 {
+    type Output = Dual;
+    #[inline]
+    fn sub(self, x: Dual) -> Dual {
+        Dual {
+            v: self - x.v,
+            d: -x.d,
+        }
+    }
+}
+impl Mul<Dual> for f64 {
+    type Output = Dual;
+    #[inline]
+    fn mul(self, x: Dual) -> Dual {
+        Dual {
+            v: self * x.v,
+            d: self * x.d,
+        }
+    }
+}
+impl Div<Dual> for f64 {
+    type Output = Dual;
+    #[inline]
+    fn div(self, x: Dual) -> Dual {
+        Dual::cst(self) / x
+    }
+}
+
+impl PartialEq<f64> for Dual {
+    /// The value's comparison: a branch on a parameter takes the side its value is on.
+    fn eq(&self, c: &f64) -> bool {
+        self.v == *c
+    }
+}
+impl PartialOrd<f64> for Dual {
+    /// The value's comparison (see `eq`).
+    fn partial_cmp(&self, c: &f64) -> Option<std::cmp::Ordering> {
+        self.v.partial_cmp(c)
+    }
+}
+
+impl std::fmt::Display for Dual {
+    /// The value, as `f64` prints it (labels and messages name values, not derivatives).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Display::fmt(&self.v, f)
+    }
+}
+impl std::fmt::LowerExp for Dual {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::LowerExp::fmt(&self.v, f)
+    }
+}
+
 impl Real for Dual {
     #[inline]
     fn cst(c: f64) -> Self {
