@@ -5,8 +5,8 @@ use std::collections::HashMap;
 use nalgebra::DMatrix;
 
 use super::element::*;
-use crate::math::dual::Dual;
 use super::units::{Domain, StateUnits};
+use crate::math::dual::Dual;
 
 /// A bond graph under construction: elements, bonds, signal blocks and outputs.
 ///

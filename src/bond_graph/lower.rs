@@ -446,9 +446,11 @@ fn compile_causal(g: &BondGraph, caus: Causality) -> Result<CompiledModel, BondG
                     name,
                 )
             }
-            SignalKind::Port(src) => {
-                b.eq(dst, Expr::Lin(vec![(fixed(1.0), sig_slot[src.unwrap().0])]), name)
-            }
+            SignalKind::Port(src) => b.eq(
+                dst,
+                Expr::Lin(vec![(fixed(1.0), sig_slot[src.unwrap().0])]),
+                name,
+            ),
             SignalKind::Function(law, input) => {
                 let law = b.law(law);
                 b.eq(

@@ -37,17 +37,9 @@ pub(super) enum Expr {
         modulator: Option<usize>,
     },
     /// `k a b`
-    Mul {
-        a: usize,
-        b: usize,
-        k: f64,
-    },
+    Mul { a: usize, b: usize, k: f64 },
     /// `k a / b`
-    Div {
-        a: usize,
-        b: usize,
-        k: f64,
-    },
+    Div { a: usize, b: usize, k: f64 },
 }
 
 impl Expr {

@@ -285,7 +285,12 @@ mod tests {
         assert!(model.has_constant_derivatives());
         let d = model.linearize_with_sensitivity(&x, &zero, &[0.0]).unwrap();
         assert_eq!(d.a.as_slice(), &[0.0, 0.0, -1.0, 0.0]);
-        assert!(d.b.iter().chain(d.c.iter()).chain(d.d.iter()).all(|&v| v == 0.0));
+        assert!(d
+            .b
+            .iter()
+            .chain(d.c.iter())
+            .chain(d.d.iter())
+            .all(|&v| v == 0.0));
         // df/dp at a fixed point: (-q, 0).
         assert!(close(d.f[0], 0.01) && d.f[1] == 0.0, "{:?}", d.f);
         // Along m: dA/dm = [[c/m², 0], [-1/m², 0]], dC/dm = [-1/m², 0], dy/dm = -p/m².
@@ -309,8 +314,10 @@ mod tests {
 
     /// A cubic damper `e = c3 f³` with its hyper-dual form, `c3` captured with its derivative.
     fn cubic(c3: Dual) -> Law {
-        let law = NonlinearLaw::new("cubic damper", move |f| (c3.v * f * f * f, 3.0 * c3.v * f * f))
-            .with_hyper(move |f, _| f * f * f * HyperDual::from(c3));
+        let law = NonlinearLaw::new("cubic damper", move |f| {
+            (c3.v * f * f * f, 3.0 * c3.v * f * f)
+        })
+        .with_hyper(move |f, _| f * f * f * HyperDual::from(c3));
         Law::Nonlinear(law)
     }
 
@@ -326,24 +333,40 @@ mod tests {
             .linearize_with_sensitivity(&[p, q], &[0.0, 0.0], &[0.0])
             .unwrap();
         let expected = -3.0 * v * v / m;
-        assert!((d.a[(0, 0)] - expected).abs() < 1e-14, "{} {expected}", d.a[(0, 0)]);
+        assert!(
+            (d.a[(0, 0)] - expected).abs() < 1e-14,
+            "{} {expected}",
+            d.a[(0, 0)]
+        );
         // A point moving with the parameter as dp/dc3 = 0.3: the law's curvature adds
         // d(A00)/dp * 0.3 = -6 c3 v / m² * 0.3.
         let d = model
             .linearize_with_sensitivity(&[p, q], &[0.3, 0.0], &[0.0])
             .unwrap();
         let expected = -3.0 * v * v / m - 6.0 * c3 * v / (m * m) * 0.3;
-        assert!((d.a[(0, 0)] - expected).abs() < 1e-14, "{} {expected}", d.a[(0, 0)]);
+        assert!(
+            (d.a[(0, 0)] - expected).abs() < 1e-14,
+            "{} {expected}",
+            d.a[(0, 0)]
+        );
         // df/dc3 with the point moving: -v³ - 3 c3 v² 0.3/m - (p moving adds nothing else).
         let expected_f = -v * v * v - 3.0 * c3 * v * v * 0.3 / m;
-        assert!((d.f[0] - expected_f).abs() < 1e-14, "{} {expected_f}", d.f[0]);
+        assert!(
+            (d.f[0] - expected_f).abs() < 1e-14,
+            "{} {expected_f}",
+            d.f[0]
+        );
         assert!((d.f[1] - 0.3 / m).abs() < 1e-15);
     }
 
     #[test]
     fn a_law_without_its_hyper_form_is_refused_where_its_curvature_is_needed() {
         let law = NonlinearLaw::new("cubic damper, no hyper form", |f| (f * f * f, 3.0 * f * f));
-        let model = msd(Dual::new(2.0, 1.0), 100.0.into(), Law::Nonlinear(law.clone()));
+        let model = msd(
+            Dual::new(2.0, 1.0),
+            100.0.into(),
+            Law::Nonlinear(law.clone()),
+        );
         // The mass moves the law's argument p/m: its second derivative would be needed.
         let e = model
             .linearize_with_sensitivity(&[0.7, 0.0], &[0.0, 0.0], &[0.0])
@@ -389,7 +412,11 @@ mod tests {
         for r in 0..2 {
             for c in 0..2 {
                 let got = d.a[(q(r).unwrap(), p(c).unwrap())];
-                assert!((got - expected[(r, c)]).abs() < 1e-15, "{got} {}", expected[(r, c)]);
+                assert!(
+                    (got - expected[(r, c)]).abs() < 1e-15,
+                    "{got} {}",
+                    expected[(r, c)]
+                );
             }
         }
     }

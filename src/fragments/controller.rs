@@ -49,16 +49,16 @@ pub const LINEAR_FRACTION: f64 = 0.8;
 
 /// Controller gains, the amplifier's output limit and the choice of drive.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ControllerParameters {
+pub struct ControllerParameters<S = f64> {
     /// Error amplifier gain `A1` \[V/V\] (paper: 2).
-    pub a1: f64,
+    pub a1: S,
     /// Power amplifier gain `A2` \[V/V\] (paper: 10).
-    pub a2: f64,
+    pub a2: S,
     /// Potentiometer gain `k_POT` \[V/rad\]. The paper does not give it; default 10 V over 150 deg
     /// = 3.8197 V/rad (docs/model-notes.md, item 7).
-    pub k_pot: f64,
+    pub k_pot: S,
     /// Output limit of the power amplifier \[V\] (`controller.e_max`), used when `saturation`.
-    pub e_max: f64,
+    pub e_max: S,
     /// Whether the power amplifier's output saturates at `+-e_max` (`controller.saturation`);
     /// false is the paper's linear eq. 1.
     pub saturation: bool,
@@ -70,10 +70,37 @@ pub struct ControllerParameters {
     /// inside the band of gains that keep the default loop damped over the assumed parameters'
     /// range (about 1.7e-8 to 6.5e-7), where the default move rings least (docs/model.md);
     /// 0 switches the feedback off (the paper).
-    pub k_pl: f64,
+    pub k_pl: S,
     /// Corner frequency of the pressure signal's first-order low-pass \[Hz\] (`controller.f_pl`):
     /// 50 Hz, ten times the loop's highest mode it damps, far below the valve's 120 Hz.
-    pub f_pl: f64,
+    pub f_pl: S,
+}
+
+impl<S: Copy> ControllerParameters<S> {
+    /// The parameters `f(self, other)` field by field, the others (choices, counts) `self`'s:
+    /// the one list of the real fields, for carrying them in another scalar (a value and its
+    /// derivative, [`crate::math::dual::Dual`]).
+    pub fn zip<T: Copy, U>(
+        &self,
+        other: &ControllerParameters<T>,
+        f: impl Fn(S, T) -> U,
+    ) -> ControllerParameters<U> {
+        ControllerParameters {
+            a1: f(self.a1, other.a1),
+            a2: f(self.a2, other.a2),
+            k_pot: f(self.k_pot, other.k_pot),
+            e_max: f(self.e_max, other.e_max),
+            saturation: self.saturation.clone(),
+            external: self.external.clone(),
+            k_pl: f(self.k_pl, other.k_pl),
+            f_pl: f(self.f_pl, other.f_pl),
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`ControllerParameters::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U) -> ControllerParameters<U> {
+        self.zip(self, |a, _| f(a))
+    }
 }
 
 /// Default load-pressure feedback gain \[V/Pa\]: 5 mV/bar.

@@ -33,6 +33,7 @@
 use nalgebra::DMatrix;
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
+use crate::math::dual::Dual;
 
 use super::controller::{self, ControllerParameters};
 
@@ -53,17 +54,41 @@ pub const PRINTED_R7: f64 = 3.8e7;
 
 /// Physical parameters of the LOES (SI units).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct LoesParameters {
+pub struct LoesParameters<S = f64> {
     /// Chamber capacitance `C3` \[m^5/N\].
-    pub c3: f64,
+    pub c3: S,
     /// Rotor inertia `I_b` \[kg m^2\].
-    pub i_b: f64,
+    pub i_b: S,
     /// Leakage resistance `R7` \[N s/m^5\].
-    pub r7: f64,
+    pub r7: S,
     /// Vane motor displacement `D_m` \[m^3/rad\].
-    pub d_m: f64,
+    pub d_m: S,
     /// Valve flow gain `k_sv` \[m^3/(s V)\].
-    pub k_sv: f64,
+    pub k_sv: S,
+}
+
+impl<S: Copy> LoesParameters<S> {
+    /// The parameters `f(self, other)` field by field, the others (choices, counts) `self`'s:
+    /// the one list of the real fields, for carrying them in another scalar (a value and its
+    /// derivative, [`crate::math::dual::Dual`]).
+    pub fn zip<T: Copy, U>(
+        &self,
+        other: &LoesParameters<T>,
+        f: impl Fn(S, T) -> U,
+    ) -> LoesParameters<U> {
+        LoesParameters {
+            c3: f(self.c3, other.c3),
+            i_b: f(self.i_b, other.i_b),
+            r7: f(self.r7, other.r7),
+            d_m: f(self.d_m, other.d_m),
+            k_sv: f(self.k_sv, other.k_sv),
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`LoesParameters::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U) -> LoesParameters<U> {
+        self.zip(self, |a, _| f(a))
+    }
 }
 
 impl Default for LoesParameters {
@@ -199,7 +224,12 @@ pub struct LoesPorts {
 
 /// Adds the LOES of Fig. 3 under `prefix` (e.g. "loes"). The valve command port is left
 /// unconnected, to be wired to the controller output.
-pub fn add_loes(g: &mut BondGraph, prefix: &str, p: &LoesParameters) -> LoesPorts {
+pub fn add_loes<S: Copy + Into<Dual>>(
+    g: &mut BondGraph,
+    prefix: &str,
+    p: &LoesParameters<S>,
+) -> LoesPorts {
+    let p = p.map(Into::<Dual>::into);
     // Signals first so that theta_a is the first state, as in eq. 1.
     let omega = g.add_signal_port(format!("{prefix}.omega"));
     let theta = g.add_integrator(format!("{prefix}.theta_a"), omega);

@@ -29,13 +29,35 @@ use crate::fragments::rules;
 
 /// The move (SI units).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct MoveParameters {
+pub struct MoveParameters<S = f64> {
     /// Motor-angle amplitude `theta_f` \[rad\] (`reference.angle`); 0 turns the generator off.
-    pub angle: f64,
+    pub angle: S,
     /// Start of the move `t_0` \[s\] after the start of the simulation (`reference.t_start`).
-    pub t_start: f64,
+    pub t_start: S,
     /// Duration `T` \[s\] (`reference.duration`).
-    pub duration: f64,
+    pub duration: S,
+}
+
+impl<S: Copy> MoveParameters<S> {
+    /// The parameters `f(self, other)` field by field, the others (choices, counts) `self`'s:
+    /// the one list of the real fields, for carrying them in another scalar (a value and its
+    /// derivative, [`crate::math::dual::Dual`]).
+    pub fn zip<T: Copy, U>(
+        &self,
+        other: &MoveParameters<T>,
+        f: impl Fn(S, T) -> U,
+    ) -> MoveParameters<U> {
+        MoveParameters {
+            angle: f(self.angle, other.angle),
+            t_start: f(self.t_start, other.t_start),
+            duration: f(self.duration, other.duration),
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`MoveParameters::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U) -> MoveParameters<U> {
+        self.zip(self, |a, _| f(a))
+    }
 }
 
 impl Default for MoveParameters {

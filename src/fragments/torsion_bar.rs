@@ -19,6 +19,7 @@
 //! the paper formulation, through TFs to the modes, which twist the bar with the root slope).
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
+use crate::math::dual::{Dual, Real};
 
 /// Default torsion-bar stiffness \[N m/rad\].
 pub const DEFAULT_STIFFNESS: f64 = 2.5e3;
@@ -28,8 +29,8 @@ pub const DEFAULT_ZETA: f64 = 0.02;
 
 /// The dashpot `c = 2 zeta sqrt(k I)` \[N m s/rad\] that gives an inertia `I` on a bar of
 /// stiffness `k` the damping ratio `zeta`.
-pub fn damping_coefficient(k: f64, zeta: f64, inertia: f64) -> f64 {
-    2.0 * zeta * (k * inertia).sqrt()
+pub fn damping_coefficient<S: Real>(k: S, zeta: S, inertia: S) -> S {
+    zeta * 2.0 * (k * inertia).sqrt()
 }
 
 /// Handles into the torsion-bar fragment.
@@ -52,10 +53,11 @@ pub struct TorsionBarPorts {
 pub fn add_torsion_bar(
     g: &mut BondGraph,
     prefix: &str,
-    k: f64,
-    c: f64,
+    k: impl Into<Dual>,
+    c: impl Into<Dual>,
     motor: ElementId,
 ) -> TorsionBarPorts {
+    let (k, c) = (k.into(), c.into());
     let node = g.add_zero(prefix.to_string());
     let twist = g.add_one(format!("{prefix}.twist"));
     let spring = g.add_c(format!("{prefix}.k"), 1.0 / k);

@@ -44,16 +44,35 @@ pub const SPIN_LIMIT: f64 = 0.1;
 
 /// The material limits and the bar's diameter (SI).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Limits {
+pub struct Limits<S = f64> {
     /// Yield strength of the plate \[Pa\] (`plate.sigma_y`, 6061-T6: 276 MPa).
-    pub plate_sigma_y: f64,
+    pub plate_sigma_y: S,
     /// Fatigue strength of the plate, completely reversed stress \[Pa\] (`plate.sigma_f`,
     /// 6061-T6: 96.5 MPa at 5e8 cycles).
-    pub plate_sigma_f: f64,
+    pub plate_sigma_f: S,
     /// Diameter of the torsion bar \[m\] (`torsion_bar.d`).
-    pub bar_d: f64,
+    pub bar_d: S,
     /// Shear yield strength of the torsion bar \[Pa\] (`torsion_bar.tau_y`).
-    pub bar_tau_y: f64,
+    pub bar_tau_y: S,
+}
+
+impl<S: Copy> Limits<S> {
+    /// The parameters `f(self, other)` field by field, the others (choices, counts) `self`'s:
+    /// the one list of the real fields, for carrying them in another scalar (a value and its
+    /// derivative, [`crate::math::dual::Dual`]).
+    pub fn zip<T: Copy, U>(&self, other: &Limits<T>, f: impl Fn(S, T) -> U) -> Limits<U> {
+        Limits {
+            plate_sigma_y: f(self.plate_sigma_y, other.plate_sigma_y),
+            plate_sigma_f: f(self.plate_sigma_f, other.plate_sigma_f),
+            bar_d: f(self.bar_d, other.bar_d),
+            bar_tau_y: f(self.bar_tau_y, other.bar_tau_y),
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`Limits::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U) -> Limits<U> {
+        self.zip(self, |a, _| f(a))
+    }
 }
 
 impl Default for Limits {

@@ -8,6 +8,7 @@ use crate::fragments::plate::{self, Formulation, PlateModel};
 use crate::fragments::{
     self, controller, hub, loes, reference, servo_valve, torsion_bar, validity,
 };
+use crate::math::dual::Dual;
 
 use super::assembly::Assembled;
 use super::parameters::{HydraulicsModel, Parameters};
@@ -31,14 +32,58 @@ pub fn bond_graph(p: &Parameters) -> Result<BondGraph, String> {
 /// without building the plate model a second time (its damping, which they do not read, set
 /// for the graph).
 pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), String> {
-    p.controller.validate()?;
-    let mut model = PlateModel::new(&p.plate)?;
+    bond_graph_and_plate_for(&p.map(Dual::from))
+}
+
+/// The parameters of a part whose fragments take `f64` constants, from parameters in dual
+/// numbers; an error naming the part when one of them carries a derivative, which those
+/// fragments would drop (its sensitivity is not built yet, docs/identify.md).
+macro_rules! values_only {
+    ($part:expr, $name:literal) => {{
+        let part = &$part;
+        if part.map(|x: Dual| x.d) != part.map(|_| 0.0) {
+            return Err(format!(
+                "exact sensitivities with respect to the parameters of {} are not built yet",
+                $name
+            ));
+        }
+        part.map(|x: Dual| x.v)
+    }};
+}
+
+/// [`bond_graph_and_plate`] from parameters in dual numbers: the model built for the parameter
+/// whose derivatives they carry ([`Parameters::seeded`]), its constants with their derivatives
+/// (`crate::model::sensitivity`). The LOES and the torsion bar's stiffness carry them; the
+/// other parts refuse a parameter with a derivative (`values_only`).
+pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
+    let controller = values_only!(p.controller, "the controller (controller.*)");
+    let servo_valve = values_only!(p.servo_valve, "the servo valve (servo_valve.*)");
+    let reference = values_only!(p.reference, "the command generator's move (reference.*)");
+    let limits = values_only!(p.limits, "the validity monitors");
+    let plate_parameters = values_only!(p.plate, "the plate and hub (plate.*, hub.I_H)");
+    let torsion_bar_zeta = p.torsion_bar_zeta;
+    if torsion_bar_zeta.d != 0.0 {
+        return Err(
+            "exact sensitivities with respect to torsion_bar.zeta are not built yet".into(),
+        );
+    }
+    controller.validate()?;
+    let mut model = PlateModel::new(&plate_parameters)?;
     // The consistent structure on its hub is damped on its own modes (bar included, motor
     // clamped), in place of the R per clamped-plate mode and the bar's dashpot.
-    let modal_damping = model.hub && p.plate.formulation == Formulation::Consistent;
+    let modal_damping = model.hub && plate_parameters.formulation == Formulation::Consistent;
     if modal_damping {
-        let bar = p.motor_coupled.then_some(p.torsion_bar_k);
-        model.dashpots = plate::damping::modal_dashpots(&model, bar, p.plate.zeta)?;
+        // The structure's modes, and so its dashpots, move with the bar's stiffness.
+        if p.motor_coupled && p.torsion_bar_k.d != 0.0 {
+            return Err(
+                "exact sensitivities with respect to torsion_bar.k are not built yet where the \
+                 consistent plate on its hub is damped on the structure's modes (the modes' \
+                 derivatives)"
+                    .into(),
+            );
+        }
+        let bar = p.motor_coupled.then_some(p.torsion_bar_k.v);
+        model.dashpots = plate::damping::modal_dashpots(&model, bar, plate_parameters.zeta)?;
         // The coordinates the dashpots span lose their own R (`damping` is per plate coordinate).
         for j in plate::damping::damped_coordinates(&model) {
             let first = model.first_plate();
@@ -55,8 +100,8 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
         HydraulicsModel::Loes => {
             let l = loes::add_loes(&mut g, "loes", &p.loes);
             // Momentum at 10 rad/s, compressed volume at 100 bar.
-            g.set_nominal(l.i_b, &[p.loes.i_b * 10.0]);
-            g.set_nominal(l.c3, &[p.loes.c3 * 1e7]);
+            g.set_nominal(l.i_b, &[p.loes.i_b.v * 10.0]);
+            g.set_nominal(l.c3, &[p.loes.c3.v * 1e7]);
             (
                 l.rotor,
                 l.valve_command,
@@ -67,7 +112,7 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
             )
         }
         HydraulicsModel::ServoValve => {
-            let sv = servo_valve::add_servo_valve(&mut g, "servo_valve", &p.servo_valve)?;
+            let sv = servo_valve::add_servo_valve(&mut g, "servo_valve", &servo_valve)?;
             servo_valve::add_valve_outputs(&mut g, &sv);
             (
                 sv.rotor,
@@ -80,8 +125,8 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
         }
     };
     // The command generator's move on top of r, unless an external controller drives the coil.
-    let loop_reference = if p.reference.is_on() && !p.controller.external {
-        reference::add_reference(&mut g, "reference", &p.reference, p.controller.k_pot, r).reference
+    let loop_reference = if reference.is_on() && !controller.external {
+        reference::add_reference(&mut g, "reference", &reference, controller.k_pot, r).reference
     } else {
         r
     };
@@ -89,7 +134,7 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
     let (y_pot, command) = controller::add_drive(
         &mut g,
         "controller",
-        &p.controller,
+        &controller,
         loop_reference,
         e_in,
         theta,
@@ -99,12 +144,12 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
     g.add_output("controller.e_out", command);
     let bar = p.motor_coupled.then(|| {
         let c = if modal_damping {
-            0.0
+            Dual::from(0.0)
         } else {
             torsion_bar::damping_coefficient(
                 p.torsion_bar_k,
-                p.torsion_bar_zeta,
-                p.plate.hub_total_inertia(),
+                torsion_bar_zeta,
+                Dual::from(plate_parameters.hub_total_inertia()),
             )
         };
         torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, c, rotor)
@@ -146,9 +191,13 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
             bar_torque: torque,
             omega_hub,
         },
-        &p.limits,
-        p.plate.a,
-        validity::first_clamped_bending(p.plate.a, p.plate.rigidity(), p.plate.areal_mass()),
+        &limits,
+        plate_parameters.a,
+        validity::first_clamped_bending(
+            plate_parameters.a,
+            plate_parameters.rigidity(),
+            plate_parameters.areal_mass(),
+        ),
     );
     for (k, &a) in plate.acc.iter().enumerate() {
         g.add_output(format!("acc[{}]", k + 1), a);

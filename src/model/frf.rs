@@ -3,7 +3,7 @@
 
 use nalgebra::{Complex, DMatrix, DVector};
 
-use crate::bond_graph::Linearization;
+use crate::bond_graph::{Linearization, LinearizationDerivative};
 
 /// A frequency response on a grid, with its peaks.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -42,22 +42,76 @@ pub fn state_response_at(
     f_hz: f64,
 ) -> Result<DVector<Complex<f64>>, String> {
     let n = lin.a.nrows();
+    let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
+    resolvent(lin, f_hz)
+        .lu()
+        .solve(&b)
+        .ok_or_else(|| unbounded_at(f_hz))
+}
+
+/// `j 2 pi f I - A`.
+fn resolvent(lin: &Linearization, f_hz: f64) -> DMatrix<Complex<f64>> {
+    let n = lin.a.nrows();
     let s = Complex::new(0.0, 2.0 * std::f64::consts::PI * f_hz);
-    let m = DMatrix::from_fn(n, n, |i, j| {
+    DMatrix::from_fn(n, n, |i, j| {
         let a = Complex::new(-lin.a[(i, j)], 0.0);
         if i == j {
             a + s
         } else {
             a
         }
-    });
-    let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
-    m.lu().solve(&b).ok_or_else(|| {
-        format!(
-            "the response is unbounded at {f_hz} Hz: j 2 pi f I - A is singular there (an \
-             undamped mode, or a free integrator at 0 Hz)"
-        )
     })
+}
+
+/// The error where `j 2 pi f I - A` is singular.
+fn unbounded_at(f_hz: f64) -> String {
+    format!(
+        "the response is unbounded at {f_hz} Hz: j 2 pi f I - A is singular there (an undamped \
+         mode, or a free integrator at 0 Hz)"
+    )
+}
+
+/// The states' response `X` to `input` at `f_hz` ([`state_response_at`]) and its derivative
+/// `dX = (j 2 pi f I - A)^-1 (dA X + dB e_input)` along the parameter whose derivatives `d`
+/// holds ([`crate::model::sensitivity`]), from one LU. An error as [`response_at`]'s.
+pub fn state_response_and_derivative_at(
+    lin: &Linearization,
+    d: &LinearizationDerivative,
+    input: usize,
+    f_hz: f64,
+) -> Result<(DVector<Complex<f64>>, DVector<Complex<f64>>), String> {
+    let n = lin.a.nrows();
+    let lu = resolvent(lin, f_hz).lu();
+    let unbounded = || unbounded_at(f_hz);
+    let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
+    let x = lu.solve(&b).ok_or_else(unbounded)?;
+    let rhs = DVector::from_fn(n, |i, _| {
+        let mut v = Complex::new(d.b[(i, input)], 0.0);
+        for j in 0..n {
+            v += x[j] * d.a[(i, j)];
+        }
+        v
+    });
+    let dx = lu.solve(&rhs).ok_or_else(unbounded)?;
+    Ok((x, dx))
+}
+
+/// `dH = dC_output X + C_output dX + dD_(output, input)`: the derivative of `output`'s
+/// response from the states' response and its derivative
+/// ([`state_response_and_derivative_at`]).
+pub fn output_derivative_of(
+    lin: &Linearization,
+    d: &LinearizationDerivative,
+    x: &DVector<Complex<f64>>,
+    dx: &DVector<Complex<f64>>,
+    input: usize,
+    output: usize,
+) -> Complex<f64> {
+    let mut y = Complex::new(d.d[(output, input)], 0.0);
+    for i in 0..x.len() {
+        y += x[i] * d.c[(output, i)] + dx[i] * lin.c[(output, i)];
+    }
+    y
 }
 
 /// `H = C_output X + D_(output, input)`: the response of `output` from the states' response `x`

@@ -11,6 +11,8 @@
 //! - [`assembly`]: that graph compiled, with its inputs, outputs and states placed among the FMU's
 //!   variables: the [`OdeSystem`](crate::solver::OdeSystem) the integrator advances.
 //! - [`frf`]: frequency responses of the linearised model and their resonance peaks.
+//! - [`sensitivity`]: the exact derivatives of the linearisation at rest with respect to a
+//!   parameter (`hsp identify`).
 //! - [`validity`]: the warnings of the validity monitors at the communication points.
 //! - [`margin`]: the loop-margin monitor, the least damped mode at rest, at initialisation.
 //! - [`oscillation`]: the oscillation monitor, a limit cycle of the loop at the communication
@@ -31,6 +33,8 @@ pub mod parameter_set;
 pub mod parameters;
 pub mod presets;
 pub mod realtime_guard;
+#[cfg(feature = "analysis")]
+pub mod sensitivity;
 pub mod validity;
 pub mod variables;
 

@@ -11,6 +11,7 @@ use crate::fragments::reference::MoveParameters;
 use crate::fragments::rules;
 use crate::fragments::servo_valve::{CoilDrive, ServoValveParameters};
 use crate::fragments::validity::Limits;
+use crate::math::dual::Dual;
 use crate::solver::{Atol, Method, SolverOptions};
 
 use super::assembly::Assembled;
@@ -74,23 +75,23 @@ fn item<E: TryFrom<i32, Error = String>, T: From<E>>(
 
 /// Every parameter of the FMU, typed.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Parameters {
+pub struct Parameters<S = f64> {
     pub hydraulics: HydraulicsModel,
     /// Whether the motor drives the hub through the torsion bar (`hydraulics.motor_coupled`).
     pub motor_coupled: bool,
-    pub loes: LoesParameters,
-    pub servo_valve: ServoValveParameters,
-    pub controller: ControllerParameters,
+    pub loes: LoesParameters<S>,
+    pub servo_valve: ServoValveParameters<S>,
+    pub controller: ControllerParameters<S>,
     /// The command generator's move (`reference.*`).
-    pub reference: MoveParameters,
+    pub reference: MoveParameters<S>,
     /// The material limits of the validity monitors and the bar's diameter.
-    pub limits: Limits,
+    pub limits: Limits<S>,
     /// The plate and hub (`plate.*`, `hub.I_H`).
-    pub plate: PlateParameters,
+    pub plate: PlateParameters<S>,
     /// Torsion-bar stiffness \[N m/rad\] (`torsion_bar.k`).
-    pub torsion_bar_k: f64,
+    pub torsion_bar_k: S,
     /// Torsion-bar structural damping ratio \[-\] (`torsion_bar.zeta`).
-    pub torsion_bar_zeta: f64,
+    pub torsion_bar_zeta: S,
     pub method: Method,
     pub rtol: f64,
     /// Absolute tolerance as a fraction of each state's nominal value.
@@ -104,6 +105,58 @@ pub struct Parameters {
     pub dense_output: bool,
     /// The experiment's stop time, if the importer gave one: no step goes past it.
     pub stop_time: Option<f64>,
+}
+
+impl<S: Copy> Parameters<S> {
+    /// The parameters `f(self, other)` field by field for the real ones, `self`'s for the
+    /// choices, counts and the solver's settings (see [`ServoValveParameters::zip`]).
+    pub fn zip<T: Copy, U>(
+        &self,
+        other: &Parameters<T>,
+        f: impl Fn(S, T) -> U + Copy,
+    ) -> Parameters<U> {
+        Parameters {
+            hydraulics: self.hydraulics,
+            motor_coupled: self.motor_coupled,
+            loes: self.loes.zip(&other.loes, f),
+            servo_valve: self.servo_valve.zip(&other.servo_valve, f),
+            controller: self.controller.zip(&other.controller, f),
+            reference: self.reference.zip(&other.reference, f),
+            limits: self.limits.zip(&other.limits, f),
+            plate: self.plate.zip(&other.plate, f),
+            torsion_bar_k: f(self.torsion_bar_k, other.torsion_bar_k),
+            torsion_bar_zeta: f(self.torsion_bar_zeta, other.torsion_bar_zeta),
+            method: self.method,
+            rtol: self.rtol,
+            atol: self.atol,
+            max_step: self.max_step,
+            max_steps: self.max_steps,
+            substeps: self.substeps,
+            dense_output: self.dense_output,
+            stop_time: self.stop_time,
+        }
+    }
+
+    /// The same parameters with the vane motor sliding: its Coulomb and breakaway friction left
+    /// out ([`ServoValveParameters::sliding`]). Linearisations at rest use it (the loop margin,
+    /// `hsp linearize`, `hsp frf`): at rest the regularised friction's slope, `T_s / omega_t`,
+    /// would clamp the motor and hide the loop, which small motions see only until they break
+    /// away. Coulomb friction adds damping that falls with the amplitude (its describing
+    /// function), so the sliding linearisation is the large-amplitude, least damped limit.
+    pub fn sliding(&self) -> Self
+    where
+        S: From<f64>,
+    {
+        Parameters {
+            servo_valve: self.servo_valve.sliding(),
+            ..self.clone()
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`Parameters::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U + Copy) -> Parameters<U> {
+        self.zip(self, move |a, _| f(a))
+    }
 }
 
 /// The model-specific check of a value being set (type, range and enumeration items are checked
@@ -146,6 +199,46 @@ impl Parameters {
         for i in 0..VARIABLES.len() {
             check(i, values.get(i))?;
         }
+        let parameters = Self::read(values, experiment)?;
+        parameters.plate.validate()?;
+        parameters.check_derived(values)?;
+        Ok(parameters)
+    }
+
+    /// The parameters in dual numbers, each real one carrying its derivative with respect to
+    /// the Real parameter `seed` (an index among the FMU's variables): 1 for `seed` itself, 0
+    /// for the others. What the model is built from for the exact sensitivities of its
+    /// linearisation ([`crate::model::sensitivity`]). An error as [`Parameters::from_values`]'s,
+    /// or naming `seed` when it is not a Real parameter.
+    pub fn seeded(
+        values: &Values,
+        experiment: &Experiment,
+        seed: usize,
+    ) -> Result<Parameters<Dual>, String> {
+        let variable = VARIABLES
+            .get(seed)
+            .ok_or_else(|| format!("no variable of index {seed}"))?;
+        if !matches!(variable.kind, Kind::Real { .. }) || variable.causality != Causality::Parameter
+        {
+            return Err(format!("{}: not a Real parameter", variable.name));
+        }
+        let parameters = Self::from_values(values, experiment)?;
+        // The derivatives are read by the same mapping from the values with every Real set to
+        // its derivative along the seed (the choices and counts as they are).
+        let mut unit = values.clone();
+        for (i, v) in VARIABLES.iter().enumerate() {
+            if matches!(v.kind, Kind::Real { .. }) {
+                unit.set(i, Value::Real(f64::from(u8::from(i == seed))));
+            }
+        }
+        let derivatives = Self::read(&unit, experiment)?;
+        Ok(parameters.zip(&derivatives, Dual::new))
+    }
+
+    /// The mapping from the FMU's values to the typed parameters, with the checks of the
+    /// choices and counts it needs to read them (not the values' own rules:
+    /// [`Parameters::from_values`] checks those).
+    fn read(values: &Values, experiment: &Experiment) -> Result<Self, String> {
         let hydraulics: HydraulicsModel =
             item::<HydraulicsModel, _>(values, idx::HYDRAULICS_MODEL)?;
         let method: Method = item::<SolverMethod, _>(values, idx::SOLVER_METHOD)?;
@@ -190,7 +283,6 @@ impl Parameters {
             x2: values.real(idx::PLATE_X2),
             y2: values.real(idx::PLATE_Y2),
         };
-        plate.validate()?;
         let parameters = Parameters {
             hydraulics,
             motor_coupled: values.boolean(idx::HYDRAULICS_MOTOR_COUPLED),
@@ -274,7 +366,6 @@ impl Parameters {
             dense_output: values.boolean(idx::SOLVER_DENSE_OUTPUT),
             stop_time: experiment.stop_time,
         };
-        parameters.check_derived(values)?;
         Ok(parameters)
     }
 
@@ -326,19 +417,6 @@ fn culprit(values: &Values, from: &[usize]) -> String {
 }
 
 impl Parameters {
-    /// The same parameters with the vane motor sliding: its Coulomb and breakaway friction left
-    /// out ([`ServoValveParameters::sliding`]). Linearisations at rest use it (the loop margin,
-    /// `hsp linearize`, `hsp frf`): at rest the regularised friction's slope, `T_s / omega_t`,
-    /// would clamp the motor and hide the loop, which small motions see only until they break
-    /// away. Coulomb friction adds damping that falls with the amplitude (its describing
-    /// function), so the sliding linearisation is the large-amplitude, least damped limit.
-    pub fn sliding(&self) -> Self {
-        Parameters {
-            servo_valve: self.servo_valve.sliding(),
-            ..self.clone()
-        }
-    }
-
     /// Checks the quantities the model derives from several parameters: masses, stiffnesses,
     /// compliances, the plate's frequency scale and the hydraulic energies at supply pressure
     /// must be finite, positive and within [`MAGNITUDES`]. The error names the parameter farthest

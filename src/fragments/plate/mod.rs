@@ -68,7 +68,7 @@ pub const GRID_Y: usize = 3;
 
 /// Parameters of the plate and hub (SI units).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct PlateParameters {
+pub struct PlateParameters<S = f64> {
     pub formulation: Formulation,
     pub root: Root,
     /// Number of beam functions along the plate (`n`, bending).
@@ -76,35 +76,73 @@ pub struct PlateParameters {
     /// Number of beam functions across the plate (`m`, "torsion" in the paper).
     pub m: usize,
     /// Young's modulus \[Pa\] (paper: 6.89e10).
-    pub e: f64,
+    pub e: S,
     /// Density \[kg/m^3\] (paper: 2795).
-    pub rho: f64,
+    pub rho: S,
     /// Length from the hub axis to the tip \[m\] (paper: 1.41).
-    pub a: f64,
+    pub a: S,
     /// Width \[m\] (paper's table: 0.4685, docs/model-notes.md, item 1).
-    pub b: f64,
+    pub b: S,
     /// Thickness \[m\] (paper: 2.65e-3).
-    pub h: f64,
+    pub h: S,
     /// Poisson's ratio (not in the paper; 0.3 reproduces eq. 16, docs/model-notes.md, item 1).
-    pub nu: f64,
+    pub nu: S,
     /// Structural damping ratio (not in the paper; 2 %, a bolted assembly: docs/model-notes.md,
     /// items 14 and 25): of every mode of hub, bar and plate with the motor clamped in the
     /// consistent formulation, of each plate mode in the paper's.
-    pub zeta: f64,
+    pub zeta: S,
     /// Hub inertia `I_H` \[kg m^2\] (paper: 3.5).
-    pub i_h: f64,
+    pub i_h: S,
     /// Drag coefficient of the plate face-on to the air \[-\] (`plate.Cd`; 0: no drag).
-    pub cd: f64,
+    pub cd: S,
     /// Density of the air \[kg/m^3\] (`plate.rho_air`).
-    pub rho_air: f64,
+    pub rho_air: S,
     /// Added-mass coefficient of the air, a multiple of strip theory \[-\] (`plate.Ca`;
     /// [`added_mass`]; 0: the plate in vacuum).
-    pub ca: f64,
+    pub ca: S,
     /// Shaker force points `(x1, y1)`, `(x2, y2)` \[m\].
-    pub x1: f64,
-    pub y1: f64,
-    pub x2: f64,
-    pub y2: f64,
+    pub x1: S,
+    pub y1: S,
+    pub x2: S,
+    pub y2: S,
+}
+
+impl<S: Copy> PlateParameters<S> {
+    /// The parameters `f(self, other)` field by field, the others (choices, counts) `self`'s:
+    /// the one list of the real fields, for carrying them in another scalar (a value and its
+    /// derivative, [`crate::math::dual::Dual`]).
+    pub fn zip<T: Copy, U>(
+        &self,
+        other: &PlateParameters<T>,
+        f: impl Fn(S, T) -> U,
+    ) -> PlateParameters<U> {
+        PlateParameters {
+            formulation: self.formulation.clone(),
+            root: self.root.clone(),
+            n: self.n.clone(),
+            m: self.m.clone(),
+            e: f(self.e, other.e),
+            rho: f(self.rho, other.rho),
+            a: f(self.a, other.a),
+            b: f(self.b, other.b),
+            h: f(self.h, other.h),
+            nu: f(self.nu, other.nu),
+            zeta: f(self.zeta, other.zeta),
+            i_h: f(self.i_h, other.i_h),
+            cd: f(self.cd, other.cd),
+            rho_air: f(self.rho_air, other.rho_air),
+            ca: f(self.ca, other.ca),
+            x1: f(self.x1, other.x1),
+            y1: f(self.y1, other.y1),
+            x2: f(self.x2, other.x2),
+            y2: f(self.y2, other.y2),
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`PlateParameters::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U) -> PlateParameters<U> {
+        self.zip(self, |a, _| f(a))
+    }
 }
 
 /// The FMU's start values (`plate.*`, `hub.I_H`): the paper's plate, 3 x 5 modes, in the

@@ -31,26 +31,26 @@ pub enum CoilDrive {
 /// `servo_valve.<name>` with the names in brackets. Ranges quoted are those of two-stage
 /// flapper-nozzle valves with mechanical feedback (docs/model.md, "The full servo valve").
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ServoValveParameters {
+pub struct ServoValveParameters<S = f64> {
     /// Supply pressure \[Pa\] (`p_supply`): 140 bar, middle of the 70-210 bar range.
-    pub p_supply: f64,
+    pub p_supply: S,
     /// Tank (return) pressure \[Pa\] (`p_tank`): 0 (gauge).
-    pub p_tank: f64,
+    pub p_tank: S,
     /// Oil density \[kg/m^3\] (`rho`): ISO VG 32 mineral oil, 860 (range 850-870).
-    pub rho: f64,
+    pub rho: S,
     /// Effective bulk modulus \[Pa\] (`beta`): 1.4 GPa (oil without entrained air; range 0.7-1.6).
-    pub beta: f64,
+    pub beta: S,
     /// Discharge coefficient of every orifice \[-\] (`Cd`): 0.61, sharp-edged.
-    pub cd: f64,
+    pub cd: S,
     /// Laminar-transition pressure drop of the orifice law \[Pa\] (`dp_cr`): 0.05 bar, from
     /// `Re_cr` = 10 at the inlet orifice, rounded up (see [`crate::fragments::orifice`]).
-    pub dp_cr: f64,
+    pub dp_cr: S,
     /// Coil resistance \[ohm\] (`R_bob`): 80, bottom of the 80-200 range.
-    pub r_bob: f64,
+    pub r_bob: S,
     /// Coil inductance \[H\] (`L_bob`): fitted to `G_est`, 1.252 H, so that the voltage-driven
     /// coil's lag `R_bob / L_bob` = 64 1/s is the identified 65 1/s pole. Above the 0.1-1 H of
     /// single coils: the two coils of a torque motor in series, at low frequency, reach it.
-    pub l_bob: f64,
+    pub l_bob: S,
     /// How the power amplifier drives the coil (`drive`): a current (a current-feedback
     /// amplifier, the default: without the coil's 65 1/s lag in the position loop the loop keeps
     /// its damping, docs/model.md) or a voltage (the paper's linear power operational
@@ -58,79 +58,148 @@ pub struct ServoValveParameters {
     pub drive: CoilDrive,
     /// Transconductance of the current-feedback amplifier \[A/V\] (`G_i`): 12.5 mA/V, the
     /// voltage drive's DC `1 / R_bob`, so that 10 V commands the rated 125 mA either way.
-    pub g_i: f64,
+    pub g_i: S,
     /// Loop gain of the current-feedback amplifier \[V/A\] (`K_i`): the coil voltage per ampere of
     /// current error, `u = K_i (G_i e_in - i)`. 7.8 kV/A puts the current loop's pole
     /// `(R_bob + K_i) / L_bob` at 1.0 kHz (a servo amplifier's current loop, far above the
     /// valve's 120 Hz) and leaves a DC current error `R_bob / (R_bob + K_i)` of 1.0 %.
-    pub k_i: f64,
+    pub k_i: S,
     /// Compliance voltage of the current-feedback amplifier \[V\] (`U_c`): the most voltage it
     /// can put across the coil, 12 V as the voltage amplifier's rail (a +-15 V supply less the
     /// output stage's headroom). It limits how fast the current can change, `U_c / L_bob`.
-    pub u_c: f64,
+    pub u_c: S,
     /// Torque-motor force constant at the nozzle \[N/A\] (`k_phi`): fitted to `G_est` (it sets the
     /// loop gain), 0.1692 N/A: 10 V drive 125 mA, 21 mN, which the wire balances at 0.4 mm of
     /// spool travel, the full stroke.
-    pub k_phi: f64,
+    pub k_phi: S,
     /// Effective armature-flapper mass at the nozzle \[kg\] (`m_f`): 0.02 g, so that with
     /// `k_f + k_w` = 353 N/m the torque motor is at 670 Hz (range 500-1000 Hz).
-    pub m_f: f64,
+    pub m_f: S,
     /// Flapper viscous friction \[N s/m\] (`b_f`): 0.06, torque-motor damping ratio
     /// `b_f / (2 sqrt((k_f + k_w) m_f))` = 0.36 (range 0.3-0.5).
-    pub b_f: f64,
+    pub b_f: S,
     /// Flapper pivot (flexure tube, net of the magnetic spring) stiffness at the nozzle \[N/m\]
     /// (`k_f`): 300.
-    pub k_f: f64,
+    pub k_f: S,
     /// Feedback-wire stiffness at the nozzle \[N/m\] (`k_w`): fitted to `G_est`, 53.41 N/m. Its
     /// share of the flapper stiffness sets the valve-stage pole
     /// `K_qp k_w / (A_s (k_f + k_w))`, the identified 753 1/s.
-    pub k_w: f64,
+    pub k_w: S,
     /// Inlet orifice diameter, R1 = R2 \[m\] (`d_0`): 0.25 mm (range 0.2-0.3).
-    pub d_0: f64,
+    pub d_0: S,
     /// Nozzle diameter \[m\] (`d_n`): 0.4 mm (range 0.3-0.5).
-    pub d_n: f64,
+    pub d_n: S,
     /// Flapper-nozzle null gap \[m\] (`x_f0`): `d_0^2 / (4 d_n)` = 39 um (range 25-50), so that the
     /// nozzle curtain area equals the inlet area and the control pressures rest at `p_s / 2`.
-    pub x_f0: f64,
+    pub x_f0: S,
     /// Volume of each control chamber \[m^3\] (`V_H`): 0.1 cm^3 (spool end and its drilling).
-    pub v_h: f64,
+    pub v_h: S,
     /// Spool diameter \[m\] (`d_s`): 5 mm (range 4-8).
-    pub d_s: f64,
+    pub d_s: S,
     /// Spool mass \[kg\] (`m_v`): 3 g (range 2-10).
-    pub m_v: f64,
+    pub m_v: S,
     /// Spool viscous friction \[N s/m\] (`b_v`): 1 (oil film on a 5 mm spool).
-    pub b_v: f64,
+    pub b_v: S,
     /// Spool centring spring \[N/m\] (`k_v`): weak; the feedback wire positions the spool.
-    pub k_v: f64,
+    pub k_v: S,
     /// Area gradient of each metering edge \[m\] (`w`): the full spool periphery `pi d_s`.
-    pub w: f64,
+    pub w: S,
     /// Radial clearance of the spool \[m\] (`c_r`): 2.5 um; rounds the critical-centre null.
-    pub c_r: f64,
+    pub c_r: S,
     /// Spool stroke \[m\] (`x_v_max`): +-0.4 mm (range 0.3-0.5), where the spool meets its end
     /// stops ([`super::limits::spool_stop_spring`]).
-    pub x_v_max: f64,
+    pub x_v_max: S,
     /// Volume of each actuator chamber with its line \[m^3\] (`V_1`): 150 cm^3, half the swept
     /// volume of a +-90 deg vane stroke (`D_m pi / 2` = 126 cm^3) plus 25 cm^3 of line (0.5 m of
     /// 8 mm bore).
-    pub v_1: f64,
+    pub v_1: S,
     /// Internal leakage resistance of the vane motor \[N s/m^5\] (`R_leak`): 1 L/min at 100 bar.
-    pub r_leak: f64,
+    pub r_leak: S,
     /// Vane motor displacement \[m^3/rad\] (`D_m`): 8.04e-5 (0.5 L/rev), the LOES's `D_m`.
-    pub d_m: f64,
+    pub d_m: S,
     /// Rotor inertia \[kg m^2\] (`I_m`): the paper's `I_b`.
-    pub i_m: f64,
+    pub i_m: S,
     /// Rotor viscous friction \[N m s/rad\] (`b_m`): 0.1 (vane seal drag); the fit does not
     /// depend on it.
-    pub b_m: f64,
+    pub b_m: S,
     /// Coulomb (running) friction torque of the vane motor \[N m\] (`T_c`): 1.0, a running
     /// pressure of 1 bar over `D_m` ([`crate::fragments::vane_motor::friction`]; 0: none).
-    pub t_c: f64,
+    pub t_c: S,
     /// Breakaway (static) friction torque \[N m\] (`T_s`): 1.5, a breakaway pressure of 1.5 bar;
     /// at least `T_c`.
-    pub t_s: f64,
+    pub t_s: S,
     /// Stribeck speed \[rad/s\] (`omega_s`): 0.5, over which the friction falls from `T_s` to
     /// `T_c` (15 mm/s at the vane tips' 30 mm radius).
-    pub omega_s: f64,
+    pub omega_s: S,
+}
+
+impl<S: Copy> ServoValveParameters<S> {
+    /// The parameters `f(self, other)` field by field, the others (choices, counts) `self`'s:
+    /// the one list of the real fields, for carrying them in another scalar (a value and its
+    /// derivative, [`crate::math::dual::Dual`]).
+    pub fn zip<T: Copy, U>(
+        &self,
+        other: &ServoValveParameters<T>,
+        f: impl Fn(S, T) -> U,
+    ) -> ServoValveParameters<U> {
+        ServoValveParameters {
+            p_supply: f(self.p_supply, other.p_supply),
+            p_tank: f(self.p_tank, other.p_tank),
+            rho: f(self.rho, other.rho),
+            beta: f(self.beta, other.beta),
+            cd: f(self.cd, other.cd),
+            dp_cr: f(self.dp_cr, other.dp_cr),
+            r_bob: f(self.r_bob, other.r_bob),
+            l_bob: f(self.l_bob, other.l_bob),
+            drive: self.drive.clone(),
+            g_i: f(self.g_i, other.g_i),
+            k_i: f(self.k_i, other.k_i),
+            u_c: f(self.u_c, other.u_c),
+            k_phi: f(self.k_phi, other.k_phi),
+            m_f: f(self.m_f, other.m_f),
+            b_f: f(self.b_f, other.b_f),
+            k_f: f(self.k_f, other.k_f),
+            k_w: f(self.k_w, other.k_w),
+            d_0: f(self.d_0, other.d_0),
+            d_n: f(self.d_n, other.d_n),
+            x_f0: f(self.x_f0, other.x_f0),
+            v_h: f(self.v_h, other.v_h),
+            d_s: f(self.d_s, other.d_s),
+            m_v: f(self.m_v, other.m_v),
+            b_v: f(self.b_v, other.b_v),
+            k_v: f(self.k_v, other.k_v),
+            w: f(self.w, other.w),
+            c_r: f(self.c_r, other.c_r),
+            x_v_max: f(self.x_v_max, other.x_v_max),
+            v_1: f(self.v_1, other.v_1),
+            r_leak: f(self.r_leak, other.r_leak),
+            d_m: f(self.d_m, other.d_m),
+            i_m: f(self.i_m, other.i_m),
+            b_m: f(self.b_m, other.b_m),
+            t_c: f(self.t_c, other.t_c),
+            t_s: f(self.t_s, other.t_s),
+            omega_s: f(self.omega_s, other.omega_s),
+        }
+    }
+
+    /// The same valve and motor without the motor's Coulomb and breakaway friction: the motor
+    /// sliding, the linearisation the margin, `hsp linearize` and `hsp frf` use
+    /// ([`crate::fragments::vane_motor::friction`]).
+    pub fn sliding(&self) -> Self
+    where
+        S: From<f64>,
+    {
+        ServoValveParameters {
+            t_c: S::from(0.0),
+            t_s: S::from(0.0),
+            ..self.clone()
+        }
+    }
+
+    /// The parameters `f(self)` field by field ([`ServoValveParameters::zip`]).
+    pub fn map<U>(&self, f: impl Fn(S) -> U) -> ServoValveParameters<U> {
+        self.zip(self, |a, _| f(a))
+    }
 }
 
 impl ServoValveParameters {
@@ -142,17 +211,6 @@ impl ServoValveParameters {
             ..Self::default()
         }
         .sliding()
-    }
-
-    /// The same valve and motor without the motor's Coulomb and breakaway friction: the motor
-    /// sliding, the linearisation the margin, `hsp linearize` and `hsp frf` use
-    /// ([`crate::fragments::vane_motor::friction`]).
-    pub fn sliding(&self) -> Self {
-        ServoValveParameters {
-            t_c: 0.0,
-            t_s: 0.0,
-            ..self.clone()
-        }
     }
 }
 

@@ -458,11 +458,11 @@ pub fn svg(g: &BondGraph, strokes: Option<&[bool]>) -> String {
         let name = short(&sg.name);
         labels.push(match &sg.kind {
             SignalKind::Input => format!("input {name}"),
-            SignalKind::Gain(k, _) => format!("{name} = {}", crate::docpage::text::short(*k)),
+            SignalKind::Gain(k, _) => format!("{name} = {}", crate::docpage::text::short(k.v)),
             SignalKind::Sum(_) => format!("\u{3a3} {name}"),
             SignalKind::Integrator(_) => format!("\u{222b} {name}"),
             SignalKind::Function(..) => format!("f: {name}"),
-            SignalKind::Constant(c) => format!("{name} = {}", crate::docpage::text::short(*c)),
+            SignalKind::Constant(c) => format!("{name} = {}", crate::docpage::text::short(c.v)),
             _ => format!("{} {name}", sg.kind.label()),
         });
         titles.push(sg.name.clone());
