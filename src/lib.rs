@@ -12,7 +12,7 @@
 //! | module | what it is | knows about |
 //! | --- | --- | --- |
 //! | [`solver`] | stiff one-step integrators (Rodas5P, Radau IIA) | numbers only |
-//! | [`eigen`] | eigenvalues of a real matrix, balanced first as LAPACK's `dgeev` does; damping ratios | numbers only |
+//! | [`eigen`] | eigenvalues of a real matrix, balanced first as LAPACK's `dgeev` does; damping ratios; derivatives of symmetric eigenpairs | numbers only |
 //! | [`bond_graph`] | elements, causality, compilation to state equations | energy and signals |
 //! | [`fragments`] | the paper's physical parts as bond-graph fragments | physics, no FMI |
 //! | [`model`] | the assembled model behind the FMU, its parameters and outputs | fragments, solver |

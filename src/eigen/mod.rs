@@ -37,9 +37,14 @@
 //! least damped mode of a spectrum, skipping the zero eigenvalues of rigid-body and integrator
 //! states.
 //!
+//! [`derivative`] differentiates the eigenpairs of symmetric (and symmetric generalised)
+//! eigenproblems along a parameter, for the plate's modes' sensitivities.
+//!
 //! Everything here is IEEE arithmetic (sums, products, quotients and `sqrt`, each correctly
 //! rounded) and nalgebra's decomposition, whose scalar functions come from the `libm` crate
 //! ([`crate::math`]): the same doubles on every platform.
+
+pub mod derivative;
 
 use nalgebra::{Complex, DMatrix, Schur};
 
