@@ -231,6 +231,14 @@ impl Fitted {
         }
     }
 
+    /// `dp/dz` at `z`: `p` for a log-scaled parameter, its scale for a linear one.
+    pub fn dp_dz(&self, z: f64) -> f64 {
+        match self.scale {
+            Scale::Log => self.p_of(z),
+            Scale::Linear(s) => s,
+        }
+    }
+
     /// The bounds in `z`.
     pub fn z_bounds(&self) -> Option<(f64, f64)> {
         self.bounds.map(|(lo, hi)| (self.z_of(lo), self.z_of(hi)))

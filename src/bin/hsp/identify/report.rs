@@ -8,6 +8,7 @@ use hydraulic_slewing_plate::fmu::{Causality, Value, Variability};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 use serde_json::json;
 
+use super::residuals::Method;
 use super::Fit;
 use crate::ecosystem::ssp::parameter_set_of;
 
@@ -26,16 +27,22 @@ use crate::ecosystem::ssp::parameter_set_of;
 /// `reached`, the number of starts that did, and `cost`).
 pub fn json(fit: &Fit) -> serde_json::Value {
     let values = fit.values();
+    let methods = fit.problem.methods();
     let mut parameters = serde_json::Map::new();
     for (j, f) in fit.problem.fitted.iter().enumerate() {
-        parameters.insert(
-            f.name.clone(),
-            json!({
-                "value": values[j],
-                "start": f.start,
-                "ci95": fit.statistics.ci95[j].map(|(lo, hi)| [lo, hi]),
-            }),
-        );
+        let mut entry = json!({
+            "value": values[j],
+            "start": f.start,
+            "ci95": fit.statistics.ci95[j].map(|(lo, hi)| [lo, hi]),
+        });
+        match &methods[j] {
+            Method::Exact => entry["sensitivity"] = json!("exact"),
+            Method::CentralDifferences(why) => {
+                entry["sensitivity"] = json!("central differences");
+                entry["sensitivity_reason"] = json!(why);
+            }
+        }
+        parameters.insert(f.name.clone(), entry);
     }
     let mut out = json!({
         "parameters": parameters,
@@ -108,12 +115,33 @@ pub fn json(fit: &Fit) -> serde_json::Value {
     out
 }
 
-/// How the sensitivities were computed, in words.
-pub fn sensitivities(fit: &Fit) -> &'static str {
-    if fit.problem.series.is_empty() {
+/// How the sensitivities were computed, in words: exact (dual numbers through the model) for
+/// the parameters that had them, central differences for the others
+/// ([`super::residuals::Problem::methods`]).
+pub fn sensitivities(fit: &Fit) -> String {
+    let methods = fit.problem.methods();
+    let names = |exact: bool| -> Vec<&str> {
+        fit.problem
+            .fitted
+            .iter()
+            .zip(&methods)
+            .filter(|(_, m)| (**m == Method::Exact) == exact)
+            .map(|(f, _)| f.name.as_str())
+            .collect()
+    };
+    let differences = if fit.problem.series.is_empty() {
         "central differences of the exact linearisation"
     } else {
         "central differences of the exact linearisation and of the simulation"
+    };
+    match (names(true), names(false)) {
+        (exact, fd) if fd.is_empty() => format!("exact (dual numbers) for {}", exact.join(", ")),
+        (exact, fd) if exact.is_empty() => format!("{differences} for {}", fd.join(", ")),
+        (exact, fd) => format!(
+            "exact (dual numbers) for {}; {differences} for {}",
+            exact.join(", "),
+            fd.join(", ")
+        ),
     }
 }
 
@@ -143,6 +171,12 @@ pub fn text(fit: &Fit) -> String {
             f.name, f.start, values[j]
         )
         .unwrap();
+    }
+    writeln!(s, "sensitivities: {}", sensitivities(fit)).unwrap();
+    for (f, m) in fit.problem.fitted.iter().zip(fit.problem.methods()) {
+        if let Method::CentralDifferences(why) = m {
+            writeln!(s, "  {}: central differences ({why})", f.name).unwrap();
+        }
     }
     for (d, (before, after)) in fit.problem.peaks.iter().zip(&fit.model_peaks) {
         writeln!(

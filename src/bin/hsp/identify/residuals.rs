@@ -16,20 +16,27 @@
 //! ([`super::series`]). The time series' sensitivities are central differences of the
 //! simulation (below).
 //!
-//! **Sensitivities, a first step:** the derivatives of the residuals with respect to the fitted
-//! parameters (in their coordinates `z`, [`super::data::Scale`]) are central finite differences
-//! of the model's linearised response, step [`STEP`] in `z`, not exact. The parameters reach the
-//! compiled plan as `f64` constants folded in by the fragments (`src/fragments/`), so dual
-//! numbers through the parameter path need the fragments and `Parameters` to be generic in the
-//! scalar type; that is left for a later step (docs/identify.md).
+//! **Sensitivities.** The derivatives of the residuals with respect to the fitted parameters
+//! (in their coordinates `z`, [`super::data::Scale`]) are exact where the model can give them:
+//! with frequency responses alone, for a parameter whose fragments carry dual numbers
+//! ([`hydraulic_slewing_plate::model::sensitivity`]: `dA/dp, dB/dp, dC/dp, dD/dp` at rest by
+//! hyper-dual passes, then `dH/dp` from the same LU as `H`). Elsewhere they are central finite
+//! differences of the model's residuals, step [`STEP`] in `z`: for a parameter whose fragments
+//! still fold it in as an `f64` constant (the reason is kept and reported, [`Problem::methods`]),
+//! and for peaks and time series, whose exact sensitivities (the modes' derivatives, forward
+//! sensitivities of the simulation) are not built.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use hydraulic_slewing_plate::bond_graph::Linearization;
 use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
-use hydraulic_slewing_plate::model::frf::{output_of, state_response_at};
+use hydraulic_slewing_plate::model::frf::{
+    output_derivative_of, output_of, state_response_and_derivative_at, state_response_at,
+};
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
+use hydraulic_slewing_plate::model::sensitivity::linearization_at_rest_with_derivatives;
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::data::{Fitted, Frf};
@@ -53,6 +60,21 @@ pub struct Problem {
     ports: Vec<(usize, usize)>,
     /// Model evaluations so far (one linearisation and its responses each).
     pub evaluations: AtomicUsize,
+    /// Exact derivatives of the linearisation so far (one model built in dual numbers for one
+    /// parameter, and its hyper-dual passes, each).
+    pub derivatives: AtomicUsize,
+    /// Per fitted parameter, why its sensitivities were central differences (the last reason
+    /// met), `None` while they have been exact.
+    finite_differences: Mutex<Vec<Option<String>>>,
+}
+
+/// How a fitted parameter's sensitivities were computed ([`Problem::methods`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Method {
+    /// Exact: dual numbers through the model.
+    Exact,
+    /// Central differences, and why.
+    CentralDifferences(String),
 }
 
 impl Problem {
@@ -108,9 +130,11 @@ impl Problem {
             frfs,
             peaks,
             series,
-            fitted,
             ports,
             evaluations: AtomicUsize::new(0),
+            derivatives: AtomicUsize::new(0),
+            finite_differences: Mutex::new(vec![None; fitted.len()]),
+            fitted,
         })
     }
 
@@ -238,25 +262,96 @@ impl Problem {
         self.residuals(&self.p_of_z(z))
     }
 
-    /// `d residuals / d z` at `z` by central differences (module doc), a column per parameter.
+    /// How each fitted parameter's sensitivities were computed so far: exact, or central
+    /// differences and why (module doc).
+    pub fn methods(&self) -> Vec<Method> {
+        self.finite_differences
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|r| match r {
+                None => Method::Exact,
+                Some(why) => Method::CentralDifferences(why.clone()),
+            })
+            .collect()
+    }
+
+    /// `d residuals / d z` at `z`, a column per parameter: exact where the model gives the
+    /// derivative, central differences elsewhere (module doc).
     pub fn jacobian_z(&self, z: &[f64]) -> Result<DMatrix<f64>, String> {
         let mut jac = DMatrix::zeros(self.len(), z.len());
-        for j in 0..z.len() {
-            let at = |dz: f64| {
-                let mut zz = z.to_vec();
-                zz[j] += dz;
-                self.residuals_z(&zz).map_err(|e| {
-                    format!(
-                        "the sensitivity to {} at {}: {e}",
-                        self.fitted[j].name,
-                        self.fitted[j].p_of(zz[j])
-                    )
-                })
-            };
-            let column = (at(STEP)? - at(-STEP)?) / (2.0 * STEP);
-            jac.set_column(j, &column);
+        let exact = self.exact_columns(z)?;
+        for (j, column) in exact.into_iter().enumerate() {
+            match column {
+                Ok(column) => jac.set_column(j, &column),
+                Err(why) => {
+                    self.finite_differences.lock().unwrap()[j] = Some(why);
+                    jac.set_column(j, &self.central_difference(z, j)?);
+                }
+            }
         }
         Ok(jac)
+    }
+
+    /// The exact columns of `d residuals / d z` at `z`, or for each parameter why there is
+    /// none: only frequency responses have them.
+    fn exact_columns(&self, z: &[f64]) -> Result<Vec<Result<DVector<f64>, String>>, String> {
+        if !self.peaks.is_empty() || !self.series.is_empty() {
+            let why = "peaks and time series have no exact sensitivities yet".to_string();
+            return Ok(vec![Err(why); z.len()]);
+        }
+        let p = self.p_of_z(z);
+        let values = self.values_at(&p)?;
+        let seeds: Vec<usize> = self.fitted.iter().map(|f| f.index).collect();
+        self.evaluations.fetch_add(1, Ordering::Relaxed);
+        let (lin, derivatives) = linearization_at_rest_with_derivatives(&values, &seeds)?;
+        let mut columns = Vec::with_capacity(z.len());
+        for (j, d) in derivatives.iter().enumerate() {
+            let d = match d {
+                Ok(d) => d,
+                Err(e) => {
+                    columns.push(Err(e.clone()));
+                    continue;
+                }
+            };
+            self.derivatives.fetch_add(1, Ordering::Relaxed);
+            let dp_dz = self.fitted[j].dp_dz(z[j]);
+            let mut column = Vec::with_capacity(self.len());
+            // One LU per input and frequency, shared by the outputs measured there.
+            let mut states = HashMap::new();
+            for (data, &(i, o)) in self.frfs.iter().zip(&self.ports) {
+                for ((&f, h), &w) in data.f_hz.iter().zip(&data.h).zip(&data.weight) {
+                    let (x, dx) = match states.entry((i, f.to_bits())) {
+                        std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                        std::collections::hash_map::Entry::Vacant(e) => {
+                            e.insert(state_response_and_derivative_at(&lin, d, i, f)?)
+                        }
+                    };
+                    let dh = output_derivative_of(&lin, d, x, dx, i, o);
+                    let de = dh * (w * dp_dz / h.norm());
+                    column.push(de.re);
+                    column.push(de.im);
+                }
+            }
+            columns.push(Ok(DVector::from_vec(column)));
+        }
+        Ok(columns)
+    }
+
+    /// The column `j` of `d residuals / d z` at `z` by central differences (module doc).
+    fn central_difference(&self, z: &[f64], j: usize) -> Result<DVector<f64>, String> {
+        let at = |dz: f64| {
+            let mut zz = z.to_vec();
+            zz[j] += dz;
+            self.residuals_z(&zz).map_err(|e| {
+                format!(
+                    "the sensitivity to {} at {}: {e}",
+                    self.fitted[j].name,
+                    self.fitted[j].p_of(zz[j])
+                )
+            })
+        };
+        Ok((at(STEP)? - at(-STEP)?) / (2.0 * STEP))
     }
 }
 
