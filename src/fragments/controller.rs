@@ -35,6 +35,7 @@
 
 use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId, StateUnits};
 use crate::fragments::rules;
+use crate::math::dual::{Dual, HyperDual, Real};
 
 /// Potentiometer full-scale voltage assumed for the default `k_POT` \[V\].
 pub const POT_FULL_SCALE_VOLTS: f64 = 10.0;
@@ -230,6 +231,39 @@ impl AmplifierLimit {
     }
 }
 
+/// The saturating amplifier's output [`AmplifierLimit::Saturating`] in any [`Real`]: the value
+/// of [`AmplifierLimit::eval`], the same operations (its `copysign` as the sign bits' choice
+/// between the magnitude and its negation, which is what `copysign` does) and branches (on the
+/// values), so the same doubles.
+pub fn saturating_value<S: Real>(e_max: S, u: S) -> S {
+    let k = e_max * LINEAR_FRACTION;
+    let a = u.abs();
+    if a.value() <= k.value() {
+        return u;
+    }
+    let w = e_max - k;
+    let t = S::tanh((a - k) / w);
+    let magnitude = k + w * t;
+    if magnitude.value().is_sign_negative() == u.value().is_sign_negative() {
+        magnitude
+    } else {
+        -magnitude
+    }
+}
+
+/// The smooth output limit [`AmplifierLimit::Saturating`] with the rail `e_max` as a law of
+/// the demanded output, with its value bound and its hyper-dual form
+/// ([`NonlinearLaw::with_hyper`]), [`saturating_value`] with the rail's derivative: the power
+/// amplifier's ([`add_output_limit`]) and the current amplifier's compliance limit
+/// ([`super::torque_motor::add_current_amplifier`]).
+pub fn saturation_law(label: impl Into<String>, e_max: impl Into<Dual>) -> NonlinearLaw {
+    let e_max_d = e_max.into();
+    let limit = AmplifierLimit::Saturating { e_max: e_max_d.v };
+    NonlinearLaw::new(label, move |u| limit.eval(u))
+        .with_value_bound_if(limit.value_bound())
+        .with_hyper(move |u, _| saturating_value(HyperDual::from(e_max_d), u))
+}
+
 /// Signals of the controller fragment.
 #[derive(Clone, Copy, Debug)]
 pub struct ControllerPorts {
@@ -264,12 +298,9 @@ pub fn add_output_limit(
 ) -> SignalId {
     match p.limit() {
         AmplifierLimit::Linear => u,
-        limit @ AmplifierLimit::Saturating { e_max } => g.add_function(
+        AmplifierLimit::Saturating { e_max } => g.add_function(
             format!("{prefix}.e_out"),
-            NonlinearLaw::new(format!("amplifier limit +-{e_max} V"), move |u| {
-                limit.eval(u)
-            })
-            .with_value_bound_if(limit.value_bound()),
+            saturation_law(format!("amplifier limit +-{e_max} V"), e_max),
             u,
         ),
     }
@@ -406,5 +437,32 @@ mod tests {
         // Slope and curvature are continuous at the knee u = 9.6: slope 1 - O(d^2) just beyond.
         let (_, d) = l.eval(9.6 + 1e-4);
         assert!((1.0 - d) < 1e-7);
+    }
+
+    use crate::fragments::law_checks::{
+        assert_hand_derivatives, assert_mixed, assert_same_bits, grid,
+    };
+
+    #[test]
+    fn limit_in_hyper_dual_numbers() {
+        let e_max = 12.0;
+        let law = saturation_law("limit", e_max);
+        let mut us = grid(e_max);
+        // At, below and above the knee (9.6 V) on both sides.
+        for u in [9.6, 9.6 + 1e-12, 9.59, 9.61, 10.5, 14.0, 30.0] {
+            us.extend([u, -u]);
+        }
+        us.push(f64::NAN);
+        assert_same_bits(&law, |u, _| saturating_value(e_max, u), &us, &[0.0]);
+        // copysign's choice holds for a negative rail too, where the arc is negative.
+        let odd = saturation_law("negative rail", -12.0);
+        assert_same_bits(&odd, |u, _| saturating_value(-12.0, u), &us, &[0.0]);
+        let dual = |u, _| saturating_value(Dual::from(e_max), u);
+        assert_hand_derivatives(&law, dual, &us, &[0.0], 1e-12, |_, _| (0.0, 0.0));
+        // d²e/du de_max beyond the knee: the arc varies in e_max over its width w = 0.2 e_max.
+        for u in [-20.0, -10.0, 9.7, 11.0, 15.0] {
+            let law_of = |e_max: Dual| saturation_law("limit", e_max);
+            assert_mixed(law_of, e_max, 1e-4, 0.2 * e_max, u, 0.0, false);
+        }
     }
 }

@@ -20,6 +20,8 @@
 pub mod controller;
 pub mod flapper_nozzle;
 pub mod hub;
+#[cfg(test)]
+mod law_checks;
 pub mod loes;
 pub mod orifice;
 pub mod plate;

@@ -41,29 +41,53 @@
 //! case at run time.
 
 use crate::bond_graph::{Law, NonlinearLaw};
+use crate::math::dual::{Dual, HyperDual, Real};
+
+/// `Q/K` of the regularised law, per unit of `K = Cd A sqrt(2/rho)`:
+/// `dp / (dp^2 + dp_cr^2)^(1/4)`, in any [`Real`] (the value of [`regularised_sqrt`], the same
+/// operations).
+#[inline]
+pub fn regularised_sqrt_value<S: Real>(dp: S, dp_cr: S) -> S {
+    let s = dp * dp + dp_cr * dp_cr;
+    dp / s.sqrt().sqrt() // s^(1/4)
+}
 
 /// `(Q/K, d(Q/K)/d(dp))` of the regularised law, per unit of `K = Cd A sqrt(2/rho)`:
-/// `dp / (dp^2 + dp_cr^2)^(1/4)` and its derivative.
+/// [`regularised_sqrt_value`] and its derivative.
+#[inline]
 pub fn regularised_sqrt(dp: f64, dp_cr: f64) -> (f64, f64) {
     let s = dp * dp + dp_cr * dp_cr;
     let q = s.sqrt().sqrt(); // s^(1/4)
-    let y = dp / q;
     let dy = (0.5 * dp * dp + dp_cr * dp_cr) / (s * q);
-    (y, dy)
+    (regularised_sqrt_value(dp, dp_cr), dy)
+}
+
+/// The orifice coefficient `K = Cd A sqrt(2/rho)` \[m^3/(s Pa^(1/2))\] of an area `area`.
+#[inline]
+pub fn orifice_coefficient<S: Real>(cd: S, area: S, rho: S) -> S {
+    cd * area * (S::cst(2.0) / rho).sqrt()
 }
 
 /// The regularised orifice flow `Q(dp)` \[m^3/s\] and `dQ/d(dp)` for a fixed area `area` \[m^2\].
 pub fn orifice_flow(dp: f64, area: f64, cd: f64, rho: f64, dp_cr: f64) -> (f64, f64) {
-    let k = cd * area * (2.0 / rho).sqrt();
+    let k = orifice_coefficient(cd, area, rho);
     let (y, dy) = regularised_sqrt(dp, dp_cr);
     (k * y, k * dy)
 }
 
-/// The smooth ramp `(x + sqrt(x^2 + c^2)) / 2` and its derivative: `max(x, 0)` with the corner
+/// The smooth ramp `(x + sqrt(x^2 + c^2)) / 2`, in any [`Real`] (the value of [`smooth_ramp`],
+/// the same operations).
+#[inline]
+pub fn smooth_ramp_value<S: Real>(x: S, c: S) -> S {
+    (x + (x * x + c * c).sqrt()) * 0.5
+}
+
+/// The smooth ramp [`smooth_ramp_value`] and its derivative: `max(x, 0)` with the corner
 /// rounded over `|x| ~ c` (`c > 0`).
+#[inline]
 pub fn smooth_ramp(x: f64, c: f64) -> (f64, f64) {
     let r = (x * x + c * c).sqrt();
-    (0.5 * (x + r), 0.5 * (1.0 + x / r))
+    (smooth_ramp_value(x, c), 0.5 * (1.0 + x / r))
 }
 
 /// Pressure at which the jet Reynolds number `Cd sqrt(2 dp/rho) d_h / nu` equals `re_cr`.
@@ -72,18 +96,41 @@ pub fn critical_pressure(re_cr: f64, nu: f64, d_h: f64, cd: f64, rho: f64) -> f6
     0.5 * rho * v * v
 }
 
-/// Constant orifice parameters common to every restriction.
+/// Constant orifice parameters common to every restriction: in `f64` for the parameters'
+/// values, in [`Dual`] for the laws, which carry each constant's derivative along the
+/// parameter the model is built for (`OrificeFluid<f64>` converts, with zero derivatives).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OrificeFluid {
+pub struct OrificeFluid<T = f64> {
     /// Discharge coefficient `Cd` \[-\].
-    pub cd: f64,
+    pub cd: T,
     /// Oil density `rho` \[kg/m^3\].
-    pub rho: f64,
+    pub rho: T,
     /// Laminar-transition pressure `dp_cr` \[Pa\].
-    pub dp_cr: f64,
+    pub dp_cr: T,
 }
 
-/// A fixed orifice of area `area` as an R law in conductance form (`f = Q(dp)`).
+impl From<OrificeFluid<f64>> for OrificeFluid<Dual> {
+    /// The constants with zero derivatives.
+    fn from(f: OrificeFluid<f64>) -> Self {
+        OrificeFluid {
+            cd: f.cd.into(),
+            rho: f.rho.into(),
+            dp_cr: f.dp_cr.into(),
+        }
+    }
+}
+
+/// The flow of a fixed orifice of coefficient `k` ([`orifice_coefficient`]) at the pressure
+/// drop `dp`, in any [`Real`]: `k dp / (dp^2 + dp_cr^2)^(1/4)`, the value of the law of
+/// [`fixed_orifice`].
+#[inline]
+pub fn fixed_orifice_flow<S: Real>(k: S, dp_cr: S, dp: S) -> S {
+    k * regularised_sqrt_value(dp, dp_cr)
+}
+
+/// A fixed orifice of area `area` as an R law in conductance form (`f = Q(dp)`); its
+/// hyper-dual form ([`NonlinearLaw::with_hyper`]) is [`fixed_orifice_flow`] with the constants'
+/// derivatives.
 ///
 /// Its value bound ([`NonlinearLaw::with_value_bound`]): with `K = Cd A sqrt(2/rho)`,
 /// `|Q| <= K (dp² + 1)`. Since `(dp² + dp_cr²)^(1/4) >= |dp|^(1/2)`, `|Q| <= K |dp|^(1/2)`,
@@ -92,19 +139,50 @@ pub struct OrificeFluid {
 /// of the law. Declared when `dp_cr²` is a normal double (then `(dp² + dp_cr²)^(1/4)` is never
 /// 0 and the law never 0/0) and `K` is finite; for `|dp| <= VALUE_BOUND_RANGE`, `dp²` does not
 /// overflow.
-pub fn fixed_orifice(label: impl Into<String>, area: f64, fluid: OrificeFluid) -> Law {
-    let OrificeFluid { cd, rho, dp_cr } = fluid;
-    let k = (cd * area * (2.0 / rho).sqrt()).abs();
-    let bound = (k.is_finite() && (dp_cr * dp_cr).is_normal()).then_some((k, k));
+pub fn fixed_orifice(
+    label: impl Into<String>,
+    area: impl Into<Dual>,
+    fluid: impl Into<OrificeFluid<Dual>>,
+) -> Law {
+    let OrificeFluid { cd, rho, dp_cr } = fluid.into();
+    let k_d = orifice_coefficient(cd, area.into(), rho);
+    let (k, dp_cr_v) = (k_d.v, dp_cr.v);
+    let bound =
+        (k.abs().is_finite() && (dp_cr_v * dp_cr_v).is_normal()).then_some((k.abs(), k.abs()));
     Law::Conductance(
-        NonlinearLaw::new(label, move |dp| orifice_flow(dp, area, cd, rho, dp_cr))
-            .with_value_bound_if(bound),
+        NonlinearLaw::new(label, move |dp| {
+            let dy = regularised_sqrt(dp, dp_cr_v).1;
+            (fixed_orifice_flow(k, dp_cr_v, dp), k * dy)
+        })
+        .with_value_bound_if(bound)
+        .with_hyper(move |dp, _| {
+            fixed_orifice_flow(HyperDual::from(k_d), HyperDual::from(dp_cr), dp)
+        }),
     )
+}
+
+/// The flow of a variable orifice at the pressure drop `dp` and modulator `m`, in any
+/// [`Real`]: `k ramp(offset + sign m, clearance) dp / (dp^2 + dp_cr^2)^(1/4)`, `k` the
+/// coefficient of the width ([`orifice_coefficient`]); the value of the law of
+/// [`variable_orifice`].
+#[inline]
+pub fn variable_orifice_flow<S: Real>(
+    k: S,
+    offset: S,
+    sign: f64,
+    clearance: S,
+    dp_cr: S,
+    dp: S,
+    m: S,
+) -> S {
+    k * smooth_ramp_value(offset + m * sign, clearance) * regularised_sqrt_value(dp, dp_cr)
 }
 
 /// A variable orifice whose area is `width * ramp(offset + sign * m, clearance)`, `m` the
 /// modulating signal (spool or flapper position), as an R law in conductance form:
-/// `Q = K(m) g(dp)` with exact `dQ/d(dp)` and `dQ/dm`.
+/// `Q = K(m) g(dp)` with exact `dQ/d(dp)` and `dQ/dm`; its hyper-dual form
+/// ([`NonlinearLaw::with_hyper`]) is [`variable_orifice_flow`] with the constants' derivatives
+/// (`sign` is a direction, no parameter).
 ///
 /// * spool edge opening with `x_v`: `width` = area gradient `w`, `offset` = 0, `sign` = +1 or -1;
 /// * nozzle with flapper `x_f`: `width` = `pi d_n`, `offset` = null gap `x_f0`, `sign` = -1 (the
@@ -120,18 +198,20 @@ pub fn fixed_orifice(label: impl Into<String>, area: f64, fluid: OrificeFluid) -
 /// `K` is finite.
 pub fn variable_orifice(
     label: impl Into<String>,
-    width: f64,
-    offset: f64,
+    width: impl Into<Dual>,
+    offset: impl Into<Dual>,
     sign: f64,
-    clearance: f64,
-    fluid: OrificeFluid,
+    clearance: impl Into<Dual>,
+    fluid: impl Into<OrificeFluid<Dual>>,
 ) -> Law {
-    let OrificeFluid { cd, rho, dp_cr } = fluid;
-    let k = cd * width * (2.0 / rho).sqrt();
+    let OrificeFluid { cd, rho, dp_cr } = fluid.into();
+    let (offset_d, clearance_d) = (offset.into(), clearance.into());
+    let k_d = orifice_coefficient(cd, width.into(), rho);
+    let (k, offset, clearance, dp_cr_v) = (k_d.v, offset_d.v, clearance_d.v, dp_cr.v);
     let range = crate::bond_graph::VALUE_BOUND_RANGE;
     let k_bound = k.abs() * (sign.abs() + offset.abs() + 0.5 * clearance.abs());
     let bound = (k_bound.is_finite()
-        && (dp_cr * dp_cr).is_normal()
+        && (dp_cr_v * dp_cr_v).is_normal()
         && sign.abs() <= 1024.0
         && offset.abs() <= range
         && clearance.abs() <= range)
@@ -139,10 +219,18 @@ pub fn variable_orifice(
     Law::Conductance(
         NonlinearLaw::modulated(label, move |dp, m| {
             let (a, da) = smooth_ramp(offset + sign * m, clearance);
-            let (y, dy) = regularised_sqrt(dp, dp_cr);
-            (k * a * y, k * a * dy, k * sign * da * y)
+            let (y, dy) = regularised_sqrt(dp, dp_cr_v);
+            (
+                variable_orifice_flow(k, offset, sign, clearance, dp_cr_v, dp, m),
+                k * a * dy,
+                k * sign * da * y,
+            )
         })
-        .with_value_bound_if(bound),
+        .with_value_bound_if(bound)
+        .with_hyper(move |dp, m| {
+            let c = HyperDual::from;
+            variable_orifice_flow(c(k_d), c(offset_d), sign, c(clearance_d), c(dp_cr), dp, m)
+        }),
     )
 }
 
@@ -178,6 +266,121 @@ mod tests {
         // ramp(x) - ramp(-x) = x exactly (null flow gain unchanged)
         for &x in &[-3e-4, 1e-7, 5e-4] {
             assert!((smooth_ramp(x, 2e-6).0 - smooth_ramp(-x, 2e-6).0 - x).abs() < 1e-18);
+        }
+    }
+
+    use crate::fragments::law_checks::{
+        assert_hand_derivatives, assert_mixed, assert_same_bits, grid,
+    };
+
+    /// The inlet orifice's fluid (`Cd`, `rho`, `dp_cr`) and area, the nozzle's width, null gap
+    /// and rounding.
+    const FLUID: OrificeFluid = OrificeFluid {
+        cd: 0.61,
+        rho: 850.0,
+        dp_cr: 5e3,
+    };
+    const AREA: f64 = 4.9e-8;
+    const NOZZLE: (f64, f64, f64) = (1.26e-3, 3e-5, 3e-7);
+
+    fn nonlinear(law: Law) -> NonlinearLaw {
+        match law {
+            Law::Conductance(law) | Law::Nonlinear(law) => law,
+            Law::Linear(_) => panic!("a linear law"),
+        }
+    }
+
+    fn nozzle(sign: f64) -> NonlinearLaw {
+        let (width, offset, clearance) = NOZZLE;
+        nonlinear(variable_orifice(
+            "nozzle", width, offset, sign, clearance, FLUID,
+        ))
+    }
+
+    #[test]
+    fn fixed_orifice_in_hyper_dual_numbers() {
+        let law = nonlinear(fixed_orifice("R1", AREA, FLUID));
+        let k = orifice_coefficient(FLUID.cd, AREA, FLUID.rho);
+        let dps = grid(FLUID.dp_cr);
+        assert_same_bits(
+            &law,
+            |dp, _| fixed_orifice_flow(k, FLUID.dp_cr, dp),
+            &dps,
+            &[0.0],
+        );
+        // The law as it was before its value had one source: orifice_flow, bit for bit.
+        for &dp in &dps {
+            let old = orifice_flow(dp, AREA, FLUID.cd, FLUID.rho, FLUID.dp_cr);
+            let (v, d, _) = law.eval(dp, 0.0);
+            assert_eq!(
+                (v.to_bits(), d.to_bits()),
+                (old.0.to_bits(), old.1.to_bits())
+            );
+        }
+        let dual = |dp: Dual, _| fixed_orifice_flow(Dual::from(k), Dual::from(FLUID.dp_cr), dp);
+        assert_hand_derivatives(&law, dual, &dps, &[0.0], 1e-12, |_, _| (0.0, 0.0));
+        // d²Q/d(dp) d(dp_cr): dQ/d(dp) varies in dp_cr over dp_cr itself.
+        let with_dp_cr = |dp_cr: Dual| {
+            let fluid = OrificeFluid {
+                cd: Dual::from(FLUID.cd),
+                rho: Dual::from(FLUID.rho),
+                dp_cr,
+            };
+            nonlinear(fixed_orifice("R1", AREA, fluid))
+        };
+        for dp in [-2e4, -3e3, 0.0, 1e3, 7e3, 4e4] {
+            assert_mixed(with_dp_cr, FLUID.dp_cr, 1e-4, FLUID.dp_cr, dp, 0.0, false);
+        }
+    }
+
+    #[test]
+    fn variable_orifice_in_hyper_dual_numbers() {
+        let (width, offset, clearance) = NOZZLE;
+        let k = orifice_coefficient(FLUID.cd, width, FLUID.rho);
+        let dps = grid(FLUID.dp_cr);
+        let ms = grid(offset);
+        for sign in [-1.0, 1.0] {
+            let law = nozzle(sign);
+            let generic =
+                |dp, m| variable_orifice_flow(k, offset, sign, clearance, FLUID.dp_cr, dp, m);
+            assert_same_bits(&law, generic, &dps, &ms);
+            // The closure as it was before its value had one source, bit for bit.
+            for &dp in &dps {
+                for &m in &ms {
+                    let (a, da) = smooth_ramp(offset + sign * m, clearance);
+                    let (y, dy) = regularised_sqrt(dp, FLUID.dp_cr);
+                    let old = (k * a * y, k * a * dy, k * sign * da * y);
+                    let new = law.eval(dp, m);
+                    assert_eq!(
+                        [new.0.to_bits(), new.1.to_bits(), new.2.to_bits()],
+                        [old.0.to_bits(), old.1.to_bits(), old.2.to_bits()]
+                    );
+                }
+            }
+            let c = Dual::from;
+            let dual = |dp, m| {
+                variable_orifice_flow(c(k), c(offset), sign, c(clearance), c(FLUID.dp_cr), dp, m)
+            };
+            // dQ/dm = K g(dp) (1 + x/r)/2 cancels below the ramp's corner (x << -c): the sum
+            // of its terms' magnitudes, K |g| (1 + |x|/r)/2 = K |g|, is its scale.
+            let scale = |dp, _| (0.0, (k * regularised_sqrt(dp, FLUID.dp_cr).0).abs());
+            assert_hand_derivatives(&law, dual, &dps, &ms, 1e-12, scale);
+            // d²Q/d(dp) d(x_f0) and d²Q/d(x_f) d(x_f0): the ramp varies over the clearance.
+            let with_offset = |offset: Dual| {
+                nonlinear(variable_orifice(
+                    "nozzle", width, offset, sign, clearance, FLUID,
+                ))
+            };
+            // At the null gap, two clearances from contact, and at contact.
+            for (dp, m) in [
+                (2e6, 0.0),
+                (-4e5, -sign * (offset - 2.0 * clearance)),
+                (3e3, -sign * offset),
+            ] {
+                for along_m in [false, true] {
+                    assert_mixed(with_offset, offset, 1e-4, clearance, dp, m, along_m);
+                }
+            }
         }
     }
 }

@@ -26,6 +26,7 @@
 
 use crate::bond_graph::{BondGraph, NonlinearLaw, SignalId, StateUnits};
 use crate::fragments::rules;
+use crate::math::dual::{Dual, HyperDual, Real};
 
 /// The move (SI units).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -105,20 +106,76 @@ impl MoveParameters {
     }
 }
 
-/// The minimum-jerk move of amplitude `amplitude` from `t0` over `duration` at time `t`: the
-/// value and its time derivative.
-pub fn minimum_jerk(amplitude: f64, t0: f64, duration: f64, t: f64) -> (f64, f64) {
+/// The minimum-jerk move of amplitude `amplitude` from `t0` over `duration` at time `t`, in any
+/// [`Real`]: 0 before the move, `amplitude` after it, `amplitude s³ (10 - 15 s + 6 s²)`,
+/// `s = (t - t0) / duration`, during it (the branches on the value of `s`).
+#[inline]
+pub fn minimum_jerk_value<S: Real>(amplitude: S, t0: S, duration: S, t: S) -> S {
     let s = (t - t0) / duration;
-    if s <= 0.0 {
-        (0.0, 0.0)
-    } else if s >= 1.0 {
-        (amplitude, 0.0)
+    if s.value() <= 0.0 {
+        S::cst(0.0)
+    } else if s.value() >= 1.0 {
+        amplitude
     } else {
         let s2 = s * s;
-        let value = amplitude * s2 * s * (10.0 + s * (-15.0 + 6.0 * s));
-        let slope = amplitude * 30.0 * s2 * (1.0 - s) * (1.0 - s) / duration;
-        (value, slope)
+        // 10 + s (-15 + 6 s), each sum and product commuted (the same doubles), x - 15 being
+        // x + (-15) in IEEE 754.
+        amplitude * s2 * s * (s * (s * 6.0 - 15.0) + 10.0)
     }
+}
+
+/// The minimum-jerk move of amplitude `amplitude` from `t0` over `duration` at time `t`: the
+/// value ([`minimum_jerk_value`]) and its time derivative.
+#[inline]
+pub fn minimum_jerk(amplitude: f64, t0: f64, duration: f64, t: f64) -> (f64, f64) {
+    let value = minimum_jerk_value(amplitude, t0, duration, t);
+    let s = (t - t0) / duration;
+    let slope = if s <= 0.0 || s >= 1.0 {
+        0.0
+    } else {
+        amplitude * 30.0 * (s * s) * (1.0 - s) * (1.0 - s) / duration
+    };
+    (value, slope)
+}
+
+/// The move in volts as a law of the clock: `k_pot theta_ref(t)` ([`minimum_jerk`] of the
+/// motor angle `angle` from `t_start` over `duration`), with its value bound ([`move_bound`])
+/// and its hyper-dual form ([`NonlinearLaw::with_hyper`]), [`minimum_jerk_value`] with the
+/// constants' derivatives.
+pub fn move_law(
+    angle: impl Into<Dual>,
+    t_start: impl Into<Dual>,
+    duration: impl Into<Dual>,
+    k_pot: impl Into<Dual>,
+) -> NonlinearLaw {
+    let (angle_d, t_start_d, duration_d, k_pot_d) =
+        (angle.into(), t_start.into(), duration.into(), k_pot.into());
+    let m = MoveParameters {
+        angle: angle_d.v,
+        t_start: t_start_d.v,
+        duration: duration_d.v,
+    };
+    let k_pot = k_pot_d.v;
+    NonlinearLaw::new(
+        format!(
+            "minimum-jerk move of {:.4} V over {} s from t = {} s",
+            k_pot * m.angle,
+            m.duration,
+            m.t_start
+        ),
+        {
+            let m = m.clone();
+            move |t| {
+                let (v, dv) = m.profile(t);
+                (k_pot * v, k_pot * dv)
+            }
+        },
+    )
+    .with_value_bound_if(move_bound(&m, k_pot))
+    .with_hyper(move |t, _| {
+        let c = HyperDual::from;
+        c(k_pot_d) * minimum_jerk_value(c(angle_d), c(t_start_d), c(duration_d), t)
+    })
 }
 
 /// The value bound of the move as a law of the clock ([`NonlinearLaw::with_value_bound`]):
@@ -160,22 +217,9 @@ pub fn add_reference(
             derivative: "1",
         },
     );
-    let m = p.clone();
     let volts = g.add_function(
         format!("{prefix}.move"),
-        NonlinearLaw::new(
-            format!(
-                "minimum-jerk move of {:.4} V over {} s from t = {} s",
-                k_pot * m.angle,
-                m.duration,
-                m.t_start
-            ),
-            move |t| {
-                let (v, dv) = m.profile(t);
-                (k_pot * v, k_pot * dv)
-            },
-        )
-        .with_value_bound_if(move_bound(p, k_pot)),
+        move_law(p.angle, p.t_start, p.duration, k_pot),
         clock,
     );
     let reference = g.add_sum(format!("{prefix}.r"), &[(1.0, r), (1.0, volts)]);
@@ -228,5 +272,60 @@ mod tests {
             ..MoveParameters::default()
         };
         assert!(bad.validate().unwrap_err().contains("reference.t_start"));
+    }
+
+    use crate::fragments::law_checks::{
+        assert_hand_derivatives, assert_mixed, assert_same_bits, grid,
+    };
+
+    /// The move as it was before its value had one source.
+    fn minimum_jerk_before(amplitude: f64, t0: f64, duration: f64, t: f64) -> (f64, f64) {
+        let s = (t - t0) / duration;
+        if s <= 0.0 {
+            (0.0, 0.0)
+        } else if s >= 1.0 {
+            (amplitude, 0.0)
+        } else {
+            let s2 = s * s;
+            let value = amplitude * s2 * s * (10.0 + s * (-15.0 + 6.0 * s));
+            let slope = amplitude * 30.0 * s2 * (1.0 - s) * (1.0 - s) / duration;
+            (value, slope)
+        }
+    }
+
+    #[test]
+    fn move_in_hyper_dual_numbers() {
+        let p = MoveParameters::default();
+        let k_pot = crate::fragments::controller::ControllerParameters::default().k_pot;
+        let law = move_law(p.angle, p.t_start, p.duration, k_pot);
+        let mut ts = grid(1.0);
+        for k in 0..=400 {
+            ts.push(p.t_start + p.duration * (f64::from(k) / 200.0 - 0.5));
+        }
+        ts.extend([p.t_start, p.t_end(), f64::NAN, f64::INFINITY]);
+        for &t in &ts {
+            let (v, d) = minimum_jerk(p.angle, p.t_start, p.duration, t);
+            let (v0, d0) = minimum_jerk_before(p.angle, p.t_start, p.duration, t);
+            assert_eq!(
+                (v.to_bits(), d.to_bits()),
+                (v0.to_bits(), d0.to_bits()),
+                "t {t}"
+            );
+        }
+        let generic = |t, _| k_pot * minimum_jerk_value(p.angle, p.t_start, p.duration, t);
+        assert_same_bits(&law, generic, &ts, &[0.0]);
+        let c = Dual::from;
+        let dual = |t, _| c(k_pot) * minimum_jerk_value(c(p.angle), c(p.t_start), c(p.duration), t);
+        // The speed 30 s² (1 - s)² is the sum of 3 s² (10 - 15 s + 6 s²) and s³ (-15 + 12 s),
+        // which cancel towards the end of the move: their magnitudes, at most 60 (k_pot
+        // theta_f / T), are its scale.
+        let scale = |_, _| (60.0 * (k_pot * p.angle / p.duration).abs(), 0.0);
+        assert_hand_derivatives(&law, dual, &ts, &[0.0], 1e-12, scale);
+        // d²r/dt dT: the speed varies in the duration over the duration itself.
+        for k in [1, 5, 10, 17] {
+            let t = p.t_start + p.duration * f64::from(k) / 20.0;
+            let law_of = |duration: Dual| move_law(p.angle, p.t_start, duration, k_pot);
+            assert_mixed(law_of, p.duration, 1e-4, p.duration, t, 0.0, false);
+        }
     }
 }

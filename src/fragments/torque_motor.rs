@@ -33,9 +33,9 @@
 //! Sign conventions: a positive amplifier voltage drives a positive current, a positive force and
 //! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).
 
-use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
 
-use super::controller::AmplifierLimit;
+use super::controller::saturation_law;
 use super::servo_valve::{CoilDrive, ServoValveParameters};
 
 /// Coil current at which the flux state is stated nominal \[A\]: 10 V over the default 80 ohm.
@@ -109,7 +109,7 @@ pub fn add_torque_motor(
 /// The current-feedback amplifier (`drive` = current): the coil voltage
 /// `u = lim(K_i (G_i e_in - i))`, signals `<prefix>.i_demand` (`G_i e_in`), `<prefix>.i_error`,
 /// `<prefix>.K_i` and `<prefix>.u_limited`, the compliance limit `+-U_c` as the power
-/// amplifier's smooth limit ([`AmplifierLimit::Saturating`]). The current is a state function
+/// amplifier's smooth limit ([`super::controller::AmplifierLimit::Saturating`], [`saturation_law`]). The current is a state function
 /// (the flux over `L_bob`), so the loop is not algebraic.
 ///
 /// With the coil `i = u_L / (R_bob + L_bob s)` and ignoring the back-EMF, the current follows its
@@ -128,13 +128,9 @@ pub fn add_current_amplifier(
         &[(1.0, demand), (-1.0, current)],
     );
     let u = g.add_gain(format!("{prefix}.K_i"), p.k_i, error);
-    let limit = AmplifierLimit::Saturating { e_max: p.u_c };
     g.add_function(
         format!("{prefix}.u_limited"),
-        NonlinearLaw::new(format!("compliance limit +-{} V", p.u_c), move |u| {
-            limit.eval(u)
-        })
-        .with_value_bound_if(limit.value_bound()),
+        saturation_law(format!("compliance limit +-{} V", p.u_c), p.u_c),
         u,
     )
 }

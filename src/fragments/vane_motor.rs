@@ -31,6 +31,7 @@
 //! flow `q_valve` is the net flow into chamber 1 (P->A minus A->T).
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, NonlinearLaw, SignalId};
+use crate::math::dual::{Dual, HyperDual, Real};
 use crate::math::{exp, tanh};
 
 use super::flapper_nozzle::restriction;
@@ -113,12 +114,7 @@ pub fn add_vane_motor(
     let i_m_bond = g.bond(rotor, i_m);
     g.bond(rotor, b_m);
     if p.t_s > 0.0 {
-        let (t_c, t_s, omega_s) = (p.t_c, p.t_s, p.omega_s);
-        let law = NonlinearLaw::new(
-            format!("seal friction, running {t_c} N m, breakaway {t_s} N m"),
-            move |omega| friction(t_c, t_s, omega_s, omega),
-        )
-        .with_value_bound_if(friction_bound(t_c, t_s, omega_s));
+        let law = friction_law(p.t_c, p.t_s, p.omega_s);
         let r = g.add_r(format!("{prefix}.friction"), Law::Nonlinear(law));
         g.bond(rotor, r);
     }
@@ -186,6 +182,37 @@ pub fn friction(t_c: f64, t_s: f64, omega_s: f64, omega: f64) -> (f64, f64) {
     (level * th, slope * th + level * (1.0 - th * th) / omega_t)
 }
 
+/// The seal friction torque [`friction`]'s value in any [`Real`]: the same operations, so the
+/// same doubles.
+pub fn friction_value<S: Real>(t_c: S, t_s: S, omega_s: S, omega: S) -> S {
+    let omega_t = omega_s * REGULARISATION;
+    let u = omega / omega_s;
+    let stribeck = S::exp(-u * u);
+    let level = t_c + (t_s - t_c) * stribeck;
+    level * S::tanh(omega / omega_t)
+}
+
+/// The seal friction `<prefix>.friction` as a law of the rotor speed: [`friction`], with its
+/// value bound ([`friction_bound`]) and its hyper-dual form ([`NonlinearLaw::with_hyper`]),
+/// [`friction_value`] with the constants' derivatives.
+pub fn friction_law(
+    t_c: impl Into<Dual>,
+    t_s: impl Into<Dual>,
+    omega_s: impl Into<Dual>,
+) -> NonlinearLaw {
+    let (t_c_d, t_s_d, omega_s_d) = (t_c.into(), t_s.into(), omega_s.into());
+    let (t_c, t_s, omega_s) = (t_c_d.v, t_s_d.v, omega_s_d.v);
+    NonlinearLaw::new(
+        format!("seal friction, running {t_c} N m, breakaway {t_s} N m"),
+        move |omega| friction(t_c, t_s, omega_s, omega),
+    )
+    .with_value_bound_if(friction_bound(t_c, t_s, omega_s))
+    .with_hyper(move |omega, _| {
+        let c = HyperDual::from;
+        friction_value(c(t_c_d), c(t_s_d), c(omega_s_d), omega)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -220,6 +247,47 @@ mod tests {
                 (d - fd).abs() < 1e-6 * d.abs().max(1.0),
                 "{omega}: {d} vs {fd}"
             );
+        }
+    }
+
+    use crate::fragments::law_checks::{
+        assert_hand_derivatives, assert_mixed, assert_same_bits, grid,
+    };
+
+    #[test]
+    fn friction_in_hyper_dual_numbers() {
+        let (t_c, t_s, w_s) = (1.0, 1.5, 0.5);
+        let law = friction_law(t_c, t_s, w_s);
+        let mut omegas = grid(w_s);
+        omegas.extend(grid(REGULARISATION * w_s));
+        assert_same_bits(
+            &law,
+            |w, _| friction_value(t_c, t_s, w_s, w),
+            &omegas,
+            &[0.0],
+        );
+        let dual = |w, _| friction_value(Dual::from(t_c), Dual::from(t_s), Dual::from(w_s), w);
+        // dT/domega = slope tanh + level (1 - tanh²)/omega_t: the Stribeck fall and the
+        // regularisation's rise cancel near the peak torque, so the sum of the terms'
+        // magnitudes is its scale.
+        let scale = |w: f64, _| {
+            let omega_t = REGULARISATION * w_s;
+            let u = w / w_s;
+            let stribeck = exp(-u * u);
+            let th = tanh(w / omega_t);
+            let slope = (t_s - t_c) * stribeck * (2.0 * u / w_s);
+            let level = t_c + (t_s - t_c) * stribeck;
+            (
+                (slope * th).abs() + (level * (1.0 - th * th) / omega_t).abs(),
+                0.0,
+            )
+        };
+        assert_hand_derivatives(&law, dual, &omegas, &[0.0], 1e-12, scale);
+        // d²T/domega domega_s: the law varies in omega_s over omega_s / (omega/omega_t) and
+        // omega_s / (omega/omega_s)², at most omega_s / 26 at these speeds.
+        for w in [-0.6, -0.04, 0.0, 0.02, 0.11, 0.5, 1.3] {
+            let law_of = |w_s: Dual| friction_law(t_c, t_s, w_s);
+            assert_mixed(law_of, w_s, 1e-4, w_s / 30.0, w, 0.0, false);
         }
     }
 }

@@ -33,6 +33,8 @@ use nalgebra::DVector;
 
 use super::beam_functions::gauss_legendre_rule;
 use super::{PlateModel, PlateParameters};
+use crate::bond_graph::NonlinearLaw;
+use crate::math::dual::{Dual, HyperDual, Real};
 
 /// Gauss-Legendre points along the arm: the rigid rotation's moment (`x^3`) exactly, and the
 /// bending shapes of the modes the drag acts on (up to two nodes along the arm).
@@ -99,9 +101,27 @@ pub fn drag_points(
     out
 }
 
-/// The drag law of a point: `(e, de/df) = (c |f| f, 2 c |f|)`.
+/// The drag force `c |f| f` of a point in any [`Real`]: [`law`]'s value.
+#[inline]
+pub fn force<S: Real>(coefficient: S, f: S) -> S {
+    coefficient * f.abs() * f
+}
+
+/// The drag law of a point: `(e, de/df) = (c |f| f, 2 c |f|)` ([`force`] and its derivative).
+#[inline]
 pub fn law(coefficient: f64, f: f64) -> (f64, f64) {
-    (coefficient * f.abs() * f, 2.0 * coefficient * f.abs())
+    (force(coefficient, f), 2.0 * coefficient * f.abs())
+}
+
+/// The drag of a point as an R law in resistance form: [`law`], with its value bound
+/// ([`value_bound`]) and its hyper-dual form ([`NonlinearLaw::with_hyper`]), [`force`] with the
+/// coefficient's derivative.
+pub fn nonlinear_law(coefficient: impl Into<Dual>) -> NonlinearLaw {
+    let c_d = coefficient.into();
+    let c = c_d.v;
+    NonlinearLaw::new(format!("air drag {c:.3e} |v| v"), move |f| law(c, f))
+        .with_value_bound_if(value_bound(c))
+        .with_hyper(move |f, _| force(HyperDual::from(c_d), f))
 }
 
 /// The value bound of [`law`] ([`crate::bond_graph::NonlinearLaw::with_value_bound`]):
@@ -166,6 +186,33 @@ mod tests {
         assert_eq!(model.drag.len(), POINTS_X * POINTS_Y);
         for d in &model.drag {
             assert!(d.velocity.iter().filter(|v| **v != 0.0).count() <= DRAG_MODES);
+        }
+    }
+
+    use crate::fragments::law_checks::{
+        assert_hand_derivatives, assert_mixed, assert_same_bits, grid,
+    };
+
+    #[test]
+    fn drag_in_hyper_dual_numbers() {
+        let c = 0.37;
+        let law = nonlinear_law(c);
+        let vs = grid(1.0);
+        assert_same_bits(&law, |v, _| force(c, v), &vs, &[0.0]);
+        for &v in &vs {
+            // The law as it was before its value had one source.
+            let before = (c * v.abs() * v, 2.0 * c * v.abs());
+            let (e, de, _) = law.eval(v, 0.0);
+            assert_eq!(
+                (e.to_bits(), de.to_bits()),
+                (before.0.to_bits(), before.1.to_bits())
+            );
+        }
+        let dual = |v, _| force(Dual::from(c), v);
+        assert_hand_derivatives(&law, dual, &vs, &[0.0], 1e-12, |_, _| (0.0, 0.0));
+        // d²e/dv dc = 2 |v|: linear in c, the central difference exact but for rounding.
+        for v in [-3.0, -0.2, 0.05, 1.7] {
+            assert_mixed(nonlinear_law, c, 1e-4, c, v, 0.0, false);
         }
     }
 }

@@ -32,7 +32,7 @@ pub mod paper;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, NonlinearLaw, SignalId};
+use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, SignalId};
 
 use super::hub::HubPorts;
 use super::rules;
@@ -642,13 +642,9 @@ pub fn add_plate(
     // quadratic R
     for (k, d) in model.drag.iter().enumerate() {
         let node = g.add_zero(format!("{prefix}.drag[{}].point", k + 1));
-        let c = d.coefficient;
         let r = g.add_r(
             format!("{prefix}.drag[{}]", k + 1),
-            Law::Nonlinear(
-                NonlinearLaw::new(format!("air drag {c:.3e} |v| v"), move |f| drag::law(c, f))
-                    .with_value_bound_if(drag::value_bound(c)),
-            ),
+            Law::Nonlinear(drag::nonlinear_law(d.coefficient)),
         );
         g.bond(node, r);
         for (i, &cj) in coord.iter().enumerate() {

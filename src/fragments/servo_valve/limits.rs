@@ -7,8 +7,14 @@
 //! changes the model at its operating point by `e^(-D/delta)`, which is below round-off for the
 //! defaults (`D/delta` = 20 for the stops, 3500 for the chambers). The linearisation at rest,
 //! and so the fit to `G_est`, does not see them.
+//!
+//! Each law's value is also written once generic in [`Real`] ([`stop_spring_force`],
+//! [`stop_damping_force`], [`chamber_pressure`], on [`softplus_value`] and [`logistic_value`]),
+//! the same operations as its closure and so the same doubles; the laws' hyper-dual forms
+//! ([`NonlinearLaw::with_hyper`]) run it with the constants' derivatives.
 
 use crate::bond_graph::{Law, NonlinearLaw};
+use crate::math::dual::{Dual, HyperDual, Real};
 
 /// Beyond this |z|, `e^-|z|` is 0 in double precision (the smallest subnormal is e^-745.1).
 /// The chambers sit at z = 3500: asking libm for that zero takes its underflow path, which
@@ -27,6 +33,37 @@ pub fn softplus(z: f64) -> (f64, f64) {
     } else {
         let e = crate::math::exp(z);
         (crate::math::ln_1p(e), e / (1.0 + e))
+    }
+}
+
+/// `ln(1 + e^z)` in any [`Real`]: [`softplus`]'s value, the same operations and branches (on
+/// the value of `z`), so the same doubles.
+pub fn softplus_value<S: Real>(z: S) -> S {
+    let zv = z.value();
+    if zv > UNDERFLOW {
+        z
+    } else if zv < -UNDERFLOW {
+        S::cst(0.0)
+    } else if zv > 0.0 {
+        z + S::ln_1p(S::exp(-z))
+    } else {
+        S::ln_1p(S::exp(z))
+    }
+}
+
+/// The logistic `1 / (1 + e^-z)` in any [`Real`]: [`logistic`], the same operations and
+/// branches (on the value of `z`), so the same doubles.
+pub fn logistic_value<S: Real>(z: S) -> S {
+    let zv = z.value();
+    if zv > UNDERFLOW {
+        S::cst(1.0)
+    } else if zv < -UNDERFLOW {
+        S::cst(0.0)
+    } else if zv > 0.0 {
+        S::cst(1.0) / (S::exp(-z) + 1.0)
+    } else {
+        let e = S::exp(z);
+        e / (e + 1.0)
     }
 }
 
@@ -53,6 +90,20 @@ pub fn stop_stiffness(a_s: f64, p_supply: f64, x_max: f64) -> f64 {
     20.0 * a_s * p_supply / x_max
 }
 
+/// The width `delta = x_max / 20` of the spool end stops' contact laws.
+#[inline]
+pub fn stop_width<S: Real>(x_max: S) -> S {
+    x_max / 20.0
+}
+
+/// The force of the spool end stops' contact spring at the spool position `x`, in any
+/// [`Real`]: `k delta (sp((x - x_max)/delta) - sp((-x - x_max)/delta))`, `delta` =
+/// [`stop_width`]; the value of [`spool_stop_spring`]'s law, the same operations.
+pub fn stop_spring_force<S: Real>(x_max: S, k: S, x: S) -> S {
+    let delta = stop_width(x_max);
+    k * delta * (softplus_value((x - x_max) / delta) - softplus_value((-x - x_max) / delta))
+}
+
 /// The spool end stops' contact spring: `F(x) = k delta (sp((x - x_max)/delta) - sp((-x - x_max)/delta))`
 /// pushes the spool back inside `|x| <= x_max` (`delta = x_max / 20`), a law on the spool port of
 /// the spring field (so its state is the spool position `x`, which the field already holds).
@@ -67,8 +118,13 @@ pub fn stop_stiffness(a_s: f64, p_supply: f64, x_max: f64) -> f64 {
 /// `sp(z) <= max(z, 0) + ln 2` with `z± <= |x|/delta`: `|F| <= k |x| + k delta ln 2`; then
 /// `|x| <= x² + 1/4` (`(|x| - 1/2)² >= 0`) and `ln 2 < 1` leaves `0.3 k delta` for rounding.
 /// Declared for `x_max > 0` (a positive `delta`: no 0/0 at the stop) and finite `k`.
-pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
-    let delta = x_max / 20.0;
+///
+/// Its hyper-dual form ([`NonlinearLaw::with_hyper`]) is [`stop_spring_force`] with the
+/// constants' derivatives.
+pub fn spool_stop_spring(x_max: impl Into<Dual>, k: impl Into<Dual>) -> NonlinearLaw {
+    let (x_max_d, k_d) = (x_max.into(), k.into());
+    let (x_max, k) = (x_max_d.v, k_d.v);
+    let delta = stop_width(x_max);
     let e_side =
         move |x: f64| -> f64 { -k * delta * delta * dilog_of_minus_exp((x - x_max) / delta) };
     let e0 = 2.0 * e_side(0.0);
@@ -86,6 +142,25 @@ pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
         (x_max > 0.0 && x_max.is_finite() && k.is_finite())
             .then_some((k.abs(), k.abs() * (0.25 + delta))),
     )
+    .with_hyper(move |x, _| stop_spring_force(HyperDual::from(x_max_d), HyperDual::from(k_d), x))
+}
+
+/// The contact damping coefficient `c_0 = 2 zeta sqrt(k m_v)`, `zeta` = 0.5, of the spool end
+/// stops ([`spool_stop_damping`]).
+#[inline]
+pub fn stop_damping_coefficient<S: Real>(k: S, m_v: S) -> S {
+    (k * m_v).sqrt() * (2.0 * 0.5)
+}
+
+/// The force of the spool end stops' contact damping at the spool speed `v` and position `x`,
+/// in any [`Real`]: `c_0 (sp'(z₊) + sp'(z₋)) v` (`z±` as in [`stop_spring_force`], `c_0` =
+/// [`stop_damping_coefficient`]); the value of [`spool_stop_damping`]'s law, the same
+/// operations.
+pub fn stop_damping_force<S: Real>(x_max: S, c0: S, v: S, x: S) -> S {
+    let delta = stop_width(x_max);
+    let s_hi = logistic_value((x - x_max) / delta);
+    let s_lo = logistic_value((-x - x_max) / delta);
+    c0 * (s_hi + s_lo) * v
 }
 
 /// The spool end stops' contact damping: `e = c(x) v` with `c(x) = c_0 (sp'(z₊) + sp'(z₋))`
@@ -97,9 +172,14 @@ pub fn spool_stop_spring(x_max: f64, k: f64) -> NonlinearLaw {
 /// |x|)`. The logistic `sp'` lies in `[0, 1]`, so `0 <= c(x) <= 2 c_0` and `|e| <= 2 c_0 |v|`;
 /// then `|v| <= v² + 1/4` leaves `c_0 / 2` for rounding. Declared for `x_max > 0` (a positive
 /// `delta`) and a finite `c_0`.
-pub fn spool_stop_damping(x_max: f64, k: f64, m_v: f64) -> Law {
-    let delta = x_max / 20.0;
-    let c0 = 2.0 * 0.5 * (k * m_v).sqrt();
+///
+/// Its hyper-dual form ([`NonlinearLaw::with_hyper`]) is [`stop_damping_force`] with the
+/// constants' derivatives.
+pub fn spool_stop_damping(x_max: impl Into<Dual>, k: impl Into<Dual>, m_v: impl Into<Dual>) -> Law {
+    let x_max_d = x_max.into();
+    let c0_d = stop_damping_coefficient(k.into(), m_v.into());
+    let (x_max, c0) = (x_max_d.v, c0_d.v);
+    let delta = stop_width(x_max);
     let bound =
         (x_max > 0.0 && x_max.is_finite() && c0.is_finite()).then_some((2.0 * c0.abs(), c0.abs()));
     Law::Nonlinear(
@@ -111,7 +191,10 @@ pub fn spool_stop_damping(x_max: f64, k: f64, m_v: f64) -> Law {
             let dc = c0 * (s_hi * (1.0 - s_hi) - s_lo * (1.0 - s_lo)) / delta;
             (c * v, c, dc * v)
         })
-        .with_value_bound_if(bound),
+        .with_value_bound_if(bound)
+        .with_hyper(move |v, x| {
+            stop_damping_force(HyperDual::from(x_max_d), HyperDual::from(c0_d), v, x)
+        }),
     )
 }
 
@@ -122,6 +205,14 @@ pub const CAVITATION_PRESSURE: f64 = 0.1e5 - 1.01325e5;
 
 /// Width of the cavitation transition \[Pa\] (0.02 bar).
 pub const CAVITATION_WIDTH: f64 = 2e3;
+
+/// The pressure of an oil chamber of stiffness `k = beta / V` holding the compressed oil volume
+/// `q`, in any [`Real`]: `p_c + s sp((k q - p_c) / s)`; the value of [`chamber`]'s law, the
+/// same operations.
+pub fn chamber_pressure<S: Real>(k: S, q: S) -> S {
+    softplus_value((k * q - CAVITATION_PRESSURE) / CAVITATION_WIDTH) * CAVITATION_WIDTH
+        + CAVITATION_PRESSURE
+}
 
 /// The chamber law `p(q)` of an oil volume `volume` with bulk modulus `beta` and a cavitation
 /// floor: `p = p_c + s sp((q beta / volume - p_c) / s)` with `p_c` = [`CAVITATION_PRESSURE`] and
@@ -142,8 +233,12 @@ pub const CAVITATION_WIDTH: f64 = 2e3;
 /// `|p| <= |p_c| + k |q| + |p_c| + s ln 2`, and `|q| <= q² + 1/4`; `ln 2 < 1` leaves `0.3 s`
 /// (600 Pa) for rounding. For `|q| <= VALUE_BOUND_RANGE`, `k q` stays finite for any `k`
 /// below 2^520 (declared only then).
-pub fn chamber(volume: f64, beta: f64) -> Law {
-    let k = beta / volume;
+///
+/// Its hyper-dual form ([`NonlinearLaw::with_hyper`]) is [`chamber_pressure`] with the
+/// stiffness's derivative.
+pub fn chamber(volume: impl Into<Dual>, beta: impl Into<Dual>) -> Law {
+    let k_d = beta.into() / volume.into();
+    let k = k_d.v;
     let (pc, s) = (CAVITATION_PRESSURE, CAVITATION_WIDTH);
     let tail = move |q: f64| dilog_of_minus_exp(-(k * q - pc) / s);
     let tail0 = tail(0.0);
@@ -159,7 +254,8 @@ pub fn chamber(volume: f64, beta: f64) -> Law {
         )
         .with_value_bound_if(
             (k.abs() < 2f64.powi(520)).then_some((k.abs(), 2.0 * (pc.abs() + s) + 0.25 * k.abs())),
-        ),
+        )
+        .with_hyper(move |q, _| chamber_pressure(HyperDual::from(k_d), q)),
     )
 }
 
@@ -427,6 +523,136 @@ mod tests {
             let fd = (ch.eval(q + h, 0.0).0 - ch.eval(q - h, 0.0).0) / (2.0 * h);
             let de = ch.eval(q, 0.0).1;
             assert!((de - fd).abs() <= 1e-5 * k, "q {q}: {de} vs {fd}");
+        }
+    }
+
+    use crate::fragments::law_checks::{
+        assert_hand_derivatives, assert_mixed, assert_same_bits, grid,
+    };
+
+    /// The default spool stroke, a stop stiffness of its order and the spool's mass.
+    const X_MAX: f64 = 4e-4;
+    const K_STOP: f64 = 7e6;
+    const M_V: f64 = 3e-3;
+
+    #[test]
+    fn softplus_and_logistic_in_any_real_are_the_f64_ones() {
+        let mut zs = grid(1.0);
+        zs.extend([
+            745.9,
+            746.0,
+            746.1,
+            -745.9,
+            -746.0,
+            -746.1,
+            3500.0,
+            -3500.0,
+            f64::NAN,
+        ]);
+        for z in zs {
+            let (sp, sig) = softplus(z);
+            assert_eq!(softplus_value(z).to_bits(), sp.to_bits(), "sp({z})");
+            assert_eq!(logistic_value(z).to_bits(), sig.to_bits(), "sp'({z})");
+            let d = softplus_value(Dual::new(z, 1.0));
+            assert_eq!(d.v.to_bits(), sp.to_bits());
+            if sig.is_finite() && sp.is_finite() {
+                assert!(
+                    (d.d - sig).abs() <= 1e-15 * sig,
+                    "sp'({z}): {} vs {sig}",
+                    d.d
+                );
+                // sp'' = sigma (1 - sigma) = e^-|z| / (1 + e^-|z|)², the logistic's derivative
+                let l = logistic_value(Dual::new(z, 1.0));
+                let e = crate::math::exp(-z.abs());
+                let exact = e / ((1.0 + e) * (1.0 + e));
+                assert!(
+                    (l.d - exact).abs() <= 1e-14 * exact,
+                    "sp''({z}): {} vs {exact}",
+                    l.d
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn stop_spring_in_hyper_dual_numbers() {
+        let law = spool_stop_spring(X_MAX, K_STOP);
+        let xs = grid(X_MAX);
+        assert_same_bits(
+            &law,
+            |x, _| stop_spring_force(X_MAX, K_STOP, x),
+            &xs,
+            &[0.0],
+        );
+        let dual = |x, _| stop_spring_force(Dual::from(X_MAX), Dual::from(K_STOP), x);
+        assert_hand_derivatives(&law, dual, &xs, &[0.0], 1e-12, |_, _| (0.0, 0.0));
+        // d²F/dx dx_max: the stiffness k (sp'(z₊) + sp'(z₋)) moves with the stop over its
+        // width delta = x_max/20 (not at null, where z± = -20 whatever x_max).
+        for x in [1e-4, 3.9e-4, 4e-4, 4.2e-4, -4.1e-4] {
+            let law_of = |x_max: Dual| spool_stop_spring(x_max, K_STOP);
+            assert_mixed(law_of, X_MAX, 1e-4, X_MAX / 20.0, x, 0.0, false);
+        }
+    }
+
+    #[test]
+    fn stop_damping_in_hyper_dual_numbers() {
+        let Law::Nonlinear(law) = spool_stop_damping(X_MAX, K_STOP, M_V) else {
+            unreachable!()
+        };
+        let c0 = stop_damping_coefficient(K_STOP, M_V);
+        let (vs, xs) = (grid(0.3), grid(X_MAX));
+        assert_same_bits(&law, |v, x| stop_damping_force(X_MAX, c0, v, x), &vs, &xs);
+        let dual = |v, x| stop_damping_force(Dual::from(X_MAX), Dual::from(c0), v, x);
+        // The hand-coded de/dx = c_0 v (s₊(1 - s₊) - s₋(1 - s₋)) / delta cancels twice: in
+        // the difference near null, where the two sides are alike, and in 1 - s past a stop,
+        // where s -> 1 (a few ulps of s, e^-z of 1 - s). Its error is then a few ulps of
+        // c_0 |v| (s₊ + s₋) / delta, its scale.
+        let scale = |v: f64, x: f64| {
+            let delta = stop_width(X_MAX);
+            let s_hi = logistic((x - X_MAX) / delta);
+            let s_lo = logistic((-x - X_MAX) / delta);
+            (0.0, (c0 * v * (s_hi + s_lo) / delta).abs())
+        };
+        assert_hand_derivatives(&law, dual, &vs, &xs, 1e-12, scale);
+        let law_of = |x_max: Dual| {
+            let Law::Nonlinear(law) = spool_stop_damping(x_max, K_STOP, M_V) else {
+                unreachable!()
+            };
+            law
+        };
+        for (v, x) in [(0.2, 3.9e-4), (-0.3, 4e-4), (0.1, -4.2e-4)] {
+            for along_m in [false, true] {
+                assert_mixed(law_of, X_MAX, 1e-4, X_MAX / 20.0, v, x, along_m);
+            }
+        }
+    }
+
+    #[test]
+    fn chamber_in_hyper_dual_numbers() {
+        let (volume, beta) = (1.5e-4, 1.4e9);
+        let Law::Nonlinear(law) = chamber(volume, beta) else {
+            unreachable!()
+        };
+        let k = beta / volume;
+        // From deep in the cavity to far above the supply pressure, through the knee at
+        // q = p_c / k (-1e-8 m³).
+        let mut qs = grid(1e-8);
+        qs.extend([-9.8e-9, -9.7e-9, -9.9e-9, 2e-6, 3e-6]);
+        assert_same_bits(&law, |q, _| chamber_pressure(k, q), &qs, &[0.0]);
+        let dual = |q, _| chamber_pressure(Dual::from(k), q);
+        assert_hand_derivatives(&law, dual, &qs, &[0.0], 1e-12, |_, _| (0.0, 0.0));
+        // d²p/dq dbeta through the knee: k sp'((k q - p_c)/s) varies in beta over s V / |q|
+        // (3e7 Pa there).
+        let law_of = |beta: Dual| {
+            let Law::Nonlinear(law) = chamber(volume, beta) else {
+                unreachable!()
+            };
+            law
+        };
+        for z in [-2.0, 0.0, 1.5] {
+            let q = (CAVITATION_PRESSURE + z * CAVITATION_WIDTH) / k;
+            let scale = CAVITATION_WIDTH * volume / q.abs();
+            assert_mixed(law_of, beta, 1e-4, scale, q, 0.0, false);
         }
     }
 }
