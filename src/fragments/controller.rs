@@ -91,8 +91,8 @@ impl<S: Copy> ControllerParameters<S> {
             a2: f(self.a2, other.a2),
             k_pot: f(self.k_pot, other.k_pot),
             e_max: f(self.e_max, other.e_max),
-            saturation: self.saturation.clone(),
-            external: self.external.clone(),
+            saturation: self.saturation,
+            external: self.external,
             k_pl: f(self.k_pl, other.k_pl),
             f_pl: f(self.f_pl, other.f_pl),
         }

@@ -52,6 +52,7 @@
 use nalgebra::DMatrix;
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, SignalId};
+use crate::math::dual::Dual;
 
 use super::orifice::{fixed_orifice, variable_orifice, OrificeFluid};
 use super::servo_valve::limits::{spool_stop_damping, spool_stop_spring};
@@ -96,14 +97,15 @@ pub(crate) fn restriction(
 
 /// Adds BG2 under `prefix`: the pilot stage between the `supply` and `tank` 0-junctions,
 /// modulated by the flapper displacement `x_f`, and the spool.
-pub fn add_flapper_nozzle(
+pub fn add_flapper_nozzle<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ServoValveParameters,
+    p: &ServoValveParameters<S>,
     supply: ElementId,
     tank: ElementId,
     x_f: SignalId,
 ) -> FlapperNozzlePorts {
+    let p = &p.map(Into::<Dual>::into);
     let fluid = p.fluid();
     let a0 = std::f64::consts::PI * p.d_0 * p.d_0 / 4.0;
     let nozzle_width = std::f64::consts::PI * p.d_n;
@@ -116,16 +118,16 @@ pub fn add_flapper_nozzle(
     let c_ha = g.add_c(format!("{prefix}.C_Ha"), limits::chamber(p.v_h, p.beta));
     let c_hb = g.add_c(format!("{prefix}.C_Hb"), limits::chamber(p.v_h, p.beta));
     // Compressed volume at the supply pressure.
-    g.set_nominal(c_ha, &[p.v_h / p.beta * p.p_supply]);
+    g.set_nominal(c_ha, &[(p.v_h / p.beta * p.p_supply).v]);
     g.set_domains(c_ha, &[Domain::Hydraulic]);
     g.set_domains(c_hb, &[Domain::Hydraulic]);
-    g.set_nominal(c_hb, &[p.v_h / p.beta * p.p_supply]);
+    g.set_nominal(c_hb, &[(p.v_h / p.beta * p.p_supply).v]);
     let ca_bond = g.bond(chamber_a, c_ha);
     let cb_bond = g.bond(chamber_b, c_hb);
 
     let r1 = g.add_r(format!("{prefix}.R1"), fixed_orifice("R1", a0, fluid));
     let r2 = g.add_r(format!("{prefix}.R2"), fixed_orifice("R2", a0, fluid));
-    let nozzle = |label: &str, sign: f64, fluid: OrificeFluid| -> Law {
+    let nozzle = |label: &str, sign: f64, fluid: OrificeFluid<Dual>| -> Law {
         variable_orifice(label, nozzle_width, p.x_f0, sign, gap_rounding, fluid)
     };
     let rna = g.add_r_modulated(
@@ -154,7 +156,7 @@ pub fn add_flapper_nozzle(
     let b_v = g.add_r(format!("{prefix}.b_v"), p.b_v);
     g.bond(spool, m_v);
     g.bond(spool, b_v);
-    g.set_nominal(m_v, &[p.m_v * 0.1]); // 0.1 m/s
+    g.set_nominal(m_v, &[p.m_v.v * 0.1]); // 0.1 m/s
     g.set_domains(m_v, &[Domain::Translation]);
     let x_v = g.add_signal_port(format!("{prefix}.x_v"));
     let stop = g.add_r_modulated(
@@ -181,21 +183,29 @@ pub fn add_flapper_nozzle(
 /// documentation): port 1 on the `flapper` junction (state `<prefix>.springs.q[1]` = `x_f`),
 /// port 2 on the `spool` junction (`.q[2]` = `x_v`). Connects the signal ports `x_f` and `x_v`.
 #[allow(clippy::too_many_arguments)]
-pub fn add_spring_field(
+pub fn add_spring_field<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ServoValveParameters,
+    p: &ServoValveParameters<S>,
     flapper: ElementId,
     spool: ElementId,
     x_f: SignalId,
     x_v: SignalId,
 ) -> ElementId {
-    let k = DMatrix::from_row_slice(2, 2, &[p.k_f + p.k_w, p.k_w, p.k_w, p.k_v + p.k_w]);
+    let p = &p.map(Into::<Dual>::into);
+    let k = [p.k_f + p.k_w, p.k_w, p.k_w, p.k_v + p.k_w];
+    let part = |f: fn(&Dual) -> f64| DMatrix::from_row_slice(2, 2, &k.map(|x| f(&x)));
     let stop = spool_stop_spring(p.x_v_max, p.stop_stiffness());
-    let field =
-        g.add_c_field_with_port_laws(format!("{prefix}.springs"), k, vec![None, Some(stop)]);
+    let field = g.add_c_field_with_port_laws(
+        format!("{prefix}.springs"),
+        part(|x| x.v),
+        vec![None, Some(stop)],
+    );
+    if k.iter().any(|x| x.d != 0.0) {
+        g.set_field_derivative(field, part(|x| x.d));
+    }
     // The flapper's null gap, the spool's stroke.
-    g.set_nominal(field, &[p.x_f0, p.x_v_max]);
+    g.set_nominal(field, &[p.x_f0.v, p.x_v_max.v]);
     g.set_domains(field, &[Domain::Translation, Domain::Translation]);
     g.bond(flapper, field);
     g.bond(spool, field);

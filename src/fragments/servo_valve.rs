@@ -54,6 +54,7 @@ pub use parameters::{CoilDrive, ServoValveParameters};
 pub use rest::rest_state;
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
+use crate::math::dual::Dual;
 
 use super::controller::{self, ControllerParameters};
 use super::flapper_nozzle::{add_flapper_nozzle, add_spring_field};
@@ -104,12 +105,13 @@ pub struct ServoValvePorts {
 /// Adds the full servo actuator (BG1 + BG2 + feedback wire + BG3, supply and tank) under
 /// `prefix`. The valve command port is left unconnected. Rejects invalid parameters (a supply
 /// pressure of zero or below, with an error naming `servo_valve.p_supply`).
-pub fn add_servo_valve(
+pub fn add_servo_valve<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ServoValveParameters,
+    p: &ServoValveParameters<S>,
 ) -> Result<ServoValvePorts, String> {
-    p.validate()?;
+    let p = &p.map(Into::<Dual>::into);
+    p.map(|x| x.v).validate()?;
     let omega_port = g.add_signal_port(format!("{prefix}.omega_port"));
     let theta = g.add_integrator(format!("{prefix}.theta_a"), omega_port);
     g.set_integrator_nominal(theta, 1.0);

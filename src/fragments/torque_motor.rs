@@ -34,6 +34,7 @@
 //! a positive `x_f` (the flapper moves towards nozzle A, raising control pressure `p_a`).
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
+use crate::math::dual::Dual;
 
 use super::controller::saturation_law;
 use super::servo_valve::{CoilDrive, ServoValveParameters};
@@ -60,11 +61,12 @@ pub struct TorqueMotorPorts {
 
 /// Adds BG1 under `prefix` (e.g. "servo_valve"): element names `<prefix>.R_bob`, `.L_bob`,
 /// `.k_phi`, `.m_f`, `.b_f`. The flapper stiffness `k_f` is added with the spring field.
-pub fn add_torque_motor(
+pub fn add_torque_motor<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ServoValveParameters,
+    p: &ServoValveParameters<S>,
 ) -> TorqueMotorPorts {
+    let p = &p.map(Into::<Dual>::into);
     let command = g.add_signal_port(format!("{prefix}.e_in"));
     let coil_voltage = g.add_signal_port(format!("{prefix}.u_coil"));
     let amp = g.add_se(format!("{prefix}.amplifier"), coil_voltage);
@@ -76,8 +78,8 @@ pub fn add_torque_motor(
     let m_f = g.add_i(format!("{prefix}.m_f"), p.m_f);
     let b_f = g.add_r(format!("{prefix}.b_f"), p.b_f);
     // Flux at the nominal current; flapper momentum at 50 mm/s.
-    g.set_nominal(l_bob, &[p.l_bob * NOMINAL_CURRENT]);
-    g.set_nominal(m_f, &[p.m_f * 0.05]);
+    g.set_nominal(l_bob, &[p.l_bob.v * NOMINAL_CURRENT]);
+    g.set_nominal(m_f, &[p.m_f.v * 0.05]);
     g.set_domains(l_bob, &[Domain::Electrical]);
     g.set_domains(m_f, &[Domain::Translation]);
 
@@ -115,13 +117,14 @@ pub fn add_torque_motor(
 /// With the coil `i = u_L / (R_bob + L_bob s)` and ignoring the back-EMF, the current follows its
 /// demand as `i / (G_i e_in) = K_i / (R_bob + K_i + L_bob s)`: a lag at `(R_bob + K_i) / L_bob`
 /// (1.0 kHz with the defaults) in place of the voltage drive's `R_bob / L_bob` (64 1/s).
-pub fn add_current_amplifier(
+pub fn add_current_amplifier<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ServoValveParameters,
+    p: &ServoValveParameters<S>,
     command: SignalId,
     current: SignalId,
 ) -> SignalId {
+    let p = &p.map(Into::<Dual>::into);
     let demand = g.add_gain(format!("{prefix}.i_demand"), p.g_i, command);
     let error = g.add_sum(
         format!("{prefix}.i_error"),

@@ -66,21 +66,22 @@ pub struct VaneMotorPorts {
 }
 
 /// Adds BG3 under `prefix`, between `supply` and `tank`, with the spool position `x_v`.
-pub fn add_vane_motor(
+pub fn add_vane_motor<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ServoValveParameters,
+    p: &ServoValveParameters<S>,
     supply: ElementId,
     tank: ElementId,
     x_v: SignalId,
 ) -> VaneMotorPorts {
+    let p = &p.map(Into::<Dual>::into);
     let fluid = p.fluid();
     let chamber_1 = g.add_zero(format!("{prefix}.chamber_1"));
     let chamber_2 = g.add_zero(format!("{prefix}.chamber_2"));
     let c_1 = g.add_c(format!("{prefix}.C_1"), limits::chamber(p.v_1, p.beta));
     let c_2 = g.add_c(format!("{prefix}.C_2"), limits::chamber(p.v_1, p.beta));
-    g.set_nominal(c_1, &[p.v_1 / p.beta * p.p_supply]);
-    g.set_nominal(c_2, &[p.v_1 / p.beta * p.p_supply]);
+    g.set_nominal(c_1, &[(p.v_1 / p.beta * p.p_supply).v]);
+    g.set_nominal(c_2, &[(p.v_1 / p.beta * p.p_supply).v]);
     g.set_domains(c_1, &[Domain::Hydraulic]);
     g.set_domains(c_2, &[Domain::Hydraulic]);
     let c1_bond = g.bond(chamber_1, c_1);
@@ -121,7 +122,7 @@ pub fn add_vane_motor(
     // The rotor's momentum at 1 rad/s: the speed of a slewing move (the default 30 deg in 2 s
     // peaks at 0.57 rad/s). 10 rad/s let an importer's BDF at rtol 1e-6 miss the rotor's speed
     // by 2e-4 of its range in that move (docs/model-exchange.md).
-    g.set_nominal(i_m, &[p.i_m]);
+    g.set_nominal(i_m, &[p.i_m.v]);
     g.set_domains(i_m, &[Domain::Rotation]);
 
     let p_1 = g.add_effort_sensor(format!("{prefix}.p_1"), c1_bond);

@@ -53,11 +53,10 @@ macro_rules! values_only {
 
 /// [`bond_graph_and_plate`] from parameters in dual numbers: the model built for the parameter
 /// whose derivatives they carry ([`Parameters::seeded`]), its constants with their derivatives
-/// (`crate::model::sensitivity`). The LOES and the torsion bar's stiffness carry them; the
-/// other parts refuse a parameter with a derivative (`values_only`).
+/// (`crate::model::sensitivity`). The LOES, the servo valve and the torsion bar's stiffness
+/// carry them; the other parts refuse a parameter with a derivative (`values_only`).
 pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
     let controller = values_only!(p.controller, "the controller (controller.*)");
-    let servo_valve = values_only!(p.servo_valve, "the servo valve (servo_valve.*)");
     let reference = values_only!(p.reference, "the command generator's move (reference.*)");
     let limits = values_only!(p.limits, "the validity monitors");
     let plate_parameters = values_only!(p.plate, "the plate and hub (plate.*, hub.I_H)");
@@ -112,7 +111,7 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
             )
         }
         HydraulicsModel::ServoValve => {
-            let sv = servo_valve::add_servo_valve(&mut g, "servo_valve", &servo_valve)?;
+            let sv = servo_valve::add_servo_valve(&mut g, "servo_valve", &p.servo_valve)?;
             servo_valve::add_valve_outputs(&mut g, &sv);
             (
                 sv.rotor,

@@ -117,10 +117,10 @@ impl<S: Copy> PlateParameters<S> {
         f: impl Fn(S, T) -> U,
     ) -> PlateParameters<U> {
         PlateParameters {
-            formulation: self.formulation.clone(),
-            root: self.root.clone(),
-            n: self.n.clone(),
-            m: self.m.clone(),
+            formulation: self.formulation,
+            root: self.root,
+            n: self.n,
+            m: self.m,
             e: f(self.e, other.e),
             rho: f(self.rho, other.rho),
             a: f(self.a, other.a),

@@ -86,8 +86,8 @@ pub fn logistic(z: f64) -> f64 {
 
 /// Stiffness of the spool end stops \[N/m\]: the largest pilot force, `A_s p_s` (275 N with the
 /// defaults), is held within a twentieth of the stroke past the stop.
-pub fn stop_stiffness(a_s: f64, p_supply: f64, x_max: f64) -> f64 {
-    20.0 * a_s * p_supply / x_max
+pub fn stop_stiffness<S: Real>(a_s: S, p_supply: S, x_max: S) -> S {
+    a_s * 20.0 * p_supply / x_max
 }
 
 /// The width `delta = x_max / 20` of the spool end stops' contact laws.

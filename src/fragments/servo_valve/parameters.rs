@@ -10,6 +10,7 @@ pub const D_M: f64 = 1e-5;
 pub const LOES_D_M: f64 = 8.04e-5;
 use super::super::orifice::OrificeFluid;
 use crate::fragments::rules;
+use crate::math::dual::Real;
 
 /// How the power amplifier drives the torque motor's coil (`servo_valve.drive`).
 ///
@@ -151,7 +152,7 @@ impl<S: Copy> ServoValveParameters<S> {
             dp_cr: f(self.dp_cr, other.dp_cr),
             r_bob: f(self.r_bob, other.r_bob),
             l_bob: f(self.l_bob, other.l_bob),
-            drive: self.drive.clone(),
+            drive: self.drive,
             g_i: f(self.g_i, other.g_i),
             k_i: f(self.k_i, other.k_i),
             u_c: f(self.u_c, other.u_c),
@@ -260,9 +261,9 @@ impl Default for ServoValveParameters {
     }
 }
 
-impl ServoValveParameters {
+impl<S: Real> ServoValveParameters<S> {
     /// The fluid constants of the orifice law.
-    pub fn fluid(&self) -> OrificeFluid {
+    pub fn fluid(&self) -> OrificeFluid<S> {
         OrificeFluid {
             cd: self.cd,
             rho: self.rho,
@@ -271,21 +272,23 @@ impl ServoValveParameters {
     }
 
     /// Spool end area `pi d_s^2 / 4` \[m^2\].
-    pub fn spool_area(&self) -> f64 {
-        std::f64::consts::PI * self.d_s * self.d_s / 4.0
+    pub fn spool_area(&self) -> S {
+        S::cst(std::f64::consts::PI) * self.d_s * self.d_s / 4.0
     }
 
     /// Stiffness of the spool end stops' contact spring \[N/m\]
     /// ([`super::limits::stop_stiffness`] of the spool area and the supply-to-tank pressure).
-    pub fn stop_stiffness(&self) -> f64 {
+    pub fn stop_stiffness(&self) -> S {
         super::limits::stop_stiffness(self.spool_area(), self.p_supply - self.p_tank, self.x_v_max)
     }
 
     /// Null flow gain of the four-way stage `Cd w sqrt((p_s - p_t)/rho)` \[m^2/s\].
-    pub fn flow_gain(&self) -> f64 {
+    pub fn flow_gain(&self) -> S {
         self.cd * self.w * ((self.p_supply - self.p_tank) / self.rho).sqrt()
     }
+}
 
+impl ServoValveParameters {
     /// Every constant with the FMU variable it is (`servo_valve.<name>`), in the order of the
     /// model description.
     pub fn named(&self) -> [(&'static str, f64); 35] {

@@ -74,24 +74,7 @@ fn newton(
     for _ in 0..50 {
         model.derivatives(&x, u, &mut f);
         model.jacobian(&x, u, &mut jac);
-        // A state whose rate depends on no state (a clock) has no rest: it stays at its guess.
-        for (i, fi) in f.iter_mut().enumerate() {
-            if jac.row(i).iter().all(|&v| v == 0.0) {
-                *fi = 0.0;
-            }
-        }
-        // Solve in scaled variables x = S z: (S^-1 J S) dz = -S^-1 f, a matrix of rates (1/s).
-        let js = DMatrix::from_fn(n, n, |i, j| jac[(i, j)] * scale[j] / scale[i]);
-        let rhs = DVector::from_iterator(n, (0..n).map(|i| -f[i] / scale[i]));
-        let dz = match by_lu.then(|| lu_step(&js, &rhs)).flatten() {
-            Some(dz) => dz,
-            None => {
-                let svd = js.svd(true, true);
-                let eps = 1e-13 * svd.singular_values.max();
-                svd.solve(&rhs, eps)
-                    .map_err(|e| format!("servo valve rest state: {e}"))?
-            }
-        };
+        let dz = newton_step(&jac, &f, scale, by_lu)?;
         let mut step = 0.0f64;
         for i in 0..n {
             x[i] += scale[i] * dz[i];
@@ -102,6 +85,59 @@ fn newton(
         }
     }
     Err("servo valve rest state: Newton's method did not converge".into())
+}
+
+/// The derivative of the rest state `x0` ([`rest_state`]) along a parameter whose partial
+/// derivative of the rates at `x0` is `f_p` (`∂f/∂p`): differentiating `f(x0(p), p) = 0` on the
+/// equations the rest state solves, `J dx0/dp = -∂f/∂p`, solved as a Newton step is (the same
+/// rows void, the same free directions held: their derivative 0). Exact: the step is the
+/// implicit function's derivative. `scale` as [`rest_state`]'s.
+pub fn rest_state_derivative(
+    model: &CompiledModel,
+    x0: &[f64],
+    u: &[f64],
+    f_p: &[f64],
+    scale: &[f64],
+) -> Result<Vec<f64>, String> {
+    let n = model.n_states();
+    let mut jac = DMatrix::zeros(n, n);
+    model.jacobian(x0, u, &mut jac);
+    let dz = newton_step(&jac, f_p, scale, true)?;
+    Ok((0..n).map(|i| scale[i] * dz[i]).collect())
+}
+
+/// The Newton step `dz` (in the scaled variables `x = S z`) for the rates `f` with the Jacobian
+/// `jac` (see [`rest_state`]): a rate whose row of `jac` is zero (a clock) is left out, and the
+/// step is the LU one where it applies (`by_lu`), the least-norm one by SVD elsewhere.
+fn newton_step(
+    jac: &DMatrix<f64>,
+    f: &[f64],
+    scale: &[f64],
+    by_lu: bool,
+) -> Result<DVector<f64>, String> {
+    let n = f.len();
+    // A state whose rate depends on no state (a clock) has no rest: it stays at its guess.
+    let f: Vec<f64> = (0..n)
+        .map(|i| {
+            if jac.row(i).iter().all(|&v| v == 0.0) {
+                0.0
+            } else {
+                f[i]
+            }
+        })
+        .collect();
+    // Solve in scaled variables x = S z: (S^-1 J S) dz = -S^-1 f, a matrix of rates (1/s).
+    let js = DMatrix::from_fn(n, n, |i, j| jac[(i, j)] * scale[j] / scale[i]);
+    let rhs = DVector::from_iterator(n, (0..n).map(|i| -f[i] / scale[i]));
+    match by_lu.then(|| lu_step(&js, &rhs)).flatten() {
+        Some(dz) => Ok(dz),
+        None => {
+            let svd = js.svd(true, true);
+            let eps = 1e-13 * svd.singular_values.max();
+            svd.solve(&rhs, eps)
+                .map_err(|e| format!("servo valve rest state: {e}"))
+        }
+    }
 }
 
 /// The Newton step `js dz = rhs` by LU with partial pivoting, if it applies (see
