@@ -10,7 +10,10 @@
 //!
 //! `--hsp PATH` (repeatable; default: the `hsp` beside this binary) times each build given, the
 //! rounds interleaved, so that a build before a change and after it are measured side by side in
-//! one run. The data are the generating model's responses without noise (the noisy case of the
+//! one run. A build that has `--sensitivities` is timed twice, with the exact sensitivities and
+//! with central differences (`--sensitivities central`), side by side; in this process the bench
+//! also times the exact derivatives of one linearisation with respect to the three parameters
+//! ([`linearization_at_rest_with_derivatives`]), what an exact Jacobian costs the model. The data are the generating model's responses without noise (the noisy case of the
 //! docs takes the same number of iterations give or take one; the iterations and evaluations
 //! printed are this run's). The machine's load (`/proc/loadavg`, the 1-minute average) is
 //! printed before and after.
@@ -28,6 +31,7 @@ use hydraulic_slewing_plate::fmu::{Experiment, Values};
 use hydraulic_slewing_plate::model::assembly::Assembled;
 use hydraulic_slewing_plate::model::frf::{output_of, state_response_at};
 use hydraulic_slewing_plate::model::parameters::{set_by_name, Parameters};
+use hydraulic_slewing_plate::model::sensitivity::linearization_at_rest_with_derivatives;
 use hydraulic_slewing_plate::model::variables::VARIABLES;
 
 /// The generating values of the docs' synthetic case (defaults 1.4e9 Pa, 0.02, 2500 N m/rad).
@@ -127,9 +131,26 @@ fn main() {
         OUTPUTS.join(", "),
         machine::load()
     );
-    let run = |hsp: &Path| -> (f64, serde_json::Value) {
+    // Each build, and each way of its sensitivities where it has the choice.
+    let mut variants: Vec<(PathBuf, Option<&str>)> = Vec::new();
+    for hsp in &builds {
+        let help = Command::new(hsp)
+            .args(["identify", "--help"])
+            .output()
+            .expect("running hsp");
+        if String::from_utf8_lossy(&help.stdout).contains("--sensitivities") {
+            variants.push((hsp.clone(), Some("exact")));
+            variants.push((hsp.clone(), Some("central")));
+        } else {
+            variants.push((hsp.clone(), None));
+        }
+    }
+    let run = |hsp: &Path, way: Option<&str>| -> (f64, serde_json::Value) {
         let mut cmd = Command::new(hsp);
         cmd.args(["identify", "--json"]);
+        if let Some(way) = way {
+            cmd.args(["--sensitivities", way]);
+        }
         for f in &frfs {
             cmd.args(["--frf", f]);
         }
@@ -147,20 +168,35 @@ fn main() {
         );
         (t, serde_json::from_slice(&out.stdout).expect("JSON"))
     };
-    let mut times = vec![Vec::new(); builds.len()];
-    let mut last = vec![serde_json::Value::Null; builds.len()];
+    let mut times = vec![Vec::new(); variants.len()];
+    let mut last = vec![serde_json::Value::Null; variants.len()];
     let mut evaluation = Vec::new();
+    let mut exact = Vec::new();
+    let defaults = Values::from_start(&VARIABLES);
+    let seeds: Vec<usize> = TRUTH
+        .iter()
+        .map(|(name, _)| {
+            VARIABLES
+                .iter()
+                .position(|v| v.name == *name)
+                .expect("a variable")
+        })
+        .collect();
     for _ in 0..rounds {
-        for (b, hsp) in builds.iter().enumerate() {
-            let (t, json) = run(hsp);
+        for (b, (hsp, way)) in variants.iter().enumerate() {
+            let (t, json) = run(hsp, *way);
             times[b].push(t);
             last[b] = json;
         }
         let start = Instant::now();
         std::hint::black_box(evaluate(&[], &f_hz));
         evaluation.push(start.elapsed().as_secs_f64());
+        let start = Instant::now();
+        std::hint::black_box(linearization_at_rest_with_derivatives(&defaults, &seeds).ok());
+        exact.push(start.elapsed().as_secs_f64());
     }
     let (e_med, e_lo, e_hi) = summary(&mut evaluation);
+    let (x_med, x_lo, x_hi) = summary(&mut exact);
     println!(
         "one model evaluation (linearisation and 400 responses), in this process: median {:.1} ms, \
          range {:.1} .. {:.1} ms",
@@ -168,14 +204,32 @@ fn main() {
         e_lo * 1e3,
         e_hi * 1e3
     );
-    for (b, hsp) in builds.iter().enumerate() {
+    let exact_of: Vec<String> = linearization_at_rest_with_derivatives(&defaults, &seeds)
+        .map(|(_, d)| {
+            d.iter()
+                .map(|d| if d.is_ok() { "exact" } else { "not available" }.to_string())
+                .collect()
+        })
+        .unwrap_or_default();
+    println!(
+        "the linearisation and its exact derivatives with respect to the 3 parameters ({}), in \
+         this process: median {:.1} ms, range {:.1} .. {:.1} ms",
+        exact_of.join(", "),
+        x_med * 1e3,
+        x_lo * 1e3,
+        x_hi * 1e3
+    );
+    for (b, (hsp, way)) in variants.iter().enumerate() {
         let (med, lo, hi) = summary(&mut times[b]);
         let json = &last[b];
         let iterations = json["iterations"].as_u64().expect("iterations");
         let evaluations = json["evaluations"].as_u64().expect("evaluations");
         let per_iteration = med / iterations as f64;
         let in_evaluations = evaluations as f64 * e_med / iterations as f64;
-        println!("{}:", hsp.display());
+        match way {
+            Some(way) => println!("{} --sensitivities {way}:", hsp.display()),
+            None => println!("{}:", hsp.display()),
+        }
         println!(
             "  the fit (hsp identify --json, the whole command): median {med:.3} s, range \
              {lo:.3} .. {hi:.3} s; {iterations} iterations, {evaluations} model evaluations, \
@@ -183,14 +237,14 @@ fn main() {
             json["cost"].as_f64().expect("cost")
         );
         println!(
-            "  per iteration: {:.1} ms, of which {:.1} model evaluations ({:.1} ms, {:.0} %); \
-             sensitivities by {}: {} evaluations a Jacobian, 1 a trial step",
+            "  per iteration: {:.1} ms, of which {:.1} model evaluations ({:.1} ms, {:.0} %) and \
+             {:.1} exact derivatives; sensitivities: {}",
             per_iteration * 1e3,
             evaluations as f64 / iterations as f64,
             in_evaluations * 1e3,
             100.0 * in_evaluations / per_iteration,
+            json["derivatives"].as_u64().unwrap_or(0) as f64 / iterations as f64,
             json["sensitivities"].as_str().unwrap_or("?"),
-            2 * TRUTH.len()
         );
     }
     println!("load after {}", machine::load());

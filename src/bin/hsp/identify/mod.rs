@@ -13,7 +13,9 @@
 //! - [`report`]: the JSON, the text table and the `.ssv`;
 //! - [`page`]: the markdown page with its Bode plots (`--report DIR`).
 //!
-//! Exact sensitivities are a later step (docs/identify.md, Known limits).
+//! Sensitivities are exact where the model gives them (dual numbers through its fragments),
+//! central differences elsewhere and on request (`--sensitivities central`), each parameter's
+//! way reported ([`residuals`], docs/identify.md).
 
 mod data;
 mod intervals;
@@ -71,6 +73,12 @@ pub struct IdentifyArgs {
     /// "iterations", "correlations" (rows in the order of "fitted"), "fitted", "warnings", ...}
     #[arg(long)]
     json: bool,
+    /// How the residuals' derivatives are computed: exact (dual numbers through the model, for
+    /// the frequency responses of every parameter whose fragments carry them; central
+    /// differences for the others, said in the report) or central (central differences for all,
+    /// to cross-check or compare)
+    #[arg(long, value_enum, default_value_t = residuals::Sensitivities::Exact)]
+    sensitivities: residuals::Sensitivities,
     /// The most Levenberg–Marquardt iterations (per start)
     #[arg(long, default_value_t = 200)]
     max_iterations: usize,
@@ -184,7 +192,7 @@ fn problem(args: &IdentifyArgs) -> Result<Problem, String> {
             "--start and --ends split the starts of --starts N (N > 1): give --starts".into(),
         );
     }
-    Problem::new(base, frfs, peaks, series, fitted)
+    Problem::new(base, frfs, peaks, series, fitted, args.sensitivities)
 }
 
 /// Reads the data and fits.

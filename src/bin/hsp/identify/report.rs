@@ -18,7 +18,9 @@ use crate::ecosystem::ssp::parameter_set_of;
 /// correlations' rows and columns in the order of `fitted` (the `--fit` order), `null` for a
 /// parameter the data do not see; `cost` is the sum of the squared weighted residuals, of which
 /// there are `residuals`; `variance` is the residual variance `s^2`; `evaluations` counts the
-/// model's linearisations; `sensitivities` says how they were computed; `responses` gives, per
+/// model's linearisations, `derivatives` the exact derivatives of one with respect to one
+/// parameter; `sensitivities` says how they were computed (and each parameter's
+/// `sensitivity`, with a `sensitivity_reason` where it was central differences); `responses` gives, per
 /// `--frf` in order, the RMS of the weighted relative error `|e_k|` at the start and fitted;
 /// `peaks`, per `--peaks` in order, the measured peaks, their uncertainties and the model's peaks
 /// taken for them at the start and fitted. With `--starts N > 1`, also `starts` (each start's
@@ -54,6 +56,7 @@ pub fn json(fit: &Fit) -> serde_json::Value {
         "residuals": fit.problem.len(),
         "variance": fit.statistics.variance,
         "evaluations": fit.problem.evaluations.load(Ordering::Relaxed),
+        "derivatives": fit.problem.derivatives.load(Ordering::Relaxed),
         "stop": format!("{:?}", fit.stop).to_lowercase(),
         "sensitivities": sensitivities(fit),
         "responses": fit.problem.frfs.iter().zip(&fit.rms).map(|(d, (before, after))| json!({
