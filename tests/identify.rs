@@ -170,6 +170,51 @@ fn synthetic_frfs_give_back_the_parameters_within_their_intervals() {
     }
 }
 
+/// The exact sensitivities and central differences (`--sensitivities central`) give the same
+/// fit: the minimum does not depend on how its Jacobian was computed (to the optimiser's
+/// tolerance, far inside the intervals), and the intervals, which come from the Jacobian at the
+/// minimum, agree to the central differences' error (their step 1e-4 in `z`: 1e-8 relative
+/// truncation, round-off 1e-16 / 1e-4 of a residual). The exact ones are what the report says
+/// they are, and the central ones say why.
+#[test]
+fn exact_sensitivities_and_central_differences_give_the_same_fit() {
+    let dir = folder("exact_central");
+    let frfs = synthetic(&dir, &TRUTH, &["y_pot", "acc_tip"], Some(3));
+    let fit: Vec<&str> = TRUTH.iter().map(|(n, _)| *n).collect();
+    let (exact, _) = identify(&frfs, &fit, &[]);
+    let (central, _) = identify(&frfs, &fit, &["--sensitivities", "central"]);
+    assert_eq!(
+        exact["parameters"]["servo_valve.beta"]["sensitivity"], "exact",
+        "{exact:#}"
+    );
+    assert!(exact["derivatives"].as_u64().unwrap() > 0, "{exact:#}");
+    for (name, _) in TRUTH {
+        let c = &central["parameters"][name];
+        assert_eq!(c["sensitivity"], "central differences", "{central:#}");
+        assert!(
+            c["sensitivity_reason"]
+                .as_str()
+                .unwrap()
+                .contains("--sensitivities central"),
+            "{central:#}"
+        );
+        let value = |j: &Json| j["parameters"][name]["value"].as_f64().unwrap();
+        let (lo, hi) = ci95(&exact, name).unwrap();
+        assert!(
+            (value(&exact) - value(&central)).abs() < 1e-3 * (hi - lo),
+            "{name}: {} against {} (interval [{lo}, {hi}])",
+            value(&exact),
+            value(&central)
+        );
+        let (clo, chi) = ci95(&central, name).unwrap();
+        assert!(
+            ((chi - clo) / (hi - lo) - 1.0).abs() < 1e-4,
+            "{name}: [{lo}, {hi}] against [{clo}, {chi}]"
+        );
+    }
+    assert_eq!(central["derivatives"].as_u64(), Some(0));
+}
+
 /// Exact data (no noise): the fit reaches the generating values to the sensitivities' accuracy,
 /// an independent check of the optimiser and the residuals' definition.
 #[test]
