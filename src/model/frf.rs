@@ -117,6 +117,84 @@ pub fn output_derivative_of(
     y
 }
 
+/// The derivative `df*/dp` of a resonance peak's frequency `f*` (a stationary point of `|H|`
+/// from `input` to `output`, as [`frequency_response`] refines it) along the parameter whose
+/// derivatives `d` holds, exact: with `g(ω) = |H(jω)|²`, `g_ω(ω*) = 0`, so by the implicit
+/// function `dω*/dp = -g_ωp / g_ωω`, where, with `R = (jω I - A)^-1`, `X = R B`, `Y = R X`,
+/// `Z = R Y` (`dR/dω = -j R²`):
+///
+/// ```text
+/// H_ω = -j C Y,   H_ωω = -2 C Z,   g_ωω = 2 Re(conj(H) H_ωω) + 2 |H_ω|²,
+/// dX = R (dA X + dB),   dY = R (dA Y + dX),   H_p = dC X + C dX + dD,
+/// H_ωp = -j (dC Y + C dY),   g_ωp = 2 Re(conj(H_p) H_ω + conj(H) H_ωp),
+/// ```
+///
+/// five solves with one LU, at the stationary point itself (Newton's steps on `g_ω` from `f_hz`
+/// first). An error where the response is unbounded, or where `g_ωω` is not negative (not a
+/// maximum: no peak to follow).
+pub fn peak_derivative(
+    lin: &Linearization,
+    d: &LinearizationDerivative,
+    input: usize,
+    output: usize,
+    f_hz: f64,
+) -> Result<f64, String> {
+    let n = lin.a.nrows();
+    let column = |m: &DMatrix<f64>| DVector::from_fn(n, |i, _| Complex::new(m[(i, input)], 0.0));
+    let times = |m: &DMatrix<f64>, v: &StateResponse| -> StateResponse {
+        DVector::from_fn(n, |i, _| {
+            (0..n).fold(Complex::new(0.0, 0.0), |s, j| s + v[j] * m[(i, j)])
+        })
+    };
+    let row = |m: &DMatrix<f64>, v: &StateResponse| {
+        (0..n).fold(Complex::new(0.0, 0.0), |s, i| s + v[i] * m[(output, i)])
+    };
+    let j = Complex::new(0.0, 1.0);
+    let two_pi = 2.0 * std::f64::consts::PI;
+    // |H| is flat at its maximum, so a search on |H| places it to about sqrt(eps) only; the
+    // derivative wants the stationary point itself: Newton's steps on g_ω = 2 Re(conj(H) H_ω)
+    // first, from `f_hz` (quadratic convergence: two or three steps to the last bits).
+    let mut f = f_hz;
+    for _ in 0..4 {
+        let lu = resolvent(lin, f).lu();
+        let solve = |v: &StateResponse| lu.solve(v).ok_or_else(|| unbounded_at(f));
+        let x = solve(&column(&lin.b))?;
+        let y = solve(&x)?;
+        let z = solve(&y)?;
+        let h = row(&lin.c, &x) + lin.d[(output, input)];
+        let h_w = -j * row(&lin.c, &y);
+        let h_ww = row(&lin.c, &z) * -2.0;
+        let g_w = 2.0 * (h.conj() * h_w).re;
+        let g_ww = 2.0 * (h.conj() * h_ww).re + 2.0 * h_w.norm_sqr();
+        if g_ww.is_nan() || g_ww >= 0.0 {
+            return Err(format!(
+                "no peak to follow at {f} Hz: |H| is not at a maximum there (d²|H|²/dω² = \
+                 {g_ww:e})"
+            ));
+        }
+        let step = -g_w / g_ww / two_pi;
+        if step.is_nan() || step.abs() > 1e-3 * f {
+            return Err(format!(
+                "no peak to follow near {f_hz} Hz: Newton's step left it"
+            ));
+        }
+        if step.abs() > 4.0 * f64::EPSILON * f {
+            f += step;
+            continue;
+        }
+        let dx = solve(&(times(&d.a, &x) + column(&d.b)))?;
+        let dy = solve(&(times(&d.a, &y) + &dx))?;
+        let h_p = row(&d.c, &x) + row(&lin.c, &dx) + d.d[(output, input)];
+        let h_wp = -j * (row(&d.c, &y) + row(&lin.c, &dy));
+        let g_wp = 2.0 * (h_p.conj() * h_w + h.conj() * h_wp).re;
+        // f = ω / 2π, and ω* moves as -g_ωp / g_ωω.
+        return Ok(-g_wp / g_ww / two_pi);
+    }
+    Err(format!(
+        "no peak to follow near {f_hz} Hz: Newton's steps did not settle"
+    ))
+}
+
 /// `H = C_output X + D_(output, input)`: the response of `output` from the states' response `x`
 /// to `input` ([`state_response_at`]).
 pub fn output_of(
@@ -235,5 +313,51 @@ mod tests {
         let h = response_at(&lin, 0, 0, 1.0).unwrap();
         let w = 2.0 * std::f64::consts::PI;
         assert!((h - Complex::new(0.0, -1.0 / w)).norm() < 1e-15, "{h}");
+    }
+
+    /// One mode `q'' + 2 ζ ω_n q' + ω_n² q = u`, `y = q`: `|H|` peaks at
+    /// `ω* = ω_n sqrt(1 - 2 ζ²)`, so `dω*/dω_n = sqrt(1 - 2 ζ²)` and
+    /// `dω*/dζ = -2 ζ ω_n / sqrt(1 - 2 ζ²)`: the closed forms the peak's derivative must give.
+    #[test]
+    fn a_peaks_derivative_is_the_closed_form_of_one_mode() {
+        let (wn, zeta) = (2.0 * std::f64::consts::PI * 7.0, 0.05);
+        let lin = Linearization {
+            a: DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -wn * wn, -2.0 * zeta * wn]),
+            b: DMatrix::from_column_slice(2, 1, &[0.0, 1.0]),
+            c: DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+            d: DMatrix::zeros(1, 1),
+            state_names: vec!["q".into(), "v".into()],
+            input_names: vec!["u".into()],
+            output_names: vec!["y".into()],
+            x0: vec![0.0; 2],
+            u0: vec![0.0],
+        };
+        let peak = frequency_response(&lin, "u", "y", 1.0, 30.0, 400)
+            .unwrap()
+            .peaks[0]
+            .0;
+        let exact_peak = wn * (1.0 - 2.0 * zeta * zeta).sqrt() / (2.0 * std::f64::consts::PI);
+        assert!(
+            (peak / exact_peak - 1.0).abs() < 1e-9,
+            "{peak} {exact_peak}"
+        );
+        let along = |da: [f64; 4]| LinearizationDerivative {
+            a: DMatrix::from_row_slice(2, 2, &da),
+            b: DMatrix::zeros(2, 1),
+            c: DMatrix::zeros(1, 2),
+            d: DMatrix::zeros(1, 1),
+            f: vec![0.0; 2],
+            y: vec![0.0],
+        };
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let s = (1.0 - 2.0 * zeta * zeta).sqrt();
+        let d_wn =
+            peak_derivative(&lin, &along([0.0, 0.0, -2.0 * wn, -2.0 * zeta]), 0, 0, peak).unwrap();
+        assert!((d_wn * two_pi / s - 1.0).abs() < 1e-12, "{}", d_wn * two_pi);
+        let d_zeta = peak_derivative(&lin, &along([0.0, 0.0, 0.0, -2.0 * wn]), 0, 0, peak).unwrap();
+        let exact = -2.0 * zeta * wn / s / two_pi;
+        assert!((d_zeta / exact - 1.0).abs() < 1e-12, "{d_zeta} {exact}");
+        // An anti-resonance or a slope is no peak: refused.
+        assert!(peak_derivative(&lin, &along([0.0; 4]), 0, 0, 1.0).is_err());
     }
 }

@@ -30,10 +30,11 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use hydraulic_slewing_plate::bond_graph::Linearization;
+use hydraulic_slewing_plate::bond_graph::{Linearization, LinearizationDerivative};
 use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
 use hydraulic_slewing_plate::model::frf::{
-    output_derivative_of, output_of, state_response_and_derivative_at, state_response_at,
+    output_derivative_of, output_of, peak_derivative, state_response_and_derivative_at,
+    state_response_at,
 };
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
 use hydraulic_slewing_plate::model::sensitivity::linearization_at_rest_with_derivatives;
@@ -58,6 +59,8 @@ pub struct Problem {
     pub fitted: Vec<Fitted>,
     /// Per response: the index of its input and its output in the linearisation.
     ports: Vec<(usize, usize)>,
+    /// Per set of peaks: the same.
+    peak_ports: Vec<(usize, usize)>,
     /// Model evaluations so far (one linearisation and its responses each).
     pub evaluations: AtomicUsize,
     /// Exact derivatives of the linearisation so far (one model built in dual numbers for one
@@ -134,15 +137,17 @@ impl Problem {
             .iter()
             .map(|d| port("--frf", &d.file, &d.input, &d.output))
             .collect::<Result<_, _>>()?;
-        for d in &peaks {
-            port("--peaks", &d.file, &d.input, &d.output)?;
-        }
+        let peak_ports = peaks
+            .iter()
+            .map(|d| port("--peaks", &d.file, &d.input, &d.output))
+            .collect::<Result<_, _>>()?;
         Ok(Problem {
             base,
             frfs,
             peaks,
             series,
             ports,
+            peak_ports,
             evaluations: AtomicUsize::new(0),
             derivatives: AtomicUsize::new(0),
             finite_differences: Mutex::new(vec![None; fitted.len()]),
@@ -313,8 +318,8 @@ impl Problem {
             let why = "asked for (--sensitivities central)".to_string();
             return Ok(vec![Err(why); z.len()]);
         }
-        if !self.peaks.is_empty() || !self.series.is_empty() {
-            let why = "peaks and time series have no exact sensitivities yet".to_string();
+        if !self.series.is_empty() {
+            let why = "time series have no exact sensitivities yet".to_string();
             return Ok(vec![Err(why); z.len()]);
         }
         let p = self.p_of_z(z);
@@ -322,6 +327,11 @@ impl Problem {
         let seeds: Vec<usize> = self.fitted.iter().map(|f| f.index).collect();
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let (lin, derivatives) = linearization_at_rest_with_derivatives(&values, &seeds)?;
+        let model_peaks: Vec<Vec<f64>> = self
+            .peaks
+            .iter()
+            .map(|d| d.model(&lin))
+            .collect::<Result<_, _>>()?;
         let mut columns = Vec::with_capacity(z.len());
         for (j, d) in derivatives.iter().enumerate() {
             let d = match d {
@@ -333,26 +343,46 @@ impl Problem {
             };
             self.derivatives.fetch_add(1, Ordering::Relaxed);
             let dp_dz = self.fitted[j].dp_dz(z[j]);
-            let mut column = Vec::with_capacity(self.len());
-            // One LU per input and frequency, shared by the outputs measured there.
-            let mut states = HashMap::new();
-            for (data, &(i, o)) in self.frfs.iter().zip(&self.ports) {
-                for ((&f, h), &w) in data.f_hz.iter().zip(&data.h).zip(&data.weight) {
-                    let (x, dx) = match states.entry((i, f.to_bits())) {
-                        std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-                        std::collections::hash_map::Entry::Vacant(e) => {
-                            e.insert(state_response_and_derivative_at(&lin, d, i, f)?)
-                        }
-                    };
-                    let dh = output_derivative_of(&lin, d, x, dx, i, o);
-                    let de = dh * (w * dp_dz / h.norm());
-                    column.push(de.re);
-                    column.push(de.im);
-                }
-            }
-            columns.push(Ok(DVector::from_vec(column)));
+            columns.push(self.exact_column(&lin, d, dp_dz, &model_peaks));
         }
         Ok(columns)
+    }
+
+    /// The exact column of `d residuals / d z` from the derivative `d` of the linearisation
+    /// `lin` along a parameter, `dp_dz` its coordinate's scale, `model_peaks` the model's peaks
+    /// taken for the measured ones: an error (central differences then) where a peak cannot be
+    /// followed.
+    fn exact_column(
+        &self,
+        lin: &Linearization,
+        d: &LinearizationDerivative,
+        dp_dz: f64,
+        model_peaks: &[Vec<f64>],
+    ) -> Result<DVector<f64>, String> {
+        let mut column = Vec::with_capacity(self.len());
+        // One LU per input and frequency, shared by the outputs measured there.
+        let mut states = HashMap::new();
+        for (data, &(i, o)) in self.frfs.iter().zip(&self.ports) {
+            for ((&f, h), &w) in data.f_hz.iter().zip(&data.h).zip(&data.weight) {
+                let (x, dx) = match states.entry((i, f.to_bits())) {
+                    std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                    std::collections::hash_map::Entry::Vacant(e) => {
+                        e.insert(state_response_and_derivative_at(lin, d, i, f)?)
+                    }
+                };
+                let dh = output_derivative_of(lin, d, x, dx, i, o);
+                let de = dh * (w * dp_dz / h.norm());
+                column.push(de.re);
+                column.push(de.im);
+            }
+        }
+        // A peak's residual (f_model - f_measured) / sigma moves with its frequency.
+        for ((data, &(i, o)), model) in self.peaks.iter().zip(&self.peak_ports).zip(model_peaks) {
+            for (&f, sigma) in model.iter().zip(&data.sigma_hz) {
+                column.push(peak_derivative(lin, d, i, o, f)? * dp_dz / sigma);
+            }
+        }
+        Ok(DVector::from_vec(column))
     }
 
     /// The column `j` of `d residuals / d z` at `z` by central differences (module doc).
