@@ -74,29 +74,55 @@ fn unbounded_at(f_hz: f64) -> String {
 /// The states' response to one input at one frequency, one complex entry per state.
 pub type StateResponse = DVector<Complex<f64>>;
 
+/// The states' response `X` to one input at one frequency with the LU of `j 2 pi f I - A`
+/// that gave it, from which [`StateResponseLu::derivative`] gives its derivative along any
+/// parameter with one more solve.
+pub struct StateResponseLu {
+    lu: nalgebra::LU<Complex<f64>, nalgebra::Dyn, nalgebra::Dyn>,
+    input: usize,
+    f_hz: f64,
+    /// `X = (j 2 pi f I - A)^-1 B e_input`.
+    pub x: StateResponse,
+}
+
+impl StateResponseLu {
+    /// `X` for `input` at `f_hz` ([`state_response_at`]), keeping its LU. An error as
+    /// [`response_at`]'s.
+    pub fn new(lin: &Linearization, input: usize, f_hz: f64) -> Result<Self, String> {
+        let n = lin.a.nrows();
+        let lu = resolvent(lin, f_hz).lu();
+        let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
+        let x = lu.solve(&b).ok_or_else(|| unbounded_at(f_hz))?;
+        Ok(StateResponseLu { lu, input, f_hz, x })
+    }
+
+    /// `dX = (j 2 pi f I - A)^-1 (dA X + dB e_input)` along the parameter whose derivatives `d`
+    /// holds ([`crate::model::sensitivity`]).
+    pub fn derivative(&self, d: &LinearizationDerivative) -> Result<StateResponse, String> {
+        let n = self.x.len();
+        let rhs = DVector::from_fn(n, |i, _| {
+            let mut v = Complex::new(d.b[(i, self.input)], 0.0);
+            for j in 0..n {
+                v += self.x[j] * d.a[(i, j)];
+            }
+            v
+        });
+        self.lu.solve(&rhs).ok_or_else(|| unbounded_at(self.f_hz))
+    }
+}
+
 /// The states' response `X` to `input` at `f_hz` ([`state_response_at`]) and its derivative
-/// `dX = (j 2 pi f I - A)^-1 (dA X + dB e_input)` along the parameter whose derivatives `d`
-/// holds ([`crate::model::sensitivity`]), from one LU. An error as [`response_at`]'s.
+/// along the parameter whose derivatives `d` holds, from one LU ([`StateResponseLu`]). An
+/// error as [`response_at`]'s.
 pub fn state_response_and_derivative_at(
     lin: &Linearization,
     d: &LinearizationDerivative,
     input: usize,
     f_hz: f64,
 ) -> Result<(StateResponse, StateResponse), String> {
-    let n = lin.a.nrows();
-    let lu = resolvent(lin, f_hz).lu();
-    let unbounded = || unbounded_at(f_hz);
-    let b = DVector::from_fn(n, |i, _| Complex::new(lin.b[(i, input)], 0.0));
-    let x = lu.solve(&b).ok_or_else(unbounded)?;
-    let rhs = DVector::from_fn(n, |i, _| {
-        let mut v = Complex::new(d.b[(i, input)], 0.0);
-        for j in 0..n {
-            v += x[j] * d.a[(i, j)];
-        }
-        v
-    });
-    let dx = lu.solve(&rhs).ok_or_else(unbounded)?;
-    Ok((x, dx))
+    let r = StateResponseLu::new(lin, input, f_hz)?;
+    let dx = r.derivative(d)?;
+    Ok((r.x, dx))
 }
 
 /// `dH = dC_output X + C_output dX + dD_(output, input)`: the derivative of `output`'s

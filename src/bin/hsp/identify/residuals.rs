@@ -33,8 +33,7 @@ use std::sync::Mutex;
 use hydraulic_slewing_plate::bond_graph::{Linearization, LinearizationDerivative};
 use hydraulic_slewing_plate::fmu::{Experiment, Value, Values};
 use hydraulic_slewing_plate::model::frf::{
-    output_derivative_of, output_of, peak_derivative, state_response_and_derivative_at,
-    state_response_at,
+    output_derivative_of, output_of, peak_derivative, state_response_at, StateResponseLu,
 };
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
 use hydraulic_slewing_plate::model::sensitivity::linearization_at_rest_with_derivatives;
@@ -332,6 +331,17 @@ impl Problem {
             .iter()
             .map(|d| d.model(&lin))
             .collect::<Result<_, _>>()?;
+        // One LU per input and frequency, shared by the outputs measured there and by the
+        // parameters.
+        let mut states: HashMap<(usize, u64), StateResponseLu> = HashMap::new();
+        for (data, &(i, _)) in self.frfs.iter().zip(&self.ports) {
+            for &f in &data.f_hz {
+                if let std::collections::hash_map::Entry::Vacant(e) = states.entry((i, f.to_bits()))
+                {
+                    e.insert(StateResponseLu::new(&lin, i, f)?);
+                }
+            }
+        }
         let mut columns = Vec::with_capacity(z.len());
         for (j, d) in derivatives.iter().enumerate() {
             let d = match d {
@@ -343,34 +353,35 @@ impl Problem {
             };
             self.derivatives.fetch_add(1, Ordering::Relaxed);
             let dp_dz = self.fitted[j].dp_dz(z[j]);
-            columns.push(self.exact_column(&lin, d, dp_dz, &model_peaks));
+            columns.push(self.exact_column(&lin, d, dp_dz, &states, &model_peaks));
         }
         Ok(columns)
     }
 
     /// The exact column of `d residuals / d z` from the derivative `d` of the linearisation
-    /// `lin` along a parameter, `dp_dz` its coordinate's scale, `model_peaks` the model's peaks
-    /// taken for the measured ones: an error (central differences then) where a peak cannot be
-    /// followed.
+    /// `lin` along a parameter, `dp_dz` its coordinate's scale, `states` the states' responses
+    /// with their LUs by input and frequency, `model_peaks` the model's peaks taken for the
+    /// measured ones: an error (central differences then) where a peak cannot be followed.
     fn exact_column(
         &self,
         lin: &Linearization,
         d: &LinearizationDerivative,
         dp_dz: f64,
+        states: &HashMap<(usize, u64), StateResponseLu>,
         model_peaks: &[Vec<f64>],
     ) -> Result<DVector<f64>, String> {
         let mut column = Vec::with_capacity(self.len());
-        // One LU per input and frequency, shared by the outputs measured there.
-        let mut states = HashMap::new();
+        // One derivative per input and frequency, shared by the outputs measured there.
+        let mut derivatives: HashMap<(usize, u64), DVector<Complex<f64>>> = HashMap::new();
         for (data, &(i, o)) in self.frfs.iter().zip(&self.ports) {
             for ((&f, h), &w) in data.f_hz.iter().zip(&data.h).zip(&data.weight) {
-                let (x, dx) = match states.entry((i, f.to_bits())) {
+                let key = (i, f.to_bits());
+                let state = &states[&key];
+                let dx = match derivatives.entry(key) {
                     std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-                    std::collections::hash_map::Entry::Vacant(e) => {
-                        e.insert(state_response_and_derivative_at(lin, d, i, f)?)
-                    }
+                    std::collections::hash_map::Entry::Vacant(e) => e.insert(state.derivative(d)?),
                 };
-                let dh = output_derivative_of(lin, d, x, dx, i, o);
+                let dh = output_derivative_of(lin, d, &state.x, dx, i, o);
                 let de = dh * (w * dp_dz / h.norm());
                 column.push(de.re);
                 column.push(de.im);
