@@ -71,6 +71,9 @@ fn unbounded_at(f_hz: f64) -> String {
     )
 }
 
+/// The state response `X` and its derivative `dX` ([`state_response_and_derivative_at`]).
+pub type StateResponseAndDerivative = (DVector<Complex<f64>>, DVector<Complex<f64>>);
+
 /// The states' response `X` to `input` at `f_hz` ([`state_response_at`]) and its derivative
 /// `dX = (j 2 pi f I - A)^-1 (dA X + dB e_input)` along the parameter whose derivatives `d`
 /// holds ([`crate::model::sensitivity`]), from one LU. An error as [`response_at`]'s.
@@ -79,7 +82,7 @@ pub fn state_response_and_derivative_at(
     d: &LinearizationDerivative,
     input: usize,
     f_hz: f64,
-) -> Result<(DVector<Complex<f64>>, DVector<Complex<f64>>), String> {
+) -> Result<StateResponseAndDerivative, String> {
     let n = lin.a.nrows();
     let lu = resolvent(lin, f_hz).lu();
     let unbounded = || unbounded_at(f_hz);
