@@ -278,47 +278,57 @@ pub struct ControllerPorts {
     pub command: SignalId,
 }
 
+// The fragments below take the parameters in `f64` or in dual numbers (`S: Copy + Into<Dual>`,
+// as `loes::add_loes`): in dual numbers every constant they give the bond graph carries its
+// derivative along the parameter the model is built for (exact sensitivities,
+// `crate::model::sensitivity`); in `f64` the same constants with derivative zero.
+
 /// The potentiometer: `y_POT = k_POT angle`, signal `<prefix>.k_pot`.
-pub fn add_potentiometer(
+pub fn add_potentiometer<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ControllerParameters,
+    p: &ControllerParameters<S>,
     angle: SignalId,
 ) -> SignalId {
-    g.add_gain(format!("{prefix}.k_pot"), p.k_pot, angle)
+    g.add_gain(format!("{prefix}.k_pot"), p.k_pot.into(), angle)
 }
 
 /// The power amplifier's output limit on a demanded voltage `u`: `u` itself when linear,
-/// otherwise the signal `<prefix>.e_out`.
-pub fn add_output_limit(
+/// otherwise the signal `<prefix>.e_out` ([`saturation_law`], the rail `e_max` with its
+/// derivative).
+pub fn add_output_limit<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ControllerParameters,
+    p: &ControllerParameters<S>,
     u: SignalId,
 ) -> SignalId {
-    match p.limit() {
-        AmplifierLimit::Linear => u,
-        AmplifierLimit::Saturating { e_max } => g.add_function(
-            format!("{prefix}.e_out"),
-            saturation_law(format!("amplifier limit +-{e_max} V"), e_max),
-            u,
-        ),
+    if !p.saturation {
+        return u;
     }
+    let e_max: Dual = p.e_max.into();
+    g.add_function(
+        format!("{prefix}.e_out"),
+        // The label names the value, as f64 prints it (Dual's Display).
+        saturation_law(format!("amplifier limit +-{e_max} V"), e_max),
+        u,
+    )
 }
 
 /// The load pressure's low-pass `p_f` \[Pa\], `dp_f/dt = 2 pi f_pl (p_load - p_f)`: the
 /// integrator `<prefix>.p_f` (a state, nominal 10 bar) fed by `<prefix>.p_f_rate`. `None` without
-/// pressure feedback (`k_pl = 0`).
-pub fn add_pressure_feedback(
+/// pressure feedback (`k_pl = 0`, its value: a derivative of `k_pl` at 0 would need the state
+/// the model does not have, which `crate::model::compose` refuses).
+pub fn add_pressure_feedback<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ControllerParameters,
+    p: &ControllerParameters<S>,
     p_load: SignalId,
 ) -> Option<SignalId> {
-    if !p.pressure_feedback() {
+    let (k_pl, f_pl): (Dual, Dual) = (p.k_pl.into(), p.f_pl.into());
+    if k_pl.v == 0.0 {
         return None;
     }
-    let w = 2.0 * core::f64::consts::PI * p.f_pl;
+    let w = 2.0 * core::f64::consts::PI * f_pl;
     let rate = g.add_signal_port(format!("{prefix}.p_f_rate"));
     let p_f = g.add_integrator(format!("{prefix}.p_f"), rate);
     g.set_integrator_nominal(p_f, 1e6);
@@ -337,28 +347,32 @@ pub fn add_pressure_feedback(
 /// The two amplifiers: returns `(A1 error, power amplifier output)`, signals `<prefix>.A1`,
 /// `<prefix>.A2` (and `<prefix>.e_out`, the limited output, when `saturation`). With pressure
 /// feedback, `k_pl p_f` is subtracted between them (`<prefix>.A1_pl`).
-pub fn add_amplifiers(
+pub fn add_amplifiers<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ControllerParameters,
+    p: &ControllerParameters<S>,
     error: SignalId,
     p_load: SignalId,
 ) -> (SignalId, SignalId) {
-    let a1 = g.add_gain(format!("{prefix}.A1"), p.a1, error);
+    let (a1_gain, a2_gain, k_pl): (Dual, Dual, Dual) = (p.a1.into(), p.a2.into(), p.k_pl.into());
+    let a1 = g.add_gain(format!("{prefix}.A1"), a1_gain, error);
     let into_a2 = match add_pressure_feedback(g, prefix, p, p_load) {
-        Some(p_f) => g.add_sum(format!("{prefix}.A1_pl"), &[(1.0, a1), (-p.k_pl, p_f)]),
+        Some(p_f) => g.add_sum(
+            format!("{prefix}.A1_pl"),
+            &[(Dual::from(1.0), a1), (-k_pl, p_f)],
+        ),
         None => a1,
     };
-    let a2 = g.add_gain(format!("{prefix}.A2"), p.a2, into_a2);
+    let a2 = g.add_gain(format!("{prefix}.A2"), a2_gain, into_a2);
     (a1, add_output_limit(g, prefix, p, a2))
 }
 
 /// The closed-loop controller: potentiometer on `angle` \[rad\], error against `reference` \[V\],
 /// both amplifiers, the pressure feedback from `p_load` \[Pa\].
-pub fn add_controller(
+pub fn add_controller<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ControllerParameters,
+    p: &ControllerParameters<S>,
     reference: SignalId,
     angle: SignalId,
     p_load: SignalId,
@@ -381,10 +395,10 @@ pub fn add_controller(
 /// `reference`, or, with `p.external`, the external coil voltage `e_in` through the amplifier's
 /// output limit (the potentiometer stays; the pressure feedback is the analog controller's, so it
 /// goes with it). Returns `(y_POT, coil voltage)`.
-pub fn add_drive(
+pub fn add_drive<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &ControllerParameters,
+    p: &ControllerParameters<S>,
     reference: SignalId,
     e_in: SignalId,
     angle: SignalId,

@@ -199,12 +199,13 @@ pub struct ReferencePorts {
     pub reference: SignalId,
 }
 
-/// Adds the generator: the loop's reference is `r + k_pot theta_ref(clock)`.
+/// Adds the generator: the loop's reference is `r + k_pot theta_ref(clock)` (`k_pot` in `f64`
+/// or with its derivative, which [`move_law`] carries).
 pub fn add_reference(
     g: &mut BondGraph,
     prefix: &str,
     p: &MoveParameters,
-    k_pot: f64,
+    k_pot: impl Into<Dual>,
     r: SignalId,
 ) -> ReferencePorts {
     let one = g.add_constant(format!("{prefix}.rate"), 1.0);

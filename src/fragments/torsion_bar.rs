@@ -49,7 +49,8 @@ pub struct TorsionBarPorts {
 }
 
 /// Adds a torsion bar of stiffness `k` and structural damping `c` (a dashpot in parallel,
-/// see [`damping_coefficient`]; 0 for none) driven from the 1-junction `motor`.
+/// see [`damping_coefficient`]; 0 for none) driven from the 1-junction `motor`. Both in `f64`
+/// or with their derivatives along a parameter (exact sensitivities).
 pub fn add_torsion_bar(
     g: &mut BondGraph,
     prefix: &str,
@@ -66,7 +67,8 @@ pub fn add_torsion_bar(
     g.bond(motor, node);
     let torque_bond = g.bond(node, twist);
     g.bond(twist, spring);
-    if c > 0.0 {
+    // A dashpot of zero coefficient but a derivative stays (its sensitivity), adding no state.
+    if c > 0.0 || c.d != 0.0 {
         let damper = g.add_r(format!("{prefix}.c"), c);
         g.bond(twist, damper);
     }

@@ -53,40 +53,50 @@ macro_rules! values_only {
 
 /// [`bond_graph_and_plate`] from parameters in dual numbers: the model built for the parameter
 /// whose derivatives they carry ([`Parameters::seeded`]), its constants with their derivatives
-/// (`crate::model::sensitivity`). The LOES, the servo valve and the torsion bar's stiffness
-/// carry them; the other parts refuse a parameter with a derivative (`values_only`).
+/// (`crate::model::sensitivity`). The LOES, the servo valve, the controller, the torsion bar
+/// (stiffness and damping ratio) and the plate's damping ratio `plate.zeta` carry them (the
+/// structure's modal dashpots with the derivatives of its modes along the bar's stiffness); the
+/// other parts refuse a parameter with a derivative (`values_only`).
 pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
-    let controller = values_only!(p.controller, "the controller (controller.*)");
     let reference = values_only!(p.reference, "the command generator's move (reference.*)");
     let limits = values_only!(p.limits, "the validity monitors");
-    let plate_parameters = values_only!(p.plate, "the plate and hub (plate.*, hub.I_H)");
-    let torsion_bar_zeta = p.torsion_bar_zeta;
-    if torsion_bar_zeta.d != 0.0 {
+    // The plate's damping ratio carries its derivative apart; the plate's other constants go
+    // into its Ritz model in f64.
+    let zeta = p.plate.zeta;
+    let plate_parameters = {
+        let mut others = p.plate.clone();
+        others.zeta = Dual::from(zeta.v);
+        let mut values = values_only!(
+            others,
+            "the plate and hub (plate.* other than plate.zeta, hub.I_H)"
+        );
+        values.zeta = zeta.v;
+        values
+    };
+    let controller = &p.controller;
+    let controller_values = controller.map(|x| x.v);
+    controller_values.validate()?;
+    if !controller_values.pressure_feedback() && controller.k_pl.d != 0.0 {
         return Err(
-            "exact sensitivities with respect to torsion_bar.zeta are not built yet".into(),
+            "controller.k_pl at 0 has no exact sensitivity: the pressure feedback and its \
+             filter's state are not in the model at 0, and are at any other value"
+                .into(),
         );
     }
-    controller.validate()?;
     let mut model = PlateModel::new(&plate_parameters)?;
+    model.damping_derivative = plate::damping::coordinate_damping_derivative(&model, zeta.d);
     // The consistent structure on its hub is damped on its own modes (bar included, motor
     // clamped), in place of the R per clamped-plate mode and the bar's dashpot.
     let modal_damping = model.hub && plate_parameters.formulation == Formulation::Consistent;
     if modal_damping {
         // The structure's modes, and so its dashpots, move with the bar's stiffness.
-        if p.motor_coupled && p.torsion_bar_k.d != 0.0 {
-            return Err(
-                "exact sensitivities with respect to torsion_bar.k are not built yet where the \
-                 consistent plate on its hub is damped on the structure's modes (the modes' \
-                 derivatives)"
-                    .into(),
-            );
-        }
-        let bar = p.motor_coupled.then_some(p.torsion_bar_k.v);
-        model.dashpots = plate::damping::modal_dashpots(&model, bar, plate_parameters.zeta)?;
+        let bar = p.motor_coupled.then_some(p.torsion_bar_k);
+        model.dashpots = plate::damping::modal_dashpots(&model, bar, zeta)?;
         // The coordinates the dashpots span lose their own R (`damping` is per plate coordinate).
         for j in plate::damping::damped_coordinates(&model) {
             let first = model.first_plate();
             model.damping[j - first] = 0.0;
+            model.damping_derivative[j - first] = 0.0;
         }
     }
     let mut g = BondGraph::new("hydraulic_slewing_plate");
@@ -133,7 +143,7 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
     let (y_pot, command) = controller::add_drive(
         &mut g,
         "controller",
-        &controller,
+        controller,
         loop_reference,
         e_in,
         theta,
@@ -147,7 +157,7 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
         } else {
             torsion_bar::damping_coefficient(
                 p.torsion_bar_k,
-                torsion_bar_zeta,
+                p.torsion_bar_zeta,
                 Dual::from(plate_parameters.hub_total_inertia()),
             )
         };

@@ -196,6 +196,7 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
         labels,
         mass,
         stiffness,
+        damping_derivative: vec![0.0; damping.len()],
         damping,
         torque,
         forces,

@@ -33,6 +33,7 @@ pub mod paper;
 use nalgebra::{DMatrix, DVector};
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, Law, SignalId};
+use crate::math::dual::Dual;
 
 use super::hub::HubPorts;
 use super::rules;
@@ -262,8 +263,12 @@ pub struct PlateModel {
     pub mass: DMatrix<f64>,
     /// Stiffness matrix (over all coordinates; the hub row and column are zero).
     pub stiffness: DMatrix<f64>,
-    /// Damping resistance of each plate coordinate (an R per mode).
+    /// Damping resistance of each plate coordinate (an R per mode), `2 zeta sqrt(K_jj M_jj)`.
     pub damping: Vec<f64>,
+    /// The derivative of each entry of `damping` along the parameter the model is built for
+    /// (exact sensitivities, [`damping::coordinate_damping_derivative`]); zeros as built from
+    /// parameters in `f64`, which is every model but a sensitivity's.
+    pub damping_derivative: Vec<f64>,
     /// Generalised force per unit root torque (the torsion-bar torque on the hub).
     pub torque: DVector<f64>,
     /// Generalised forces per unit shaker force F1, F2.
@@ -588,8 +593,10 @@ pub fn add_plate(
         g.set_domains(c, &[Domain::Translation]);
         g.bond(coord[first + j], c);
         c_elems.push(c);
-        if model.damping[j] > 0.0 {
-            let r = g.add_r(format!("{prefix}.R[{}]", j + 1), model.damping[j]);
+        // An R of zero resistance but a derivative stays (its sensitivity), adding no state.
+        let resistance = Dual::new(model.damping[j], model.damping_derivative[j]);
+        if resistance.v > 0.0 || resistance.d != 0.0 {
+            let r = g.add_r(format!("{prefix}.R[{}]", j + 1), resistance);
             g.bond(coord[first + j], r);
         }
     }
@@ -631,7 +638,7 @@ pub fn add_plate(
                 Some(t) if j == 0 && model.hub => (t, -d.velocity[0]),
                 _ => (cj, d.velocity[j]),
             };
-            if modulus != 0.0 {
+            if modulus.v != 0.0 || modulus.d != 0.0 {
                 let tf = g.add_tf(format!("{prefix}.damping[{}]_tf[{j}]", i + 1), modulus);
                 g.bond(node, tf);
                 g.bond(tf, junction);
