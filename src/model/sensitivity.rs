@@ -50,6 +50,21 @@ pub fn linearization_at_rest_with_derivatives(
     Ok((lin, derivatives))
 }
 
+/// Why the exact derivative with respect to the parameter `seed` is not available in the
+/// configuration `values`, if it is not (a part whose fragments take `f64` constants, or a
+/// configuration its model refuses): the check [`linearization_at_rest_with_derivatives`]
+/// makes first, without its compile and its linearisation, so that a caller can skip them when
+/// no parameter has a derivative.
+pub fn unavailable(values: &Values, seed: usize) -> Option<String> {
+    let name = VARIABLES.get(seed).map_or("?", |v| v.name);
+    match Parameters::seeded(values, &Experiment::default(), seed) {
+        Ok(p) => bond_graph_and_plate_for(&p.sliding())
+            .err()
+            .map(|e| format!("{name}: {e}")),
+        Err(e) => Some(e),
+    }
+}
+
 /// The derivative of `lin` (the linearisation at rest of `values`) with respect to the
 /// parameter `seed`.
 fn derivative_at_rest(

@@ -36,7 +36,9 @@ use hydraulic_slewing_plate::model::frf::{
     output_derivative_of, output_of, peak_derivative, state_response_at, StateResponseLu,
 };
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
-use hydraulic_slewing_plate::model::sensitivity::linearization_at_rest_with_derivatives;
+use hydraulic_slewing_plate::model::sensitivity::{
+    linearization_at_rest_with_derivatives, unavailable,
+};
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::data::{Fitted, Frf};
@@ -324,6 +326,14 @@ impl Problem {
         let p = self.p_of_z(z);
         let values = self.values_at(&p)?;
         let seeds: Vec<usize> = self.fitted.iter().map(|f| f.index).collect();
+        // Without any exact derivative, the linearisation would be computed for nothing.
+        let reasons: Vec<Option<String>> = seeds.iter().map(|&s| unavailable(&values, s)).collect();
+        if reasons.iter().all(Option::is_some) {
+            return Ok(reasons
+                .into_iter()
+                .map(|r| Err(r.unwrap_or_default()))
+                .collect());
+        }
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let (lin, derivatives) = linearization_at_rest_with_derivatives(&values, &seeds)?;
         let model_peaks: Vec<Vec<f64>> = self
