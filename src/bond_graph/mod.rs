@@ -8,7 +8,7 @@
 //! # Building a graph
 //!
 //! ```
-//! use hydraulic_slewing_plate::bond_graph::{BondGraph, Law};
+//! use hydraulic_slewing_plate::bond_graph::BondGraph;
 //!
 //! // Se - 1 - I, C, R: a mass on a spring and damper pushed by a force F.
 //! let mut g = BondGraph::new("msd");
@@ -16,7 +16,7 @@
 //! let se = g.add_se("force", f); // modulated effort source (MSe)
 //! let j = g.add_one("v"); // common velocity
 //! let m = g.add_i("mass", 2.0); // inertance = mass [kg]
-//! let k = g.add_c("spring", Law::Linear(1.0 / 100.0)); // capacitance = 1/stiffness
+//! let k = g.add_c("spring", 1.0 / 100.0); // linear law: capacitance = 1/stiffness
 //! let d = g.add_r("damper", 3.0); // resistance = damping [N s/m]
 //! g.bond(se, j); // half arrow: power flows from the source into the junction
 //! let bm = g.bond(j, m);
