@@ -23,7 +23,9 @@
 //! equations the rest state solves, the Newton step of the rest state applied to `∂f/∂p`
 //! ([`crate::fragments::servo_valve::rest::rest_state_derivative`]).
 
-use crate::bond_graph::{Linearization, LinearizationDerivative};
+pub mod series;
+
+use crate::bond_graph::{CompiledModel, Linearization, LinearizationDerivative};
 use crate::fmu::{Experiment, Values};
 
 use super::assembly::Assembled;
@@ -74,37 +76,75 @@ fn derivative_at_rest(
     seed: usize,
 ) -> Result<LinearizationDerivative, String> {
     let name = VARIABLES[seed].name;
-    let p = Parameters::seeded(values, experiment, seed)?.sliding();
-    let (graph, _) = bond_graph_and_plate_for(&p).map_err(|e| format!("{name}: {e}"))?;
-    let compiled = graph.compile().map_err(|e| e.to_string())?;
-    if compiled.state_names() != lin.state_names.as_slice() {
-        return Err(format!(
-            "{name}: the model built for its derivative has other states than the model"
-        ));
-    }
-    let still = vec![0.0; lin.x0.len()];
-    let (f_p, _) = compiled.parameter_derivative(&lin.x0, &still, &lin.u0)?;
-    // The rest state moves with the parameter where the rates at rest do.
-    let dx0 = match (f_p.iter().position(|&v| v != 0.0), p.hydraulics) {
-        (None, _) => still,
-        (Some(_), HydraulicsModel::ServoValve) => rest_state_derivative(
-            &compiled,
-            &lin.x0,
-            &lin.u0,
-            &f_p,
-            &servo_valve::nominals(&graph),
-        )?,
-        (Some(i), HydraulicsModel::Loes) => {
-            return Err(format!(
-                "{name}: the LOES's rest state moves with it (the rate of {} at rest), which it \
-                 should not",
-                lin.state_names[i]
-            ))
-        }
-    };
-    compiled
+    let seeded = Seeded::build(values, experiment, seed, true, &lin.state_names)?;
+    let dx0 = seeded.rest_derivative(&lin.x0, &lin.u0)?;
+    seeded
+        .compiled
         .linearize_with_sensitivity(&lin.x0, &dx0, &lin.u0)
         .map_err(|e| format!("{name}: {e}"))
+}
+
+/// The model built in dual numbers for one parameter ([`Parameters::seeded`]): its compiled
+/// plan carries the derivatives of its constants along the parameter, its values are the
+/// model's to the bit.
+pub struct Seeded {
+    /// The parameter, by its index among the FMU's variables.
+    pub seed: usize,
+    /// The compiled model with its constants' derivatives.
+    pub compiled: CompiledModel,
+    /// What the servo valve's rest state is scaled by ([`servo_valve::nominals`]), with the
+    /// full servo valve.
+    rest_scale: Option<Vec<f64>>,
+}
+
+impl Seeded {
+    /// Builds the model of `values` seeded on the parameter `seed`, with the vane motor sliding
+    /// if `sliding` (as linearisations at rest take it), and checks that its states are
+    /// `state_names`, the model's; an error names the parameter.
+    pub fn build(
+        values: &Values,
+        experiment: &Experiment,
+        seed: usize,
+        sliding: bool,
+        state_names: &[String],
+    ) -> Result<Seeded, String> {
+        let name = VARIABLES.get(seed).map_or("?", |v| v.name);
+        let p = Parameters::seeded(values, experiment, seed)?;
+        let p = if sliding { p.sliding() } else { p };
+        let (graph, _) = bond_graph_and_plate_for(&p).map_err(|e| format!("{name}: {e}"))?;
+        let compiled = graph.compile().map_err(|e| e.to_string())?;
+        if compiled.state_names() != state_names {
+            return Err(format!(
+                "{name}: the model built for its derivative has other states than the model"
+            ));
+        }
+        let rest_scale =
+            (p.hydraulics == HydraulicsModel::ServoValve).then(|| servo_valve::nominals(&graph));
+        Ok(Seeded {
+            seed,
+            compiled,
+            rest_scale,
+        })
+    }
+
+    /// The rest state's derivative along the parameter, `x0` the rest state and `u0` the inputs
+    /// it was found with: zero unless the rates at rest move with the parameter, which for the
+    /// full servo valve move its null pressures and volumes (`dx0/dp = -J⁻¹ ∂f/∂p` on the
+    /// equations the rest state solves), and which for the LOES they should not.
+    pub fn rest_derivative(&self, x0: &[f64], u0: &[f64]) -> Result<Vec<f64>, String> {
+        let name = VARIABLES[self.seed].name;
+        let still = vec![0.0; x0.len()];
+        let (f_p, _) = self.compiled.parameter_derivative(x0, &still, u0)?;
+        match (f_p.iter().position(|&v| v != 0.0), &self.rest_scale) {
+            (None, _) => Ok(still),
+            (Some(_), Some(scale)) => rest_state_derivative(&self.compiled, x0, u0, &f_p, scale),
+            (Some(i), None) => Err(format!(
+                "{name}: the LOES's rest state moves with it (the rate of {} at rest), which it \
+                 should not",
+                self.compiled.state_names()[i]
+            )),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -79,6 +79,11 @@ pub struct IdentifyArgs {
     /// to cross-check or compare)
     #[arg(long, value_enum, default_value_t = residuals::Sensitivities::Exact)]
     sensitivities: residuals::Sensitivities,
+    /// How a time series' derivatives are computed (with --sensitivities exact): central
+    /// (central differences of the FMU's simulation) or forward (forward sensitivities
+    /// integrated beside the states, exact to the integrator's tolerance, slower: docs/identify.md)
+    #[arg(long, value_enum, default_value_t = residuals::SeriesSensitivities::Central)]
+    series_sensitivities: residuals::SeriesSensitivities,
     /// The most Levenberg–Marquardt iterations (per start)
     #[arg(long, default_value_t = 200)]
     max_iterations: usize,
@@ -192,7 +197,15 @@ fn problem(args: &IdentifyArgs) -> Result<Problem, String> {
             "--start and --ends split the starts of --starts N (N > 1): give --starts".into(),
         );
     }
-    Problem::new(base, frfs, peaks, series, fitted, args.sensitivities)
+    Problem::new(
+        base,
+        frfs,
+        peaks,
+        series,
+        fitted,
+        args.sensitivities,
+        args.series_sensitivities,
+    )
 }
 
 /// Reads the data and fits.

@@ -137,11 +137,16 @@ pub fn sensitivities(fit: &Fit) -> String {
     } else {
         "central differences of the exact linearisation and of the simulation"
     };
+    let exactly = if fit.problem.series.is_empty() {
+        "exact (dual numbers)"
+    } else {
+        "exact (dual numbers; forward sensitivities of the simulation)"
+    };
     match (names(true), names(false)) {
-        (exact, fd) if fd.is_empty() => format!("exact (dual numbers) for {}", exact.join(", ")),
+        (exact, fd) if fd.is_empty() => format!("{exactly} for {}", exact.join(", ")),
         (exact, fd) if exact.is_empty() => format!("{differences} for {}", fd.join(", ")),
         (exact, fd) => format!(
-            "exact (dual numbers) for {}; {differences} for {}",
+            "{exactly} for {}; {differences} for {}",
             exact.join(", "),
             fd.join(", ")
         ),

@@ -13,18 +13,19 @@
 //! Measured resonance peaks (`--peaks`) add one residual each, the model's peak's error in units
 //! of the measured one's uncertainty ([`super::peaks`]); measured time series (`--series`) one
 //! per output and time, the error of the FMU's simulation relative to the output's RMS
-//! ([`super::series`]). The time series' sensitivities are central differences of the
-//! simulation (below).
+//! ([`super::series`]).
 //!
 //! **Sensitivities.** The derivatives of the residuals with respect to the fitted parameters
-//! (in their coordinates `z`, [`super::data::Scale`]) are exact where the model can give them:
-//! with frequency responses alone, for a parameter whose fragments carry dual numbers
-//! ([`hydraulic_slewing_plate::model::sensitivity`]: `dA/dp, dB/dp, dC/dp, dD/dp` at rest by
-//! hyper-dual passes, then `dH/dp` from the same LU as `H`). Elsewhere they are central finite
-//! differences of the model's residuals, step [`STEP`] in `z`: for a parameter whose fragments
-//! still fold it in as an `f64` constant (the reason is kept and reported, [`Problem::methods`]),
-//! and for peaks and time series, whose exact sensitivities (the modes' derivatives, forward
-//! sensitivities of the simulation) are not built.
+//! (in their coordinates `z`, [`super::data::Scale`]) are exact where the model can give them,
+//! for a parameter whose fragments carry dual numbers
+//! ([`hydraulic_slewing_plate::model::sensitivity`]): for frequency responses and peaks from
+//! `dA/dp, dB/dp, dC/dp, dD/dp` at rest by hyper-dual passes, then `dH/dp` from the same LU as
+//! `H`; for time series, with `--series-sensitivities forward`, from the forward sensitivities
+//! of the simulation ([`hydraulic_slewing_plate::model::sensitivity::series`]). Elsewhere they
+//! are central finite differences of the model's residuals, step [`STEP`] in `z`: for a
+//! parameter whose fragments still fold it in as an `f64` constant (the reason is kept and
+//! reported, [`Problem::methods`]), and for time series by default (cheaper there,
+//! docs/identify.md). A column is exact where every part of it is.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -36,6 +37,7 @@ use hydraulic_slewing_plate::model::frf::{
     output_derivative_of, output_of, peak_derivative, state_response_at, StateResponseLu,
 };
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
+use hydraulic_slewing_plate::model::sensitivity::series::{simulate_with_sensitivities, Direction};
 use hydraulic_slewing_plate::model::sensitivity::{
     linearization_at_rest_with_derivatives, unavailable,
 };
@@ -72,6 +74,8 @@ pub struct Problem {
     finite_differences: Mutex<Vec<Option<String>>>,
     /// How the sensitivities are asked for.
     sensitivities: Sensitivities,
+    /// How the time series' sensitivities are asked for.
+    pub series_sensitivities: SeriesSensitivities,
 }
 
 /// How the sensitivities are asked for (`--sensitivities`).
@@ -81,6 +85,16 @@ pub enum Sensitivities {
     Exact,
     /// Central differences for every parameter.
     Central,
+}
+
+/// How the time series' sensitivities are asked for (`--series-sensitivities`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SeriesSensitivities {
+    /// Central differences of the FMU's simulation.
+    Central,
+    /// Forward sensitivities integrated beside the states
+    /// ([`hydraulic_slewing_plate::model::sensitivity::series`]).
+    Forward,
 }
 
 /// How a fitted parameter's sensitivities were computed ([`Problem::methods`]).
@@ -102,6 +116,7 @@ impl Problem {
         series: Vec<Series>,
         fitted: Vec<Fitted>,
         sensitivities: Sensitivities,
+        series_sensitivities: SeriesSensitivities,
     ) -> Result<Problem, String> {
         if fitted.is_empty() {
             return Err("nothing to fit: give at least one --fit NAME".into());
@@ -154,6 +169,7 @@ impl Problem {
             finite_differences: Mutex::new(vec![None; fitted.len()]),
             fitted,
             sensitivities,
+            series_sensitivities,
         })
     }
 
@@ -313,21 +329,91 @@ impl Problem {
     }
 
     /// The exact columns of `d residuals / d z` at `z`, or for each parameter why there is
-    /// none: only frequency responses have them.
+    /// none: the frequency responses' and peaks' from the linearisation's derivatives, the time
+    /// series' from forward sensitivities; a column is exact where every part of it is.
     fn exact_columns(&self, z: &[f64]) -> Result<Vec<Result<DVector<f64>, String>>, String> {
         if self.sensitivities == Sensitivities::Central {
             let why = "asked for (--sensitivities central)".to_string();
             return Ok(vec![Err(why); z.len()]);
         }
-        if !self.series.is_empty() {
-            let why = "time series have no exact sensitivities yet".to_string();
-            return Ok(vec![Err(why); z.len()]);
-        }
         let p = self.p_of_z(z);
         let values = self.values_at(&p)?;
         let seeds: Vec<usize> = self.fitted.iter().map(|f| f.index).collect();
+        let mut columns: Vec<Result<Vec<f64>, String>> = vec![Ok(Vec::new()); z.len()];
+        let mut append = |parts: Vec<Result<Vec<f64>, String>>| {
+            for (column, part) in columns.iter_mut().zip(parts) {
+                if let Ok(c) = column {
+                    match part {
+                        Ok(part) => c.extend(part),
+                        Err(e) => *column = Err(e),
+                    }
+                }
+            }
+        };
+        if !self.frfs.is_empty() || !self.peaks.is_empty() {
+            append(self.linear_columns(z, &values, &seeds)?);
+        }
+        for d in &self.series {
+            append(self.series_columns(d, z, &values)?);
+        }
+        Ok(columns
+            .into_iter()
+            .map(|c| c.map(DVector::from_vec))
+            .collect())
+    }
+
+    /// The time series `d`'s part of the exact columns at `z` (`values` the configuration
+    /// there): the forward sensitivities of its simulation along each fitted parameter
+    /// ([`simulate_with_sensitivities`]), relative to each output's RMS.
+    fn series_columns(
+        &self,
+        d: &Series,
+        z: &[f64],
+        values: &Values,
+    ) -> Result<Vec<Result<Vec<f64>, String>>, String> {
+        if self.series_sensitivities == SeriesSensitivities::Central {
+            let why = "time series: central differences of the simulation (forward \
+                       sensitivities with --series-sensitivities forward)";
+            return Ok(vec![Err(why.to_string()); z.len()]);
+        }
+        let directions: Vec<Direction> = self
+            .fitted
+            .iter()
+            .zip(z)
+            .map(|(f, &z)| Direction {
+                seed: f.index,
+                scale: f.dp_dz(z),
+            })
+            .collect();
+        let run = d
+            .with_drive(|drive| simulate_with_sensitivities(values, drive, &directions))
+            .map_err(|e| format!("--series {}: {e}", d.file))?;
+        Ok(run
+            .derivatives
+            .into_iter()
+            .map(|dy| {
+                let dy = dy?;
+                self.derivatives.fetch_add(1, Ordering::Relaxed);
+                Ok(d.outputs
+                    .iter()
+                    .zip(&dy)
+                    .flat_map(|((.., rms), dy)| dy.iter().map(move |v| v / rms))
+                    .collect())
+            })
+            .collect())
+    }
+
+    /// The frequency responses' and peaks' part of the exact columns at `z` (`values` the
+    /// configuration there, `seeds` the fitted parameters): from the derivatives of the
+    /// linearisation at rest.
+    fn linear_columns(
+        &self,
+        z: &[f64],
+        values: &Values,
+        seeds: &[usize],
+    ) -> Result<Vec<Result<Vec<f64>, String>>, String> {
         // Without any exact derivative, the linearisation would be computed for nothing.
-        let reasons: Vec<Option<String>> = seeds.iter().map(|&s| unavailable(&values, s)).collect();
+        let reasons: Vec<Option<String>> = seeds.iter().map(|&s| unavailable(values, s)).collect();
         if reasons.iter().all(Option::is_some) {
             return Ok(reasons
                 .into_iter()
@@ -335,7 +421,7 @@ impl Problem {
                 .collect());
         }
         self.evaluations.fetch_add(1, Ordering::Relaxed);
-        let (lin, derivatives) = linearization_at_rest_with_derivatives(&values, &seeds)?;
+        let (lin, derivatives) = linearization_at_rest_with_derivatives(values, seeds)?;
         let model_peaks: Vec<Vec<f64>> = self
             .peaks
             .iter()
@@ -379,7 +465,7 @@ impl Problem {
         dp_dz: f64,
         states: &HashMap<(usize, u64), StateResponseLu>,
         model_peaks: &[Vec<f64>],
-    ) -> Result<DVector<f64>, String> {
+    ) -> Result<Vec<f64>, String> {
         let mut column = Vec::with_capacity(self.len());
         // One derivative per input and frequency, shared by the outputs measured there.
         let mut derivatives: HashMap<(usize, u64), DVector<Complex<f64>>> = HashMap::new();
@@ -403,7 +489,7 @@ impl Problem {
                 column.push(peak_derivative(lin, d, i, o, f)? * dp_dz / sigma);
             }
         }
-        Ok(DVector::from_vec(column))
+        Ok(column)
     }
 
     /// The column `j` of `d residuals / d z` at `z` by central differences (module doc).

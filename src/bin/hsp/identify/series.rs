@@ -3,7 +3,7 @@
 //! fitted.
 //!
 //! The model is the FMU's own co-simulation (`HydraulicSlewingPlate` through the `FmuModel`
-//! trait, its solver and tolerances from the configuration): initialised at the first time
+//! trait, its solver and tolerances from the configuration, [`simulate`]): initialised at the first time
 //! with the first row's inputs, then stepped from row to row with each row's inputs held to the
 //! next (zero-order hold, as an importer sets inputs at its communication points), the outputs
 //! read at every row. The residual of output `o` at row `k` is
@@ -15,9 +15,9 @@
 //! `s_o` the RMS of the measured column, so that outputs in different units weigh alike and a
 //! 1 % error of a signal's size counts the same in each.
 
-use hydraulic_slewing_plate::fmu::{Causality, Experiment, FmuModel, LogCategory, Value, Values};
+use hydraulic_slewing_plate::fmu::{Causality, Values};
+use hydraulic_slewing_plate::model::sensitivity::series::{simulate, Drive};
 use hydraulic_slewing_plate::model::variables::VARIABLES;
-use hydraulic_slewing_plate::model::HydraulicSlewingPlate;
 
 use super::data::Measured;
 
@@ -103,37 +103,23 @@ impl Series {
     /// The model's outputs in the configuration `values` driven by the inputs, one vector per
     /// output column (module doc).
     pub fn simulate(&self, values: &Values) -> Result<Vec<Vec<f64>>, String> {
-        let mut values = values.clone();
-        let set_inputs = |values: &mut Values, k: usize| {
-            for (i, _, u) in &self.inputs {
-                values.set(*i, Value::Real(u[k]));
-            }
-        };
-        let mut model = HydraulicSlewingPlate::new();
-        let mut log = |_: LogCategory, _: &dyn Fn() -> String| {};
-        let experiment = Experiment {
-            start_time: self.time[0],
-            stop_time: self.time.last().copied(),
-            ..Experiment::default()
-        };
-        set_inputs(&mut values, 0);
-        model
-            .initialize(&mut values, &experiment, &mut log)
-            .map_err(|e| format!("--series {}: initialising: {e}", self.file))?;
-        let mut out: Vec<Vec<f64>> = vec![Vec::with_capacity(self.time.len()); self.outputs.len()];
-        for k in 0..self.time.len() {
-            if k > 0 {
-                model
-                    .do_step(&mut values, self.time[k - 1], self.time[k], &mut log)
-                    .map_err(|e| format!("--series {}: {}", self.file, e.message))?;
-                set_inputs(&mut values, k);
-            }
-            model.refresh(&mut values, None);
-            for (o, (i, _, _, _)) in self.outputs.iter().enumerate() {
-                out[o].push(values.real(*i));
-            }
-        }
-        Ok(out)
+        self.with_drive(|drive| simulate(values, drive))
+            .map_err(|e| format!("--series {}: {e}", self.file))
+    }
+
+    /// `f` of the series as the library's [`Drive`]: its times, inputs and outputs.
+    pub fn with_drive<R>(&self, f: impl FnOnce(Drive) -> R) -> R {
+        let inputs: Vec<(usize, &[f64])> = self
+            .inputs
+            .iter()
+            .map(|(i, _, u)| (*i, u.as_slice()))
+            .collect();
+        let outputs: Vec<usize> = self.outputs.iter().map(|(i, ..)| *i).collect();
+        f(Drive {
+            time: &self.time,
+            inputs: &inputs,
+            outputs: &outputs,
+        })
     }
 
     /// The residuals of the model's outputs `model` ([`Series::simulate`]) (module doc).
