@@ -815,7 +815,10 @@ fn forward_sensitivities_and_central_differences_give_the_same_series_fit() {
         let why = "--series-sensitivities forward";
         same_fit(&forward, &central, name, why, (1e-3, 1e-3));
         let (lo, hi) = ci95(&forward, name).unwrap();
-        assert!(lo <= truth && truth <= hi, "{name}: {truth} not in [{lo}, {hi}]");
+        assert!(
+            lo <= truth && truth <= hi,
+            "{name}: {truth} not in [{lo}, {hi}]"
+        );
     }
 }
 

@@ -42,46 +42,35 @@ pub fn linearization_at_rest_with_derivatives(
     values: &Values,
     seeds: &[usize],
 ) -> Result<(Linearization, Vec<Result<LinearizationDerivative, String>>), String> {
+    linearization_at_rest_of(values, seeded_at_rest(values, seeds))
+}
+
+/// The models of `values` in dual numbers for each parameter of `seeds`, the vane motor
+/// sliding as at rest, or why one is not available (a part whose fragments take `f64`
+/// constants, or a configuration its model refuses): what a caller checks before it asks for
+/// the linearisation ([`linearization_at_rest_of`]), to skip it when no parameter has a
+/// derivative.
+pub fn seeded_at_rest(values: &Values, seeds: &[usize]) -> Vec<Result<Seeded, String>> {
     let experiment = Experiment::default();
-    let p = Parameters::from_values(values, &experiment)?.sliding();
-    let (_, lin) = Assembled::with_linearization_at_rest(&p)?;
-    let derivatives = seeds
+    seeds
         .iter()
-        .map(|&seed| derivative_at_rest(values, &experiment, &lin, seed))
+        .map(|&seed| Seeded::build(values, &experiment, seed, true))
+        .collect()
+}
+
+/// [`linearization_at_rest_with_derivatives`] with the models in dual numbers already built
+/// ([`seeded_at_rest`]).
+pub fn linearization_at_rest_of(
+    values: &Values,
+    seeded: Vec<Result<Seeded, String>>,
+) -> Result<(Linearization, Vec<Result<LinearizationDerivative, String>>), String> {
+    let p = Parameters::from_values(values, &Experiment::default())?.sliding();
+    let (_, lin) = Assembled::with_linearization_at_rest(&p)?;
+    let derivatives = seeded
+        .into_iter()
+        .map(|s| s.and_then(|s| s.derivative_at_rest(&lin)))
         .collect();
     Ok((lin, derivatives))
-}
-
-/// Why the exact derivative with respect to the parameter `seed` is not available in the
-/// configuration `values`, if it is not (a part whose fragments take `f64` constants, or a
-/// configuration its model refuses): the check [`linearization_at_rest_with_derivatives`]
-/// makes first, without its compile and its linearisation, so that a caller can skip them when
-/// no parameter has a derivative.
-pub fn unavailable(values: &Values, seed: usize) -> Option<String> {
-    let name = VARIABLES.get(seed).map_or("?", |v| v.name);
-    match Parameters::seeded(values, &Experiment::default(), seed) {
-        Ok(p) => bond_graph_and_plate_for(&p.sliding())
-            .err()
-            .map(|e| format!("{name}: {e}")),
-        Err(e) => Some(e),
-    }
-}
-
-/// The derivative of `lin` (the linearisation at rest of `values`) with respect to the
-/// parameter `seed`.
-fn derivative_at_rest(
-    values: &Values,
-    experiment: &Experiment,
-    lin: &Linearization,
-    seed: usize,
-) -> Result<LinearizationDerivative, String> {
-    let name = VARIABLES[seed].name;
-    let seeded = Seeded::build(values, experiment, seed, true, &lin.state_names)?;
-    let dx0 = seeded.rest_derivative(&lin.x0, &lin.u0)?;
-    seeded
-        .compiled
-        .linearize_with_sensitivity(&lin.x0, &dx0, &lin.u0)
-        .map_err(|e| format!("{name}: {e}"))
 }
 
 /// The model built in dual numbers for one parameter ([`Parameters::seeded`]): its compiled
@@ -99,25 +88,18 @@ pub struct Seeded {
 
 impl Seeded {
     /// Builds the model of `values` seeded on the parameter `seed`, with the vane motor sliding
-    /// if `sliding` (as linearisations at rest take it), and checks that its states are
-    /// `state_names`, the model's; an error names the parameter.
+    /// if `sliding` (as linearisations at rest take it); an error names the parameter.
     pub fn build(
         values: &Values,
         experiment: &Experiment,
         seed: usize,
         sliding: bool,
-        state_names: &[String],
     ) -> Result<Seeded, String> {
         let name = VARIABLES.get(seed).map_or("?", |v| v.name);
         let p = Parameters::seeded(values, experiment, seed)?;
         let p = if sliding { p.sliding() } else { p };
         let (graph, _) = bond_graph_and_plate_for(&p).map_err(|e| format!("{name}: {e}"))?;
         let compiled = graph.compile().map_err(|e| e.to_string())?;
-        if compiled.state_names() != state_names {
-            return Err(format!(
-                "{name}: the model built for its derivative has other states than the model"
-            ));
-        }
         let rest_scale =
             (p.hydraulics == HydraulicsModel::ServoValve).then(|| servo_valve::nominals(&graph));
         Ok(Seeded {
@@ -125,6 +107,30 @@ impl Seeded {
             compiled,
             rest_scale,
         })
+    }
+
+    /// An error unless the model's states are `state_names`, those of the model it is a
+    /// derivative of.
+    pub fn check_states(&self, state_names: &[String]) -> Result<(), String> {
+        if self.compiled.state_names() != state_names {
+            return Err(format!(
+                "{}: the model built for its derivative has other states than the model",
+                VARIABLES[self.seed].name
+            ));
+        }
+        Ok(())
+    }
+
+    /// The derivative of `lin`, the linearisation at rest of the model, along the parameter.
+    pub fn derivative_at_rest(
+        &self,
+        lin: &Linearization,
+    ) -> Result<LinearizationDerivative, String> {
+        self.check_states(&lin.state_names)?;
+        let dx0 = self.rest_derivative(&lin.x0, &lin.u0)?;
+        self.compiled
+            .linearize_with_sensitivity(&lin.x0, &dx0, &lin.u0)
+            .map_err(|e| format!("{}: {e}", VARIABLES[self.seed].name))
     }
 
     /// The rest state's derivative along the parameter, `x0` the rest state and `u0` the inputs

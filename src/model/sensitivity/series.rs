@@ -173,8 +173,10 @@ pub fn simulate_with_sensitivities(
     let mut derivatives: Vec<Result<Vec<Vec<f64>>, String>> = Vec::new();
     let mut start = x0.clone();
     for d in directions {
-        let built = Seeded::build(values, &experiment, d.seed, false, &state_names)
-            .and_then(|s| Ok((s.rest_derivative(&x0, &u0)?, s)));
+        let built = Seeded::build(values, &experiment, d.seed, false).and_then(|s| {
+            s.check_states(&state_names)?;
+            Ok((s.rest_derivative(&x0, &u0)?, s))
+        });
         match built {
             Ok((dx0, s)) => {
                 start.extend(dx0.iter().map(|v| d.scale * v));

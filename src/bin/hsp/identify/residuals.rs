@@ -38,9 +38,7 @@ use hydraulic_slewing_plate::model::frf::{
 };
 use hydraulic_slewing_plate::model::parameters::{check, Parameters};
 use hydraulic_slewing_plate::model::sensitivity::series::{simulate_with_sensitivities, Direction};
-use hydraulic_slewing_plate::model::sensitivity::{
-    linearization_at_rest_with_derivatives, unavailable,
-};
+use hydraulic_slewing_plate::model::sensitivity::{linearization_at_rest_of, seeded_at_rest};
 use nalgebra::{Complex, DMatrix, DVector};
 
 use super::data::{Fitted, Frf};
@@ -413,15 +411,12 @@ impl Problem {
         seeds: &[usize],
     ) -> Result<Vec<Result<Vec<f64>, String>>, String> {
         // Without any exact derivative, the linearisation would be computed for nothing.
-        let reasons: Vec<Option<String>> = seeds.iter().map(|&s| unavailable(values, s)).collect();
-        if reasons.iter().all(Option::is_some) {
-            return Ok(reasons
-                .into_iter()
-                .map(|r| Err(r.unwrap_or_default()))
-                .collect());
+        let seeded = seeded_at_rest(values, seeds);
+        if seeded.iter().all(Result::is_err) {
+            return Ok(seeded.into_iter().map(|s| s.map(|_| Vec::new())).collect());
         }
         self.evaluations.fetch_add(1, Ordering::Relaxed);
-        let (lin, derivatives) = linearization_at_rest_with_derivatives(values, seeds)?;
+        let (lin, derivatives) = linearization_at_rest_of(values, seeded)?;
         let model_peaks: Vec<Vec<f64>> = self
             .peaks
             .iter()
