@@ -70,6 +70,10 @@ pub struct Problem {
     /// Per fitted parameter, why its sensitivities were central differences (the last reason
     /// met), `None` while they have been exact.
     finite_differences: Mutex<Vec<Option<String>>>,
+    /// The model's peaks taken for the measured ones at the parameters last evaluated (their
+    /// bits): the exact Jacobian at the same point takes them from here instead of searching
+    /// the response again.
+    last_peaks: Mutex<Option<KeptPeaks>>,
     /// How the sensitivities are asked for.
     sensitivities: Sensitivities,
     /// How the time series' sensitivities are asked for.
@@ -166,6 +170,7 @@ impl Problem {
             derivatives: AtomicUsize::new(0),
             finite_differences: Mutex::new(vec![None; fitted.len()]),
             fitted,
+            last_peaks: Mutex::new(None),
             sensitivities,
             series_sensitivities,
         })
@@ -247,11 +252,18 @@ impl Problem {
                 r.push(e.im);
             }
         }
-        for d in &self.peaks {
-            let model = d.model(&lin)?;
+        let peaks: Vec<Vec<f64>> = self
+            .peaks
+            .iter()
+            .map(|d| d.model(&lin))
+            .collect::<Result<_, _>>()?;
+        for (d, model) in self.peaks.iter().zip(&peaks) {
             for ((m, f), sigma) in model.iter().zip(&d.f_hz).zip(&d.sigma_hz) {
                 r.push((m - f) / sigma);
             }
+        }
+        if !peaks.is_empty() {
+            *self.last_peaks.lock().unwrap() = Some((bits(p), peaks));
         }
         if !self.series.is_empty() {
             let values = self.values_at(p)?;
@@ -417,11 +429,19 @@ impl Problem {
         }
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let (lin, derivatives) = linearization_at_rest_of(values, seeded)?;
-        let model_peaks: Vec<Vec<f64>> = self
-            .peaks
-            .iter()
-            .map(|d| d.model(&lin))
-            .collect::<Result<_, _>>()?;
+        let p = self.p_of_z(z);
+        let kept = match &*self.last_peaks.lock().unwrap() {
+            Some((at, peaks)) if *at == bits(&p) => Some(peaks.clone()),
+            _ => None,
+        };
+        let model_peaks: Vec<Vec<f64>> = match kept {
+            Some(peaks) => peaks,
+            None => self
+                .peaks
+                .iter()
+                .map(|d| d.model(&lin))
+                .collect::<Result<_, _>>()?,
+        };
         // One LU per input and frequency, shared by the outputs measured there and by the
         // parameters.
         let mut states: HashMap<(usize, u64), StateResponseLu> = HashMap::new();
@@ -502,6 +522,14 @@ impl Problem {
         };
         Ok((at(STEP)? - at(-STEP)?) / (2.0 * STEP))
     }
+}
+
+/// The model's peaks at parameters given by their bits ([`bits`]).
+type KeptPeaks = (Vec<u64>, Vec<Vec<f64>>);
+
+/// The bits of the parameters `p`: the key of what was computed at them.
+fn bits(p: &[f64]) -> Vec<u64> {
+    p.iter().map(|v| v.to_bits()).collect()
 }
 
 /// The weighted relative error `e_k = w_k (H_model - H_measured) / |H_measured|` of one point
