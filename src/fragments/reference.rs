@@ -199,18 +199,18 @@ pub struct ReferencePorts {
     pub reference: SignalId,
 }
 
-/// Adds the generator: the loop's reference is `r + k_pot theta_ref(clock)` (`k_pot` in `f64`
-/// or with its derivative, which [`move_law`] carries).
-pub fn add_reference(
+/// Adds the generator: the loop's reference is `r + k_pot theta_ref(clock)` (the move's
+/// parameters and `k_pot` in `f64` or with their derivatives, which [`move_law`] carries).
+pub fn add_reference<S: Copy + Into<Dual>>(
     g: &mut BondGraph,
     prefix: &str,
-    p: &MoveParameters,
+    p: &MoveParameters<S>,
     k_pot: impl Into<Dual>,
     r: SignalId,
 ) -> ReferencePorts {
     let one = g.add_constant(format!("{prefix}.rate"), 1.0);
     let clock = g.add_integrator(format!("{prefix}.clock"), one);
-    g.set_integrator_nominal(clock, p.duration);
+    g.set_integrator_nominal(clock, p.duration.into().v);
     g.set_integrator_units(
         clock,
         StateUnits {

@@ -58,7 +58,6 @@ macro_rules! values_only {
 /// structure's modal dashpots with the derivatives of its modes along the bar's stiffness); the
 /// other parts refuse a parameter with a derivative (`values_only`).
 pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
-    let reference = values_only!(p.reference, "the command generator's move (reference.*)");
     let limits = values_only!(p.limits, "the validity monitors");
     // The plate's damping ratio carries its derivative apart; the plate's other constants go
     // into its Ritz model in f64.
@@ -134,8 +133,9 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
         }
     };
     // The command generator's move on top of r, unless an external controller drives the coil.
-    let loop_reference = if reference.is_on() && !controller.external {
-        reference::add_reference(&mut g, "reference", &reference, controller.k_pot, r).reference
+    let reference = &p.reference;
+    let loop_reference = if reference.map(|x| x.v).is_on() && !controller.external {
+        reference::add_reference(&mut g, "reference", reference, controller.k_pot, r).reference
     } else {
         r
     };
