@@ -60,19 +60,9 @@ macro_rules! values_only {
 pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
     let reference = values_only!(p.reference, "the command generator's move (reference.*)");
     let limits = values_only!(p.limits, "the validity monitors");
-    // The plate's damping ratio carries its derivative apart; the plate's other constants go
-    // into its Ritz model in f64.
-    let zeta = p.plate.zeta;
-    let plate_parameters = {
-        let mut others = p.plate.clone();
-        others.zeta = Dual::from(zeta.v);
-        let mut values = values_only!(
-            others,
-            "the plate and hub (plate.* other than plate.zeta, hub.I_H)"
-        );
-        values.zeta = zeta.v;
-        values
-    };
+    // The plate and hub carry their derivatives through the Ritz model (every `plate.*` and
+    // `hub.I_H`); the values alone for the choices and the nominal magnitudes.
+    let plate_parameters = p.plate.map(|x| x.v);
     let controller = &p.controller;
     let controller_values = controller.map(|x| x.v);
     controller_values.validate()?;
@@ -83,13 +73,14 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
                 .into(),
         );
     }
-    let mut model = PlateModel::new(&plate_parameters)?;
-    model.damping_derivative = plate::damping::coordinate_damping_derivative(&model, zeta.d);
+    let zeta = p.plate.zeta;
+    let mut model = PlateModel::for_parameters(&p.plate)?;
     // The consistent structure on its hub is damped on its own modes (bar included, motor
     // clamped), in place of the R per clamped-plate mode and the bar's dashpot.
     let modal_damping = model.hub && plate_parameters.formulation == Formulation::Consistent;
     if modal_damping {
-        // The structure's modes, and so its dashpots, move with the bar's stiffness.
+        // The structure's modes, and so its dashpots, move with the bar's stiffness and with
+        // the plate's and hub's parameters (the model's derivatives).
         let bar = p.motor_coupled.then_some(p.torsion_bar_k);
         model.dashpots = plate::damping::modal_dashpots(&model, bar, zeta)?;
         // The coordinates the dashpots span lose their own R (`damping` is per plate coordinate).
@@ -158,7 +149,7 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
             torsion_bar::damping_coefficient(
                 p.torsion_bar_k,
                 p.torsion_bar_zeta,
-                Dual::from(plate_parameters.hub_total_inertia()),
+                p.plate.hub_total_inertia(),
             )
         };
         torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, c, rotor)
@@ -201,12 +192,8 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
             omega_hub,
         },
         &limits,
-        plate_parameters.a,
-        validity::first_clamped_bending(
-            plate_parameters.a,
-            plate_parameters.rigidity(),
-            plate_parameters.areal_mass(),
-        ),
+        p.plate.a,
+        validity::first_clamped_bending(p.plate.a, p.plate.rigidity(), p.plate.areal_mass()),
     );
     for (k, &a) in plate.acc.iter().enumerate() {
         g.add_output(format!("acc[{}]", k + 1), a);
