@@ -114,7 +114,16 @@ impl Limits {
 
     /// The shear stress at the surface of the bar per unit torque, `16 / (pi d^3)` \[Pa/(N m)\].
     pub fn bar_stress_per_torque(&self) -> f64 {
-        16.0 / (std::f64::consts::PI * self.bar_d.powi(3))
+        self.map(Dual::from).bar_stress_per_torque().v
+    }
+}
+
+impl Limits<Dual> {
+    /// [`Limits::bar_stress_per_torque`] with its derivative (along `torsion_bar.d`).
+    pub fn bar_stress_per_torque(&self) -> Dual {
+        let d = self.bar_d;
+        let cube = Dual::new(d.v.powi(3), 3.0 * d.v.powi(2) * d.d);
+        16.0 / (std::f64::consts::PI * cube)
     }
 }
 
@@ -231,11 +240,13 @@ pub struct Watched {
 
 /// Adds the four monitor outputs under the names of [`Monitor::variable`]; `a` is the plate's
 /// length and `omega_1` its first clamped bending frequency \[rad/s\], both in `f64` or with
-/// their derivatives along a parameter (the gains `1 / a` and `1 / omega_1` carry them).
+/// their derivatives along a parameter (the gains `1 / a`, `1 / omega_1` and the bar's
+/// `16 / (pi d^3)` carry them; the strengths only set the warnings' thresholds, which are not
+/// outputs).
 pub fn add_monitors(
     g: &mut BondGraph,
     s: Watched,
-    limits: &Limits,
+    limits: &Limits<Dual>,
     a: impl Into<Dual>,
     omega_1: impl Into<Dual>,
 ) {

@@ -54,12 +54,13 @@ macro_rules! values_only {
 /// [`bond_graph_and_plate`] from parameters in dual numbers: the model built for the parameter
 /// whose derivatives they carry ([`Parameters::seeded`]), its constants with their derivatives
 /// (`crate::model::sensitivity`). The LOES, the servo valve, the controller, the torsion bar
-/// (stiffness and damping ratio) and the plate's damping ratio `plate.zeta` carry them (the
-/// structure's modal dashpots with the derivatives of its modes along the bar's stiffness); the
-/// other parts refuse a parameter with a derivative (`values_only`).
+/// (stiffness and damping ratio), the plate (every `plate.*`: its Ritz model built in dual
+/// numbers, [`PlateModel::for_parameters`]) and the hub's inertia `hub.I_H` carry them (the
+/// structure's modal dashpots with the derivatives of its modes along all of these), and the
+/// validity monitors' gains; the command generator refuses a parameter with a derivative
+/// (`values_only`).
 pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
     let reference = values_only!(p.reference, "the command generator's move (reference.*)");
-    let limits = values_only!(p.limits, "the validity monitors");
     // The plate and hub carry their derivatives through the Ritz model (every `plate.*` and
     // `hub.I_H`); the values alone for the choices and the nominal magnitudes.
     let plate_parameters = p.plate.map(|x| x.v);
@@ -191,7 +192,7 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
             bar_torque: torque,
             omega_hub,
         },
-        &limits,
+        &p.limits,
         p.plate.a,
         validity::first_clamped_bending(p.plate.a, p.plate.rigidity(), p.plate.areal_mass()),
     );

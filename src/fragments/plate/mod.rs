@@ -934,6 +934,114 @@ mod tests {
         }
     }
 
+    /// The model built along a seeded parameter: its values are the `f64` model's bits, in
+    /// both formulations and root conditions, for every parameter.
+    fn seeded(p: &PlateParameters, seed: impl Fn(&mut PlateParameters<Dual>)) -> PlateModel {
+        let mut dual = p.map(Dual::from);
+        seed(&mut dual);
+        let model = PlateModel::for_parameters(&dual).unwrap();
+        let plain = PlateModel::new(p).unwrap();
+        assert_eq!(model.mass, plain.mass);
+        assert_eq!(model.stiffness, plain.stiffness);
+        assert_eq!(model.damping, plain.damping);
+        assert_eq!(model.forces, plain.forces);
+        assert_eq!(model.tip, plain.tip);
+        assert_eq!(model.stress, plain.stress);
+        assert_eq!(model.accelerometers, plain.accelerometers);
+        model
+    }
+
+    fn configurations() -> Vec<PlateParameters> {
+        let mut all = Vec::new();
+        for formulation in [Formulation::Paper, Formulation::Consistent] {
+            for root in [Root::Hub, Root::Locked] {
+                all.push(PlateParameters {
+                    formulation,
+                    root,
+                    ..PlateParameters::default()
+                });
+            }
+        }
+        all
+    }
+
+    /// `K` is `E` times a matrix of the others (`D = E h^3 / (12 (1 - nu^2))`, and the clamped
+    /// plate's modes, eigenvectors of `S K S`, do not move with `E`): `dK/dE = K / E`, `dM/dE =
+    /// 0`, and the stress `E h (...)` per unit coordinate `sigma / E`; the shapes' vectors stay
+    /// (to the eigen-solver's round-off in the consistent formulation's modes).
+    #[test]
+    fn along_e_the_stiffness_is_k_over_e() {
+        for p in configurations() {
+            let what = format!("{:?} {:?}", p.formulation, p.root);
+            let m = seeded(&p, |d| d.e.d = 1.0);
+            for (name, value, derivative) in [
+                ("K", &m.stiffness, &m.derivative.stiffness),
+                (
+                    "sigma",
+                    &DMatrix::from_column_slice(m.dim(), 1, m.stress.as_slice()),
+                    &{ DMatrix::from_column_slice(m.dim(), 1, m.derivative.stress.as_slice()) },
+                ),
+            ] {
+                let expect = value / p.e;
+                let miss = (derivative - &expect).amax();
+                assert!(
+                    miss <= 1e-9 * expect.amax(),
+                    "{what}: d{name}/dE off by {miss:e}"
+                );
+            }
+            // (The hub's coupling to the modes moves by the modes' round-off.)
+            let mass = m.derivative.mass.amax() * p.e / m.mass.amax();
+            assert!(mass <= 1e-9, "{what}: M moves with E by {mass:e}");
+            // The vectors of shapes: exactly still in the paper's closed forms, to the
+            // eigen-solver's round-off in the consistent one's modes.
+            let tip = m.derivative.tip.amax() * p.e / m.tip.amax();
+            assert!(tip <= 1e-9, "{what}: the tip moves with E by {tip:e}");
+        }
+    }
+
+    /// Along `h`: `D ∝ h^3` and `m ∝ h`. In the paper's formulation each mode's `k` and `m`
+    /// are those closed forms (`dk/dh = 3 k / h`; `dm/dh = m / h` without air), and the hub's
+    /// inertia `I_H + 2 I_P` gains `2 I_P / h`. Along `I_H` only `M_00` moves, by 1.
+    #[test]
+    fn along_h_and_i_h_the_closed_forms() {
+        let p = PlateParameters {
+            formulation: Formulation::Paper,
+            ca: 0.0,
+            ..PlateParameters::default()
+        };
+        let m = seeded(&p, |d| d.h.d = 1.0);
+        let k3 = &m.stiffness * (3.0 / p.h);
+        assert!((&m.derivative.stiffness - &k3).amax() <= 1e-12 * k3.amax());
+        for j in 1..m.dim() {
+            let expect = m.mass[(j, j)] / p.h;
+            assert!((m.derivative.mass[(j, j)] - expect).abs() <= 1e-14 * expect);
+        }
+        let expect = 2.0 * p.i_p() / p.h;
+        assert!((m.derivative.mass[(0, 0)] - expect).abs() <= 1e-14 * expect);
+        for p in configurations() {
+            let m = seeded(&p, |d| d.i_h.d = 1.0);
+            let mut expect = DMatrix::zeros(m.dim(), m.dim());
+            if m.hub {
+                expect[(0, 0)] = 1.0;
+            }
+            assert_eq!(m.derivative.mass, expect);
+            assert_eq!(m.derivative.stiffness.amax(), 0.0);
+        }
+    }
+
+    /// Along every other parameter the model keeps its values' bits (`seeded`).
+    #[test]
+    fn a_seeded_model_keeps_the_values() {
+        for p in configurations() {
+            seeded(&p, |d| d.rho.d = 1.0);
+            seeded(&p, |d| d.nu.d = 1.0);
+            seeded(&p, |d| d.a.d = 1.0);
+            seeded(&p, |d| d.b.d = 1.0);
+            seeded(&p, |d| d.ca.d = 1.0);
+            seeded(&p, |d| d.x1.d = 1.0);
+        }
+    }
+
     /// The paper formulation's mass matrix is diagonal: the hub keeps `I_H + 2 I_P` and no mode
     /// rides on it.
     #[test]
