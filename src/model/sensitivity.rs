@@ -277,6 +277,7 @@ mod tests {
             linearization_at(values, seed, -STEP),
         );
         let (mut worst, mut relative, mut at) = (0.0f64, 0.0f64, String::new());
+        let mut per_matrix = String::new();
         for (what, exact, value, plus, minus) in [
             ("A", &d.a, &lin.a, &plus.a, &minus.a),
             ("B", &d.b, &lin.b, &plus.b, &minus.b),
@@ -312,11 +313,12 @@ mod tests {
             let miss = (exact - &fd).amax();
             if fd.amax() > 0.0 {
                 relative = relative.max(miss / fd.amax());
+                per_matrix += &format!(" d{what} {:.1e} of {:.1e};", miss / fd.amax(), fd.amax());
             }
         }
         eprintln!(
-            "{name}: largest error {relative:.1e} of the largest derivative; worst entry \
-             {worst:.1e} of its tolerance, {at}"
+            "{name}: largest error {relative:.1e} of the largest derivative ({per_matrix}); \
+             worst entry {worst:.1e} of its tolerance, {at}"
         );
         (d, worst)
     }
