@@ -10,13 +10,16 @@
 //! **What is built, what is not.** Carried in dual numbers through their fragments: the LOES
 //! (`loes.*`); the servo valve (`servo_valve.*`); the controller (`controller.A1`, `A2`, `k_pot`, the last also in the command
 //! generator's move, `k_pl` except at 0, where the pressure feedback's state is not in the model,
-//! `f_pl`, `e_max`); the torsion bar's stiffness and damping ratio; the plate's damping ratio
-//! `plate.zeta`, per plate coordinate and on the structure's modes, whose modal dashpots move
-//! with the bar's stiffness by the derivatives of the structure's eigenpairs
-//! ([`crate::fragments::plate::damping`]). The other parts' fragments still fold their
-//! parameters in as `f64` constants (the plate's others among them: its Ritz model is built in
-//! `f64`), and a parameter of theirs gets an error that says so (`compose::values_only`), which
-//! `hsp identify` answers with central differences for that parameter, and says so. The servo
+//! `f_pl`, `e_max`); the torsion bar's stiffness and damping ratio; the plate (every `plate.*`)
+//! and the hub's inertia `hub.I_H`, through the plate's Ritz model built in dual numbers
+//! ([`crate::fragments::plate::PlateModel::for_parameters`]: the clamped plate's modes by the
+//! derivatives of their eigenpairs), per plate coordinate and on the structure's modes, whose
+//! modal dashpots move with all of these and the bar's stiffness by the derivatives of the
+//! structure's eigenpairs ([`crate::fragments::plate::damping`]); the validity monitors' gains
+//! (`torsion_bar.d`; the strengths move no output). The command generator's fragment still
+//! folds its parameters in as `f64` constants, and a parameter of its gets an error that says
+//! so (`compose::values_only`), which `hsp identify` answers with central differences for that
+//! parameter, and says so. The servo
 //! valve's parameters are all carried (`servo_valve.*`). Where the rates at rest move with the
 //! parameter (the servo valve's null pressures and volumes with `beta` and `p_supply`), the
 //! rest state's own derivative is part of the point's move: `dx0/dp = -J⁻¹ ∂f/∂p` on the
