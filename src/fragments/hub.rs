@@ -10,6 +10,7 @@
 //! `<prefix>.theta`, a state).
 
 use crate::bond_graph::{BondGraph, BondId, Domain, ElementId, SignalId};
+use crate::math::dual::Dual;
 
 /// Handles into the hub fragment.
 #[derive(Clone, Debug)]
@@ -24,9 +25,10 @@ pub struct HubPorts {
     pub theta: SignalId,
 }
 
-/// Adds the hub. With `Some(inertia)` a one-port I `<prefix>.I`; with `None` the inertia is
-/// supplied later ([`connect_inertia`]).
-pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPorts {
+/// Adds the hub. With `Some(inertia)` a one-port I `<prefix>.I` (in `f64`, or with its
+/// derivative along a parameter: exact sensitivities); with `None` the inertia is supplied
+/// later ([`connect_inertia`]).
+pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<impl Into<Dual>>) -> HubPorts {
     let omega = g.add_signal_port(format!("{prefix}.omega_hub"));
     let theta = g.add_integrator(format!("{prefix}.theta"), omega);
     g.set_integrator_nominal(theta, 1.0);
@@ -38,9 +40,9 @@ pub fn add_hub(g: &mut BondGraph, prefix: &str, inertia: Option<f64>) -> HubPort
         omega,
         theta,
     };
-    if let Some(i) = inertia {
+    if let Some(i) = inertia.map(Into::into) {
         let el = g.add_i(format!("{prefix}.I"), i);
-        g.set_nominal(el, &[i]); // momentum at 1 rad/s
+        g.set_nominal(el, &[i.v]); // momentum at 1 rad/s
         g.set_domains(el, &[Domain::Rotation]);
         let b = g.bond(junction, el);
         connect_inertia(g, &ports, b);

@@ -31,6 +31,7 @@
 //! their own concentration factor, which the model does not know).
 
 use crate::bond_graph::{BondGraph, SignalId};
+use crate::math::dual::{Dual, Real};
 
 /// `|w_tip / a|` above which linear plate theory is not trusted.
 pub const TIP_RATIO_LIMIT: f64 = 0.1;
@@ -113,7 +114,16 @@ impl Limits {
 
     /// The shear stress at the surface of the bar per unit torque, `16 / (pi d^3)` \[Pa/(N m)\].
     pub fn bar_stress_per_torque(&self) -> f64 {
-        16.0 / (std::f64::consts::PI * self.bar_d.powi(3))
+        self.map(Dual::from).bar_stress_per_torque().v
+    }
+}
+
+impl Limits<Dual> {
+    /// [`Limits::bar_stress_per_torque`] with its derivative (along `torsion_bar.d`).
+    pub fn bar_stress_per_torque(&self) -> Dual {
+        let d = self.bar_d;
+        let cube = Dual::new(d.v.powi(3), 3.0 * d.v.powi(2) * d.d);
+        16.0 / (std::f64::consts::PI * cube)
     }
 }
 
@@ -210,9 +220,9 @@ impl Monitor {
 /// The first bending frequency of the plate clamped at the root, `omega_1 = 1.8751^2 /
 /// a^2 sqrt(D / (rho h))` \[rad/s\] (the clamped-free beam with the plate's rigidity: 1.12 Hz for
 /// the paper's plate), the scale of `hub.omega_ratio`.
-pub fn first_clamped_bending(a: f64, rigidity: f64, areal_mass: f64) -> f64 {
+pub fn first_clamped_bending<S: Real>(a: S, rigidity: S, areal_mass: S) -> S {
     const BETA_1: f64 = 1.875_104_068_711_961;
-    BETA_1 * BETA_1 / (a * a) * (rigidity / areal_mass).sqrt()
+    S::cst(BETA_1 * BETA_1) / (a * a) * S::sqrt(rigidity / areal_mass)
 }
 
 /// The signals the monitors read.
@@ -229,8 +239,18 @@ pub struct Watched {
 }
 
 /// Adds the four monitor outputs under the names of [`Monitor::variable`]; `a` is the plate's
-/// length and `omega_1` its first clamped bending frequency \[rad/s\].
-pub fn add_monitors(g: &mut BondGraph, s: Watched, limits: &Limits, a: f64, omega_1: f64) {
+/// length and `omega_1` its first clamped bending frequency \[rad/s\], both in `f64` or with
+/// their derivatives along a parameter (the gains `1 / a`, `1 / omega_1` and the bar's
+/// `16 / (pi d^3)` carry them; the strengths only set the warnings' thresholds, which are not
+/// outputs).
+pub fn add_monitors(
+    g: &mut BondGraph,
+    s: Watched,
+    limits: &Limits<Dual>,
+    a: impl Into<Dual>,
+    omega_1: impl Into<Dual>,
+) {
+    let (a, omega_1): (Dual, Dual) = (a.into(), omega_1.into());
     let ratio = g.add_gain("validity.w_tip_ratio", 1.0 / a, s.w_tip);
     g.add_output(Monitor::TipRatio.variable(), ratio);
     g.add_output(Monitor::PlateStress.variable(), s.plate_stress);

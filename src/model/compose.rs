@@ -35,43 +35,18 @@ pub fn bond_graph_and_plate(p: &Parameters) -> Result<(BondGraph, PlateModel), S
     bond_graph_and_plate_for(&p.map(Dual::from))
 }
 
-/// The parameters of a part whose fragments take `f64` constants, from parameters in dual
-/// numbers; an error naming the part when one of them carries a derivative, which those
-/// fragments would drop (its sensitivity is not built yet, docs/identify.md).
-macro_rules! values_only {
-    ($part:expr, $name:literal) => {{
-        let part = &$part;
-        if part.map(|x: Dual| x.d) != part.map(|_| 0.0) {
-            return Err(format!(
-                "exact sensitivities with respect to the parameters of {} are not built yet",
-                $name
-            ));
-        }
-        part.map(|x: Dual| x.v)
-    }};
-}
-
 /// [`bond_graph_and_plate`] from parameters in dual numbers: the model built for the parameter
 /// whose derivatives they carry ([`Parameters::seeded`]), its constants with their derivatives
 /// (`crate::model::sensitivity`). The LOES, the servo valve, the controller, the torsion bar
-/// (stiffness and damping ratio) and the plate's damping ratio `plate.zeta` carry them (the
-/// structure's modal dashpots with the derivatives of its modes along the bar's stiffness); the
-/// other parts refuse a parameter with a derivative (`values_only`).
+/// (stiffness and damping ratio), the plate (every `plate.*`: its Ritz model built in dual
+/// numbers, [`PlateModel::for_parameters`]) and the hub's inertia `hub.I_H` carry them (the
+/// structure's modal dashpots with the derivatives of its modes along all of these), the
+/// command generator's move, and the validity monitors' gains: every Real parameter but
+/// `controller.k_pl` at 0, which is refused (the pressure feedback is not in the model there).
 pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, PlateModel), String> {
-    let limits = values_only!(p.limits, "the validity monitors");
-    // The plate's damping ratio carries its derivative apart; the plate's other constants go
-    // into its Ritz model in f64.
-    let zeta = p.plate.zeta;
-    let plate_parameters = {
-        let mut others = p.plate.clone();
-        others.zeta = Dual::from(zeta.v);
-        let mut values = values_only!(
-            others,
-            "the plate and hub (plate.* other than plate.zeta, hub.I_H)"
-        );
-        values.zeta = zeta.v;
-        values
-    };
+    // The plate and hub carry their derivatives through the Ritz model (every `plate.*` and
+    // `hub.I_H`); the values alone for the choices and the nominal magnitudes.
+    let plate_parameters = p.plate.map(|x| x.v);
     let controller = &p.controller;
     let controller_values = controller.map(|x| x.v);
     controller_values.validate()?;
@@ -82,13 +57,14 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
                 .into(),
         );
     }
-    let mut model = PlateModel::new(&plate_parameters)?;
-    model.damping_derivative = plate::damping::coordinate_damping_derivative(&model, zeta.d);
+    let zeta = p.plate.zeta;
+    let mut model = PlateModel::for_parameters(&p.plate)?;
     // The consistent structure on its hub is damped on its own modes (bar included, motor
     // clamped), in place of the R per clamped-plate mode and the bar's dashpot.
     let modal_damping = model.hub && plate_parameters.formulation == Formulation::Consistent;
     if modal_damping {
-        // The structure's modes, and so its dashpots, move with the bar's stiffness.
+        // The structure's modes, and so its dashpots, move with the bar's stiffness and with
+        // the plate's and hub's parameters (the model's derivatives).
         let bar = p.motor_coupled.then_some(p.torsion_bar_k);
         model.dashpots = plate::damping::modal_dashpots(&model, bar, zeta)?;
         // The coordinates the dashpots span lose their own R (`damping` is per plate coordinate).
@@ -158,7 +134,7 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
             torsion_bar::damping_coefficient(
                 p.torsion_bar_k,
                 p.torsion_bar_zeta,
-                Dual::from(plate_parameters.hub_total_inertia()),
+                p.plate.hub_total_inertia(),
             )
         };
         torsion_bar::add_torsion_bar(&mut g, "torsion_bar", p.torsion_bar_k, c, rotor)
@@ -200,13 +176,9 @@ pub fn bond_graph_and_plate_for(p: &Parameters<Dual>) -> Result<(BondGraph, Plat
             bar_torque: torque,
             omega_hub,
         },
-        &limits,
-        plate_parameters.a,
-        validity::first_clamped_bending(
-            plate_parameters.a,
-            plate_parameters.rigidity(),
-            plate_parameters.areal_mass(),
-        ),
+        &p.limits,
+        p.plate.a,
+        validity::first_clamped_bending(p.plate.a, p.plate.rigidity(), p.plate.areal_mass()),
     );
     for (k, &a) in plate.acc.iter().enumerate() {
         g.add_output(format!("acc[{}]", k + 1), a);

@@ -36,43 +36,52 @@
 use nalgebra::DVector;
 
 use super::beam_functions::{moment_integral, product_integral, BeamFunction};
-use super::PlateParameters;
+use super::{powi, PlateParameters};
+use crate::math::dual::Dual;
 
-/// The added mass of the air on the assumed modes of one formulation.
+/// The added mass of the air on the assumed modes of one formulation, in `f64` or with the
+/// derivatives along a parameter ([`Dual`]).
 #[derive(Clone, Debug, PartialEq)]
-pub struct AddedMass {
+pub struct AddedMass<S = f64> {
     /// On each assumed-mode product `j = N (m - 1) + n` (the diagonal of the added mass matrix)
     /// \[kg\], over `arms` arms.
-    pub modes: DVector<f64>,
+    pub modes: DVector<S>,
     /// On the rigid rotation, `arms m_h a^3 / 3` \[kg m^2\].
-    pub hub: f64,
+    pub hub: S,
     /// Between the rigid rotation and each assumed-mode product,
     /// `arms m_h a^2 int xi phi_n dxi h_m` \[kg m\].
-    pub coupling: DVector<f64>,
+    pub coupling: DVector<S>,
 }
 
 /// Strip theory's added mass per unit length of the arm, `(m_h, m_alpha)`: heave \[kg/m\] and
 /// twist about the centre line \[kg m\].
 pub fn per_length(p: &PlateParameters) -> (f64, f64) {
+    let (m_h, m_alpha) = per_length_dual(&p.map(Dual::from));
+    (m_h.v, m_alpha.v)
+}
+
+/// [`per_length`] with the derivatives.
+pub fn per_length_dual(p: &PlateParameters<Dual>) -> (Dual, Dual) {
     let c = p.ca * p.rho_air * std::f64::consts::PI;
-    (c * p.b * p.b / 4.0, c * p.b.powi(4) / 128.0)
+    (c * p.b * p.b / 4.0, c * powi(p.b, 4) / 128.0)
 }
 
 /// The added mass on the products of `phis` (along the arm) and `psis` (across it) for `arms`
-/// arms; `None` when there is none (`plate.Ca` or `plate.rho_air` zero).
+/// arms, with its derivatives; `None` when there is none (`plate.Ca` or `plate.rho_air` zero,
+/// and not moving).
 pub fn strip(
-    p: &PlateParameters,
+    p: &PlateParameters<Dual>,
     phis: &[BeamFunction],
     psis: &[BeamFunction],
     arms: f64,
-) -> Option<AddedMass> {
-    let (m_h, m_alpha) = per_length(p);
-    if m_h == 0.0 {
+) -> Option<AddedMass<Dual>> {
+    let (m_h, m_alpha) = per_length_dual(p);
+    if m_h.v == 0.0 && m_h.d == 0.0 {
         return None;
     }
     let (a, b) = (p.a, p.b);
     let heave: Vec<f64> = psis.iter().map(|psi| moment_integral(psi, 0)).collect();
-    let twist: Vec<f64> = psis
+    let twist: Vec<Dual> = psis
         .iter()
         .map(|psi| 12.0 * (moment_integral(psi, 1) - 0.5 * moment_integral(psi, 0)) / b)
         .collect();
@@ -93,7 +102,7 @@ pub fn strip(
     });
     Some(AddedMass {
         modes,
-        hub: arms * m_h * a.powi(3) / 3.0,
+        hub: arms * m_h * powi(a, 3) / 3.0,
         coupling,
     })
 }

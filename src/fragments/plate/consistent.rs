@@ -30,7 +30,11 @@ use nalgebra::{DMatrix, DVector};
 use super::beam_functions::{
     moment_integral, product_tables, BeamFunction, BeamKind, TABLE_ORDERS,
 };
-use super::{added_mass, PlateModel, PlateParameters, Root};
+use super::{
+    added_mass, beam_value, powi, DualDisplacementMap, DualModel, PlateParameters, Root, ZERO,
+};
+use crate::eigen::derivative::symmetric_eigen_derivative;
+use crate::math::dual::{Dual, Real};
 
 /// Number of arms described by the coordinates (antisymmetric motion of the symmetric plate).
 pub const ARMS: f64 = 2.0;
@@ -38,23 +42,30 @@ pub const ARMS: f64 = 2.0;
 /// The Ritz matrices of the plate alone (both arms) in the assumed-mode coordinates
 /// `j = N (m - 1) + n`: `(M, K)`, `M = 2 m a b I`.
 pub fn ritz_matrices(p: &PlateParameters) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (m, k) = ritz_matrices_dual(&p.map(Dual::from));
+    (m.map(|x| x.v), k.map(|x| x.v))
+}
+
+/// [`ritz_matrices`] with their derivatives along the parameter seeded in `p`: the tables are
+/// dimensionless, so `dK` and `dM` are the entries' formulas differentiated in `D`, `nu`, `m`
+/// and the lengths `a`, `b` that scale them.
+pub fn ritz_matrices_dual(p: &PlateParameters<Dual>) -> (DMatrix<Dual>, DMatrix<Dual>) {
     let (a, b, d, nu) = (p.a, p.b, p.rigidity(), p.nu);
     // The dimensionless tables of the families, scaled by the lengths of their directions.
-    let scaled = |kind: BeamKind, count: usize, len: f64| {
+    let scaled = |kind: BeamKind, count: usize, len: Dual| {
         let tables = product_tables(kind, count);
         std::array::from_fn(|k| {
             let (i, j) = TABLE_ORDERS[k];
-            DMatrix::from_fn(count, count, |r, c| {
-                tables[k][(r, c)] * len.powi(1 - i as i32 - j as i32)
-            })
+            let factor = powi(len, 1 - i as i32 - j as i32);
+            DMatrix::from_fn(count, count, |r, c| tables[k][(r, c)] * factor)
         })
     };
     let [x00, x11, x20, x22] = scaled(BeamKind::ClampedFree, p.n, a);
     let [y00, y11, y20, y22] = scaled(BeamKind::FreeFree, p.m, b);
     let nm = p.n * p.m;
     let idx = |j: usize| (j % p.n, j / p.n);
-    let mut k = DMatrix::zeros(nm, nm);
-    let mut m = DMatrix::zeros(nm, nm);
+    let mut k = DMatrix::from_element(nm, nm, ZERO);
+    let mut m = DMatrix::from_element(nm, nm, ZERO);
     for r in 0..nm {
         let (n1, m1) = idx(r);
         for c in 0..nm {
@@ -69,19 +80,35 @@ pub fn ritz_matrices(p: &PlateParameters) -> (DMatrix<f64>, DMatrix<f64>) {
         }
     }
     // symmetrise rounding
-    let k = (&k + k.transpose()) * 0.5;
-    let m = (&m + m.transpose()) * 0.5;
-    (m, k)
+    (symmetrised(&m), symmetrised(&k))
+}
+
+/// `(A + A') / 2` on the values and on the derivatives.
+fn symmetrised(a: &DMatrix<Dual>) -> DMatrix<Dual> {
+    let half = |b: DMatrix<f64>| (&b + b.transpose()) * 0.5;
+    half(a.map(|x| x.v)).zip_map(&half(a.map(|x| x.d)), Dual::new)
+}
+
+/// `Phi' v` for `Phi` and `v` with their derivatives: the value `Phi' v` (the `f64` product),
+/// the derivative `dPhi' v + Phi' dv`.
+fn transposed_product(phi: &(DMatrix<f64>, DMatrix<f64>), v: &DVector<Dual>) -> DVector<Dual> {
+    let (value, slope) = (v.map(|x| x.v), v.map(|x| x.d));
+    let product = phi.0.transpose() * &value;
+    let derivative = phi.1.transpose() * &value + phi.0.transpose() * &slope;
+    product.zip_map(&derivative, Dual::new)
 }
 
 /// Builds the consistent formulation, with the map from a point `(x, y)` to its displacement
-/// per unit coordinate (the hub's rotation `x theta` included).
-pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f64>) {
+/// per unit coordinate (the hub's rotation `x theta` included), in dual numbers: the modes'
+/// derivatives are the clamped plate's eigenpairs' ([`symmetric_eigen_derivative`] on
+/// `S K S`), which fails when two of its modes are too close to differentiate (only when a
+/// derivative is seeded).
+pub(crate) fn build(p: &PlateParameters<Dual>) -> Result<(DualModel, DualDisplacementMap), String> {
     let phis = BeamFunction::family(BeamKind::ClampedFree, p.n);
     let psis = BeamFunction::family(BeamKind::FreeFree, p.m);
     let (a, b, mu) = (p.a, p.b, p.areal_mass());
     let nm = p.n * p.m;
-    let (_, kr) = ritz_matrices(p);
+    let (_, kr) = ritz_matrices_dual(p);
     let modal_mass = ARMS * mu * a * b;
     // M = modal_mass I + the air's diagonal added mass D_a: with S = diag(sqrt(modal_mass /
     // (modal_mass + D_a))), the modes are S u for the eigenvectors u of S K S, whose eigenvalues
@@ -89,52 +116,63 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
     // modes are the eigenvectors of K)
     let air = added_mass::strip(p, &phis, &psis, ARMS);
     let scale = match &air {
-        Some(air) => air.modes.map(|d| (modal_mass / (modal_mass + d)).sqrt()),
-        None => DVector::from_element(nm, 1.0),
+        Some(air) => air.modes.map(|d| Real::sqrt(modal_mass / (modal_mass + d))),
+        None => DVector::from_element(nm, Dual::from(1.0)),
     };
-    let eig = match &air {
+    let problem = match &air {
         Some(_) => DMatrix::from_fn(nm, nm, |r, c| scale[r] * kr[(r, c)] * scale[c]),
         None => kr,
-    }
-    .symmetric_eigen();
+    };
+    let (d_problem, problem) = (problem.map(|x| x.d), problem.map(|x| x.v));
+    let eig = problem.symmetric_eigen();
+    // The eigenpairs' derivatives, when the problem moves.
+    let (d_values, d_vectors) = if d_problem.iter().any(|&x| x != 0.0) {
+        symmetric_eigen_derivative(eig.eigenvalues.as_slice(), &eig.eigenvectors, &d_problem)
+            .map_err(|e| format!("the clamped plate's modes: {e}"))?
+    } else {
+        (vec![0.0; nm], DMatrix::zeros(nm, nm))
+    };
     let mut order: Vec<usize> = (0..nm).collect();
     order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
-    let mut phi_mat = DMatrix::zeros(nm, nm);
+    let mut phi_mat = (DMatrix::zeros(nm, nm), DMatrix::zeros(nm, nm));
     let mut lambdas = Vec::with_capacity(nm);
     for (c, &i) in order.iter().enumerate() {
-        let mut v = eig.eigenvectors.column(i).component_mul(&scale);
-        let imax = v.iamax();
-        if v[imax] < 0.0 {
-            v = -v;
+        let mut v = DVector::from_fn(nm, |r, _| {
+            Dual::new(eig.eigenvectors[(r, i)], d_vectors[(r, i)]) * scale[r]
+        });
+        let imax = v.map(|x| x.v).iamax();
+        if v[imax].v < 0.0 {
+            v = v.map(|x| -x);
         }
-        phi_mat.set_column(c, &v);
-        lambdas.push(eig.eigenvalues[i]);
+        phi_mat.0.set_column(c, &v.map(|x| x.v));
+        phi_mat.1.set_column(c, &v.map(|x| x.d));
+        lambdas.push(Dual::new(eig.eigenvalues[i], d_values[i]));
     }
-    let shape = |x: f64, y: f64| {
+    let shape = |x: Dual, y: Dual| {
         DVector::from_fn(nm, |j, _| {
-            phis[j % p.n].value(x / a) * psis[j / p.n].value(y / b)
+            beam_value(&phis[j % p.n], 0, x / a) * beam_value(&psis[j / p.n], 0, y / b)
         })
     };
     let hub = p.root == Root::Hub;
     let first = usize::from(hub);
     let n = first + nm;
-    let mut mass = DMatrix::zeros(n, n);
-    let mut stiffness = DMatrix::zeros(n, n);
+    let mut mass = DMatrix::from_element(n, n, ZERO);
+    let mut stiffness = DMatrix::from_element(n, n, ZERO);
     let mut damping = Vec::with_capacity(nm);
     let mut labels = Vec::with_capacity(nm);
     for c in 0..nm {
         mass[(first + c, first + c)] = modal_mass;
         stiffness[(first + c, first + c)] = lambdas[c];
-        damping.push(2.0 * p.zeta * (lambdas[c] * modal_mass).sqrt());
-        let j = phi_mat.column(c).iamax();
+        damping.push(2.0 * p.zeta * Real::sqrt(lambdas[c] * modal_mass));
+        let j = phi_mat.0.column(c).iamax();
         labels.push((j % p.n + 1, j / p.n + 1));
     }
-    let mut torque = DVector::zeros(n);
+    let mut torque = DVector::from_element(n, ZERO);
     let points = p.accelerometer_points();
     let mut accelerometers = Vec::new();
-    let modal = |v: DVector<f64>| phi_mat.transpose() * v;
-    let embed = |hub_part: f64, plate: DVector<f64>| {
-        let mut v = DVector::zeros(n);
+    let modal = |v: DVector<Dual>| transposed_product(&phi_mat, &v);
+    let embed = |hub_part: Dual, plate: DVector<Dual>| {
+        let mut v = DVector::from_element(n, ZERO);
         if hub {
             v[0] = hub_part;
         }
@@ -142,7 +180,7 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
         v
     };
     if hub {
-        mass[(0, 0)] = p.i_h + ARMS * p.i_p() + air.as_ref().map_or(0.0, |air| air.hub);
+        mass[(0, 0)] = p.i_h + ARMS * p.i_p() + air.as_ref().map_or(ZERO, |air| air.hub);
         // int int m x phi_n psi_m dx dy, both arms, and the air's
         let along: Vec<f64> = phis.iter().map(|phi| moment_integral(phi, 1)).collect();
         let across: Vec<f64> = psis.iter().map(|psi| moment_integral(psi, 0)).collect();
@@ -150,19 +188,19 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
             ARMS * mu * a * a * along[j % p.n] * b * across[j / p.n]
         });
         if let Some(air) = &air {
-            coupling += &air.coupling;
+            coupling = coupling.zip_map(&air.coupling, |x, y| x + y);
         }
         let c = modal(coupling);
         for i in 0..nm {
-            let v = if c[i].abs() > 1e-13 * mass[(0, 0)] {
+            let v = if c[i].v.abs() > 1e-13 * mass[(0, 0)].v {
                 c[i]
             } else {
-                0.0
+                ZERO
             };
             mass[(0, first + i)] = v;
             mass[(first + i, 0)] = v;
         }
-        torque[0] = 1.0;
+        torque[0] = Dual::from(1.0);
     }
     for &(x, y) in &points {
         accelerometers.push(embed(x, modal(shape(x, y))));
@@ -171,42 +209,41 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
         embed(p.x1, modal(shape(p.x1, p.y1))),
         embed(p.x2, modal(shape(p.x2, p.y2))),
     ];
-    let tip = embed(0.0, modal(shape(a, b / 2.0)));
+    let tip = embed(ZERO, modal(shape(a, b / 2.0)));
     // The clamped root bends most: the stress on its centre line.
-    let stress_point = (0.0, 0.5 * b);
-    let stress = embed(0.0, modal(super::stress_row(p, &phis, &psis, stress_point)));
+    let stress_point = (ZERO, 0.5 * b);
+    let stress = embed(
+        ZERO,
+        modal(super::stress_row(p, &phis, &psis, stress_point)),
+    );
     let point = {
         let (phis, psis, phi_mat, (a, b, nn)) =
             (phis.clone(), psis.clone(), phi_mat.clone(), (a, b, p.n));
-        move |x: f64, y: f64| {
+        move |x: Dual, y: Dual| {
             let shape = DVector::from_fn(nm, |j, _| {
-                phis[j % nn].value(x / a) * psis[j / nn].value(y / b)
+                beam_value(&phis[j % nn], 0, x / a) * beam_value(&psis[j / nn], 0, y / b)
             });
-            let mut v = DVector::zeros(n);
+            let mut v = DVector::from_element(n, ZERO);
             if hub {
                 v[0] = x;
             }
             v.rows_mut(first, nm)
-                .copy_from(&(phi_mat.transpose() * shape));
+                .copy_from(&transposed_product(&phi_mat, &shape));
             v
         }
     };
-    let model = PlateModel {
+    let model = DualModel {
         hub,
         labels,
         mass,
         stiffness,
-        damping_derivative: vec![0.0; damping.len()],
         damping,
         torque,
         forces,
         tip,
         stress,
-        stress_point,
+        stress_point: (stress_point.0.v, stress_point.1.v),
         accelerometers,
-        drag: Vec::new(),
-        dashpots: Vec::new(),
-        nominal: super::PlateNominal::of(p),
     };
-    (model, point)
+    Ok((model, Box::new(point)))
 }

@@ -29,11 +29,12 @@
 //!
 //! **Derivatives** (exact sensitivities, `crate::model::sensitivity`). The dashpots carry their
 //! constants in dual numbers: along `zeta` the resistances move (`2 omega_i d zeta`), along the
-//! bar's stiffness the modes move too, and their derivatives are those of the generalised
-//! eigenpairs of the subproblem (hub and [`damped_coordinates`], all its modes kept, the free
-//! structure's rigid mode included in the expansion though it gets no dashpot):
-//! [`crate::eigen::derivative::generalized_eigen_dual`] with `dK` the bar's `dk` on the hub
-//! and `dM = 0`. The values are the `f64` computation's, bit for bit.
+//! bar's stiffness and the plate's and hub's parameters the modes move too, and their
+//! derivatives are those of the generalised eigenpairs of the subproblem (hub and
+//! [`damped_coordinates`], all its modes kept, the free structure's rigid mode included in the
+//! expansion though it gets no dashpot): [`crate::eigen::derivative::generalized_eigen_dual`]
+//! with `dK` the bar's `dk` on the hub plus the model's `dK` ([`super::PlateDerivative`]) and
+//! `dM` the model's. The values are the `f64` computation's, bit for bit.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -72,22 +73,14 @@ pub fn damped_coordinates(model: &PlateModel) -> Vec<usize> {
     plate
 }
 
-/// The derivative of each plate coordinate's own R, `2 zeta sqrt(K_jj M_jj)` (both
-/// formulations' [`PlateModel::damping`]), when `zeta` moves at the rate `d_zeta` and nothing
-/// else of the plate does: `2 d_zeta sqrt(K_jj M_jj)`, indexed by plate coordinate.
-pub fn coordinate_damping_derivative(model: &PlateModel, d_zeta: f64) -> Vec<f64> {
-    (model.first_plate()..model.dim())
-        .map(|j| 2.0 * d_zeta * (model.stiffness[(j, j)] * model.mass[(j, j)]).sqrt())
-        .collect()
-}
-
 /// The modal dashpots of the structure of `model` (which must have its hub): every elastic mode
 /// of `(M, K + bar)` over the hub and the [`damped_coordinates`], with the bar's stiffness
 /// `bar_k` on the hub coordinate when the motor drives it (clamped motor), damped with `zeta`.
 ///
 /// `bar_k` and `zeta` in `f64` or in dual numbers: the dashpots carry the derivatives (the
-/// module's **Derivatives**); the modes' derivatives are computed only when `bar_k` carries one,
-/// so a model of `f64` parameters meets no condition of theirs (distinct eigenvalues).
+/// module's **Derivatives**), and so do the model's matrices ([`PlateModel::derivative`]); the
+/// modes' derivatives are computed only when `bar_k` or the matrices carry one, so a model of
+/// `f64` parameters meets no condition of theirs (distinct eigenvalues).
 pub fn modal_dashpots<S: Copy + Into<Dual>>(
     model: &PlateModel,
     bar_k: Option<S>,
@@ -102,19 +95,17 @@ pub fn modal_dashpots<S: Copy + Into<Dual>>(
         .chain(damped_coordinates(model))
         .collect();
     let n = coords.len();
-    let sub = |m: &DMatrix<f64>| DMatrix::from_fn(n, n, |i, j| m[(coords[i], coords[j])]);
-    let (mass, mut k) = (sub(&model.mass), sub(&model.stiffness));
-    let mut d_k = DMatrix::zeros(n, n);
+    let sub = |m: &DMatrix<Dual>| DMatrix::from_fn(n, n, |i, j| m[(coords[i], coords[j])]);
+    let (mass, mut k) = (sub(&model.mass_dual()), sub(&model.stiffness_dual()));
     if let Some(kb) = bar_k {
-        k[(0, 0)] += kb.v;
-        d_k[(0, 0)] = kb.d;
+        k[(0, 0)] = k[(0, 0)] + kb;
     }
-    // The eigenpairs and their derivatives along the bar's stiffness (zero without one).
-    let (vals, vecs, d_vals, d_vecs) = if d_k[(0, 0)] != 0.0 {
-        let k_dual = k.zip_map(&d_k, Dual::new);
-        let m_dual = mass.map(Dual::from);
-        let (vals, vecs) = generalized_eigen_dual(&k_dual, &m_dual, generalized_eigen)
-            .map_err(|e| format!("the structure's modes along the bar's stiffness: {e}"))?;
+    // The eigenpairs and their derivatives along the parameter (zero when neither the bar nor
+    // the structure moves).
+    let moves = |m: &DMatrix<Dual>| m.iter().any(|x| x.d != 0.0);
+    let (vals, vecs, d_vals, d_vecs) = if moves(&k) || moves(&mass) {
+        let (vals, vecs) = generalized_eigen_dual(&k, &mass, generalized_eigen)
+            .map_err(|e| format!("the structure's modes: {e}"))?;
         (
             vals.iter().map(|x| x.v).collect::<Vec<f64>>(),
             vecs.map(|x| x.v),
@@ -122,9 +113,10 @@ pub fn modal_dashpots<S: Copy + Into<Dual>>(
             vecs.map(|x| x.d),
         )
     } else {
-        let (vals, vecs) = generalized_eigen(&k, &mass)?;
+        let (vals, vecs) = generalized_eigen(&k.map(|x| x.v), &mass.map(|x| x.v))?;
         (vals, vecs, vec![0.0; n], DMatrix::zeros(n, n))
     };
+    let (mass, d_mass) = (mass.map(|x| x.v), mass.map(|x| x.d));
     let scale = vals.iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let mut out = Vec::new();
     for (i, &w2) in vals.iter().enumerate() {
@@ -133,7 +125,7 @@ pub fn modal_dashpots<S: Copy + Into<Dual>>(
         }
         let omega = Real::sqrt(Dual::new(w2, d_vals[i]));
         let spanned = &mass * vecs.column(i);
-        let d_spanned = &mass * d_vecs.column(i);
+        let d_spanned = &mass * d_vecs.column(i) + &d_mass * vecs.column(i);
         let mut velocity = DVector::from_element(model.dim(), Dual::from(0.0));
         for ((&c, &v), &d) in coords.iter().zip(spanned.iter()).zip(d_spanned.iter()) {
             velocity[c] = Dual::new(v, d);
@@ -161,15 +153,24 @@ mod tests {
         PlateModel::new(&p).unwrap()
     }
 
-    /// Each coordinate's R is `2 zeta sqrt(K_jj M_jj)` to the bit in both formulations, the
-    /// formula [`coordinate_damping_derivative`] differentiates.
+    /// Each coordinate's R is `2 zeta sqrt(K_jj M_jj)` to the bit in both formulations, and
+    /// along `zeta` (the model built with `zeta` seeded) its derivative is `2 sqrt(K_jj M_jj)`.
     #[test]
     fn the_coordinates_damping_is_the_differentiated_formula() {
         let zeta = PlateParameters::default().zeta;
         for formulation in [Formulation::Paper, Formulation::Consistent] {
             for root in [Root::Hub, Root::Locked] {
                 let m = model(formulation, root);
-                let d = coordinate_damping_derivative(&m, 1.0);
+                let p = PlateParameters {
+                    formulation,
+                    root,
+                    ..PlateParameters::default()
+                };
+                let mut seeded = p.map(Dual::from);
+                seeded.zeta = Dual::new(zeta, 1.0);
+                let d = PlateModel::for_parameters(&seeded)
+                    .unwrap()
+                    .damping_derivative;
                 for (j, &r) in m.damping.iter().enumerate() {
                     let c = m.first_plate() + j;
                     let k_m = m.stiffness[(c, c)] * m.mass[(c, c)];

@@ -55,21 +55,21 @@ pub struct DragPoint {
     /// Where it is on the arm, `(x, y)` \[m\].
     pub at: (f64, f64),
     /// Its normal velocity per unit rate of each coordinate (zero for the coordinates the drag
-    /// leaves out).
-    pub velocity: DVector<f64>,
-    /// `c_k`: the drag force is `c_k |v_k| v_k` \[N s^2/m^2\].
-    pub coefficient: f64,
+    /// leaves out), with its derivative along the parameter the model is built for.
+    pub velocity: DVector<Dual>,
+    /// `c_k`: the drag force is `c_k |v_k| v_k` \[N s^2/m^2\], with its derivative.
+    pub coefficient: Dual,
 }
 
 /// The drag points of `model` (whose drag is not set yet), from the velocity map `map(x, y)` of
 /// a point (its displacement per unit coordinate, rigid rotation included); none without drag.
 pub fn drag_points(
-    p: &PlateParameters,
+    p: &PlateParameters<Dual>,
     model: &PlateModel,
-    map: impl Fn(f64, f64) -> DVector<f64>,
+    map: impl Fn(Dual, Dual) -> DVector<Dual>,
 ) -> Vec<DragPoint> {
     let c = 0.5 * p.rho_air * p.cd;
-    if c == 0.0 {
+    if c.v == 0.0 && c.d == 0.0 {
         return Vec::new();
     }
     // The plate coordinates of lowest frequency (stiffness and mass are diagonal over them).
@@ -87,12 +87,12 @@ pub fn drag_points(
             let (x, y) = (0.5 * p.a * (1.0 + u), 0.5 * p.b * (1.0 + v));
             let weight = 0.25 * p.a * p.b * wu * wv;
             let full = map(x, y);
-            let mut velocity = DVector::zeros(full.len());
+            let mut velocity = DVector::from_element(full.len(), Dual::from(0.0));
             for &j in &kept {
                 velocity[j] = full[j];
             }
             out.push(DragPoint {
-                at: (x, y),
+                at: (x.v, y.v),
                 velocity,
                 coefficient: ARMS * c * weight,
             });
@@ -157,8 +157,9 @@ mod tests {
                 .drag
                 .iter()
                 .map(|d| {
-                    let v = d.velocity.dot(&rate);
-                    law(d.coefficient, v).0 * d.velocity[0]
+                    let velocity = d.velocity.map(|x| x.v);
+                    let v = velocity.dot(&rate);
+                    law(d.coefficient.v, v).0 * velocity[0]
                 })
                 .sum();
             let exact = p.rho_air * p.cd * p.b * omega * omega * p.a.powi(4) / 4.0;
@@ -185,7 +186,7 @@ mod tests {
         let model = PlateModel::new(&p).unwrap();
         assert_eq!(model.drag.len(), POINTS_X * POINTS_Y);
         for d in &model.drag {
-            assert!(d.velocity.iter().filter(|v| **v != 0.0).count() <= DRAG_MODES);
+            assert!(d.velocity.iter().filter(|v| v.v != 0.0).count() <= DRAG_MODES);
         }
     }
 

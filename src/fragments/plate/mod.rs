@@ -174,27 +174,27 @@ impl Default for PlateParameters {
     }
 }
 
-impl PlateParameters {
-    /// Flexural rigidity `D = E h^3 / (12 (1 - nu^2))` \[N m\].
-    pub fn rigidity(&self) -> f64 {
-        self.e * self.h.powi(3) / (12.0 * (1.0 - self.nu * self.nu))
+impl PlateParameters<Dual> {
+    /// Flexural rigidity `D = E h^3 / (12 (1 - nu^2))` \[N m\], with its derivative.
+    pub fn rigidity(&self) -> Dual {
+        self.e * powi(self.h, 3) / (12.0 * (1.0 - self.nu * self.nu))
     }
-    /// Mass per unit area `m = rho h` \[kg/m^2\].
-    pub fn areal_mass(&self) -> f64 {
+    /// Mass per unit area `m = rho h` \[kg/m^2\], with its derivative.
+    pub fn areal_mass(&self) -> Dual {
         self.rho * self.h
     }
-    /// `I_P = int int m x^2 dx dy` of one arm about the hub axis \[kg m^2\].
-    pub fn i_p(&self) -> f64 {
-        self.areal_mass() * self.b * self.a.powi(3) / 3.0
+    /// `I_P = int int m x^2 dx dy` of one arm about the hub axis \[kg m^2\], with its
+    /// derivative.
+    pub fn i_p(&self) -> Dual {
+        self.areal_mass() * self.b * powi(self.a, 3) / 3.0
     }
-    /// `I = I_H + 2 I_P` (section 3).
-    pub fn hub_total_inertia(&self) -> f64 {
+    /// `I = I_H + 2 I_P` (section 3), with its derivative.
+    pub fn hub_total_inertia(&self) -> Dual {
         self.i_h + 2.0 * self.i_p()
     }
-    /// The 4 x 3 accelerometer grid over one arm, numbered along `y` first: point
-    /// `k = 3 (i - 1) + j` is at `x = i a / 4`, `y = (2 j - 1) b / 6` (so `acc[11]` is the tip
-    /// centre of eq. 22).
-    pub fn accelerometer_points(&self) -> Vec<(f64, f64)> {
+    /// The 4 x 3 accelerometer grid over one arm ([`PlateParameters::accelerometer_points`]),
+    /// with the points' derivatives.
+    pub fn accelerometer_points(&self) -> Vec<(Dual, Dual)> {
         let mut v = Vec::new();
         for i in 1..=GRID_X {
             for j in 1..=GRID_Y {
@@ -205,6 +205,48 @@ impl PlateParameters {
             }
         }
         v
+    }
+}
+
+/// `x^n` with its derivative `n x^(n-1) dx`, the value `f64::powi`'s (the `f64` model's bits).
+pub fn powi(x: Dual, n: i32) -> Dual {
+    Dual::new(x.v.powi(n), f64::from(n) * x.v.powi(n - 1) * x.d)
+}
+
+/// A beam function's `k`-th derivative at `xi` with its derivative along `xi`'s,
+/// `phi^(k)(xi) + phi^(k+1)(xi) dxi ε`.
+pub fn beam_value(phi: &beam_functions::BeamFunction, k: u32, xi: Dual) -> Dual {
+    let slope = if xi.d == 0.0 {
+        0.0
+    } else {
+        phi.derivative(k + 1, xi.v) * xi.d
+    };
+    Dual::new(phi.derivative(k, xi.v), slope)
+}
+
+impl PlateParameters {
+    /// Flexural rigidity `D = E h^3 / (12 (1 - nu^2))` \[N m\].
+    pub fn rigidity(&self) -> f64 {
+        self.map(Dual::from).rigidity().v
+    }
+    /// Mass per unit area `m = rho h` \[kg/m^2\].
+    pub fn areal_mass(&self) -> f64 {
+        self.map(Dual::from).areal_mass().v
+    }
+    /// `I_P = int int m x^2 dx dy` of one arm about the hub axis \[kg m^2\].
+    pub fn i_p(&self) -> f64 {
+        self.map(Dual::from).i_p().v
+    }
+    /// `I = I_H + 2 I_P` (section 3).
+    pub fn hub_total_inertia(&self) -> f64 {
+        self.map(Dual::from).hub_total_inertia().v
+    }
+    /// The 4 x 3 accelerometer grid over one arm, numbered along `y` first: point
+    /// `k = 3 (i - 1) + j` is at `x = i a / 4`, `y = (2 j - 1) b / 6` (so `acc[11]` is the tip
+    /// centre of eq. 22).
+    pub fn accelerometer_points(&self) -> Vec<(f64, f64)> {
+        let points = self.map(Dual::from).accelerometer_points();
+        points.into_iter().map(|(x, y)| (x.v, y.v)).collect()
     }
 
     /// Every numeric value with the FMU variable it is (`plate.<name>`, `hub.I_H`).
@@ -251,6 +293,9 @@ impl PlateParameters {
 /// ([`PlateModel::with_displacements`]).
 pub type DisplacementMap = Box<dyn Fn(f64, f64) -> DVector<f64>>;
 
+/// [`DisplacementMap`] in dual numbers: the point and the displacements with their derivatives.
+pub type DualDisplacementMap = Box<dyn Fn(Dual, Dual) -> DVector<Dual>>;
+
 /// A plate model in generalised coordinates `q`: the hub angle first when the root is the hub,
 /// then the plate coordinates. Kinetic energy `q' M q / 2`, strain energy `q' K q / 2`.
 #[derive(Clone, Debug)]
@@ -266,8 +311,8 @@ pub struct PlateModel {
     /// Damping resistance of each plate coordinate (an R per mode), `2 zeta sqrt(K_jj M_jj)`.
     pub damping: Vec<f64>,
     /// The derivative of each entry of `damping` along the parameter the model is built for
-    /// (exact sensitivities, [`damping::coordinate_damping_derivative`]); zeros as built from
-    /// parameters in `f64`, which is every model but a sensitivity's.
+    /// (exact sensitivities, [`PlateModel::for_parameters`]: `zeta`, `K_jj` and `M_jj` moving);
+    /// zeros as built from parameters in `f64`, which is every model but a sensitivity's.
     pub damping_derivative: Vec<f64>,
     /// Generalised force per unit root torque (the torsion-bar torque on the hub).
     pub torque: DVector<f64>,
@@ -295,7 +340,79 @@ pub struct PlateModel {
     pub dashpots: Vec<damping::ModalDashpot>,
     /// Typical magnitudes of the plate's states, scaling the integrator's absolute tolerance.
     pub nominal: PlateNominal,
+    /// The derivatives of `mass`, `stiffness` and the vectors along the parameter the model is
+    /// built for (exact sensitivities); zeros as built from parameters in `f64`.
+    pub derivative: PlateDerivative,
 }
+
+/// The derivatives of a [`PlateModel`]'s matrices and vectors along the parameter the model is
+/// built for ([`PlateModel::for_parameters`]), each the shape of the field it is named after:
+/// `dM/dp`, `dK/dp`, and so on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlateDerivative {
+    pub mass: DMatrix<f64>,
+    pub stiffness: DMatrix<f64>,
+    pub torque: DVector<f64>,
+    pub forces: [DVector<f64>; 2],
+    pub tip: DVector<f64>,
+    pub stress: DVector<f64>,
+    pub accelerometers: Vec<DVector<f64>>,
+}
+
+/// A plate model's constants in dual numbers, as [`paper::build`] and [`consistent::build`]
+/// compute them: the values the `f64` model's to the bit, the derivatives along the parameter
+/// seeded in [`PlateParameters<Dual>`]. [`DualModel::split`] makes the [`PlateModel`].
+pub(crate) struct DualModel {
+    pub hub: bool,
+    pub labels: Vec<(usize, usize)>,
+    pub mass: DMatrix<Dual>,
+    pub stiffness: DMatrix<Dual>,
+    pub damping: Vec<Dual>,
+    pub torque: DVector<Dual>,
+    pub forces: [DVector<Dual>; 2],
+    pub tip: DVector<Dual>,
+    pub stress: DVector<Dual>,
+    pub stress_point: (f64, f64),
+    pub accelerometers: Vec<DVector<Dual>>,
+}
+
+impl DualModel {
+    /// The [`PlateModel`]: values, and derivatives in [`PlateModel::derivative`] (the damping's
+    /// in [`PlateModel::damping_derivative`]).
+    pub fn split(self, p: &PlateParameters<Dual>) -> PlateModel {
+        let value = |v: &DVector<Dual>| v.map(|x| x.v);
+        let slope = |v: &DVector<Dual>| v.map(|x| x.d);
+        PlateModel {
+            hub: self.hub,
+            labels: self.labels,
+            mass: self.mass.map(|x| x.v),
+            stiffness: self.stiffness.map(|x| x.v),
+            damping: self.damping.iter().map(|x| x.v).collect(),
+            damping_derivative: self.damping.iter().map(|x| x.d).collect(),
+            torque: value(&self.torque),
+            forces: [value(&self.forces[0]), value(&self.forces[1])],
+            tip: value(&self.tip),
+            stress: value(&self.stress),
+            stress_point: self.stress_point,
+            accelerometers: self.accelerometers.iter().map(value).collect(),
+            drag: Vec::new(),
+            dashpots: Vec::new(),
+            nominal: PlateNominal::of(&p.map(|x| x.v)),
+            derivative: PlateDerivative {
+                mass: self.mass.map(|x| x.d),
+                stiffness: self.stiffness.map(|x| x.d),
+                torque: slope(&self.torque),
+                forces: [slope(&self.forces[0]), slope(&self.forces[1])],
+                tip: slope(&self.tip),
+                stress: slope(&self.stress),
+                accelerometers: self.accelerometers.iter().map(slope).collect(),
+            },
+        }
+    }
+}
+
+/// A zero in dual numbers (`DMatrix::from_element`, as `Dual` has no `nalgebra` zero).
+pub(crate) const ZERO: Dual = Dual::new(0.0, 0.0);
 
 /// Typical magnitudes of the plate's states, stated by [`add_plate`] on the elements that own
 /// them ([`BondGraph::set_nominal`]). They scale the absolute tolerance of the FMU's integrator
@@ -334,7 +451,20 @@ impl PlateNominal {
 impl PlateModel {
     /// The model of a parameter set.
     pub fn new(p: &PlateParameters) -> Result<Self, String> {
-        let (mut model, map) = Self::with_displacements(p)?;
+        Self::for_parameters(&p.map(Dual::from))
+    }
+
+    /// The model of a parameter set in dual numbers: the values those of [`PlateModel::new`] to
+    /// the bit, the derivatives along the seeded parameter in [`PlateModel::derivative`],
+    /// [`PlateModel::damping_derivative`] and the drag points'.
+    ///
+    /// # Errors
+    ///
+    /// Invalid values, and, in the consistent formulation, clamped-plate modes too close to
+    /// differentiate ([`crate::eigen::derivative::symmetric_eigen_derivative`]) when a
+    /// derivative is seeded.
+    pub fn for_parameters(p: &PlateParameters<Dual>) -> Result<Self, String> {
+        let (mut model, map) = Self::dual_displacements(p)?;
         model.drag = drag::drag_points(p, &model, map);
         Ok(model)
     }
@@ -344,15 +474,24 @@ impl PlateModel {
     /// rotation `x theta` of the hub coordinate included): what draws the deflected plate from
     /// the coordinates.
     pub fn with_displacements(p: &PlateParameters) -> Result<(Self, DisplacementMap), String> {
-        p.validate()?;
+        let (model, map) = Self::dual_displacements(&p.map(Dual::from))?;
+        let map = move |x: f64, y: f64| map(Dual::from(x), Dual::from(y)).map(|s| s.v);
+        Ok((model, Box::new(map)))
+    }
+
+    /// [`PlateModel::with_displacements`] in dual numbers.
+    fn dual_displacements(
+        p: &PlateParameters<Dual>,
+    ) -> Result<(Self, DualDisplacementMap), String> {
+        p.map(|x| x.v).validate()?;
         Ok(match p.formulation {
             Formulation::Paper => {
                 let (model, map) = paper::build(p);
-                (model, Box::new(map))
+                (model.split(p), Box::new(map))
             }
             Formulation::Consistent => {
-                let (model, map) = consistent::build(p);
-                (model, Box::new(map))
+                let (model, map) = consistent::build(p)?;
+                (model.split(p), map)
             }
         })
     }
@@ -381,29 +520,48 @@ impl PlateModel {
         omega_sq.iter().map(|&w| (lowest / w).sqrt()).collect()
     }
 
+    /// The mass matrix with its derivative, `M + dM ε`.
+    pub fn mass_dual(&self) -> DMatrix<Dual> {
+        self.mass.zip_map(&self.derivative.mass, Dual::new)
+    }
+
+    /// The stiffness matrix with its derivative, `K + dK ε`.
+    pub fn stiffness_dual(&self) -> DMatrix<Dual> {
+        self.stiffness
+            .zip_map(&self.derivative.stiffness, Dual::new)
+    }
+
     /// The kinetic energy as one-port inertias on the coordinates' absolute rates
     /// ([`AbsoluteRates`]); `None` if the plate coordinates' mass matrix is not diagonal.
     pub fn absolute_rates(&self) -> Option<AbsoluteRates> {
+        self.absolute_rates_dual().map(|r| AbsoluteRates {
+            hub: r.hub.map(|x| x.v),
+            masses: r.masses.iter().map(|x| x.v).collect(),
+            ratios: r.ratios.iter().map(|x| x.v).collect(),
+        })
+    }
+
+    /// [`PlateModel::absolute_rates`] with the derivatives of `I_r`, `D_jj` and `c_j` (from
+    /// [`PlateDerivative::mass`]).
+    pub fn absolute_rates_dual(&self) -> Option<AbsoluteRates<Dual>> {
         let first = self.first_plate();
         let n = self.dim();
-        let plate_diagonal =
-            (first..n).all(|i| (first..n).all(|j| i == j || self.mass[(i, j)] == 0.0));
+        let mass = self.mass_dual();
+        let plate_diagonal = (first..n).all(|i| (first..n).all(|j| i == j || mass[(i, j)] == 0.0));
         if !plate_diagonal {
             return None;
         }
-        let masses: Vec<f64> = (first..n).map(|j| self.mass[(j, j)]).collect();
-        let ratios: Vec<f64> = if self.hub {
-            (first..n)
-                .map(|j| self.mass[(0, j)] / self.mass[(j, j)])
-                .collect()
+        let masses: Vec<Dual> = (first..n).map(|j| mass[(j, j)]).collect();
+        let ratios: Vec<Dual> = if self.hub {
+            (first..n).map(|j| mass[(0, j)] / mass[(j, j)]).collect()
         } else {
-            vec![0.0; n - first]
+            vec![ZERO; n - first]
         };
         // I_r = M_00 - sum_j M_0j^2 / M_jj, the Schur complement of the plate block: positive
         // as M is positive definite.
         let hub = self.hub.then(|| {
-            (first..n).fold(self.mass[(0, 0)], |i, j| {
-                i - self.mass[(0, j)] * self.mass[(0, j)] / self.mass[(j, j)]
+            (first..n).fold(mass[(0, 0)], |i, j| {
+                i - mass[(0, j)] * mass[(0, j)] / mass[(j, j)]
             })
         });
         Some(AbsoluteRates {
@@ -414,9 +572,9 @@ impl PlateModel {
     }
 
     /// The hub's one-port inertia: `I_r` of [`AbsoluteRates`] (the whole `M_00` when the
-    /// plate does not couple to the hub, the paper formulation).
-    pub fn hub_one_port(&self) -> Option<f64> {
-        self.absolute_rates().and_then(|r| r.hub)
+    /// plate does not couple to the hub, the paper formulation), with its derivative.
+    pub fn hub_one_port(&self) -> Option<Dual> {
+        self.absolute_rates_dual().and_then(|r| r.hub)
     }
 }
 
@@ -437,13 +595,13 @@ impl PlateModel {
 /// joined at the hub (the structured LU, `solver::linalg`), and a right-hand side costs
 /// `O(n)` instead of `O(n^2)`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct AbsoluteRates {
+pub struct AbsoluteRates<S = f64> {
     /// `I_r` \[kg m^2\], with the hub.
-    pub hub: Option<f64>,
+    pub hub: Option<S>,
     /// `D_jj` per plate coordinate.
-    pub masses: Vec<f64>,
+    pub masses: Vec<S>,
     /// `c_j = b_j / D_jj` per plate coordinate (zero without the hub).
-    pub ratios: Vec<f64>,
+    pub ratios: Vec<S>,
 }
 
 /// The bending stress at the surface of the plate at `(x, y)` per unit amplitude of each
@@ -452,17 +610,17 @@ pub struct AbsoluteRates {
 /// normal stress through the thickness (at the face the deflection points away from; the other
 /// face carries its opposite).
 pub fn stress_row(
-    p: &PlateParameters,
+    p: &PlateParameters<Dual>,
     phis: &[beam_functions::BeamFunction],
     psis: &[beam_functions::BeamFunction],
-    (x, y): (f64, f64),
-) -> DVector<f64> {
+    (x, y): (Dual, Dual),
+) -> DVector<Dual> {
     let scale = p.e * p.h / (2.0 * (1.0 - p.nu * p.nu));
     let (xi, eta) = (x / p.a, y / p.b);
     DVector::from_fn(phis.len() * psis.len(), |j, _| {
         let (phi, psi) = (&phis[j % phis.len()], &psis[j / phis.len()]);
-        let w_xx = phi.derivative(2, xi) / (p.a * p.a) * psi.value(eta);
-        let w_yy = phi.value(xi) * psi.derivative(2, eta) / (p.b * p.b);
+        let w_xx = beam_value(phi, 2, xi) / (p.a * p.a) * beam_value(psi, 0, eta);
+        let w_yy = beam_value(phi, 0, xi) * beam_value(psi, 2, eta) / (p.b * p.b);
         scale * (w_xx + p.nu * w_yy)
     })
 }
@@ -495,7 +653,7 @@ pub struct PlatePorts {
     pub acc: Vec<SignalId>,
 }
 
-fn combination(g: &mut BondGraph, name: String, terms: Vec<(f64, SignalId)>) -> SignalId {
+fn combination(g: &mut BondGraph, name: String, terms: Vec<(Dual, SignalId)>) -> SignalId {
     if terms.is_empty() {
         g.add_constant(name, 0.0)
     } else {
@@ -540,11 +698,12 @@ pub fn add_plate(
     // inertias: one-port I's on the absolute rates, a bond per coordinate whose effort is the
     // rate of its momentum
     let rates = model
-        .absolute_rates()
+        .absolute_rates_dual()
         .expect("the plate coordinates' mass matrix must be diagonal");
+    let moves = |x: Dual| x.v != 0.0 || x.d != 0.0;
     // Coupled to the hub, the momenta are the I-field's (hub and modes together), and so are
     // their magnitudes.
-    let coupled = rates.ratios.iter().any(|&c| c != 0.0);
+    let coupled = rates.ratios.iter().any(|&c| c.v != 0.0);
     let momentum = if coupled {
         model.nominal.field_momentum
     } else {
@@ -564,7 +723,7 @@ pub fn add_plate(
         g.set_nominal(i, &[momentum * scale[j]]);
         g.set_domains(i, &[Domain::Translation]);
         let c = rates.ratios[j];
-        if c == 0.0 {
+        if !moves(c) {
             inertia_bonds.push(g.bond(coord[first + j], i));
         } else {
             // u_j = eta_j' + c_j theta': a 0-junction fed by the mode, giving -c_j theta' to the
@@ -581,7 +740,10 @@ pub fn add_plate(
     // stiffness and damping per plate coordinate
     let mut c_elems = Vec::with_capacity(np);
     for j in 0..np {
-        let k = model.stiffness[(first + j, first + j)];
+        let k = Dual::new(
+            model.stiffness[(first + j, first + j)],
+            model.derivative.stiffness[(first + j, first + j)],
+        );
         for i in 0..n {
             assert!(
                 i == first + j || model.stiffness[(i, first + j)] == 0.0,
@@ -603,10 +765,10 @@ pub fn add_plate(
     // root torque
     if let Some(node) = root {
         for (i, &c) in coord.iter().enumerate() {
-            let t = model.torque[i];
-            if i == 0 && model.hub && t == 1.0 {
+            let t = Dual::new(model.torque[i], model.derivative.torque[i]);
+            if i == 0 && model.hub && t.v == 1.0 && t.d == 0.0 {
                 g.bond(node, c);
-            } else if t != 0.0 {
+            } else if moves(t) {
                 let tf = g.add_tf(format!("{prefix}.root_tf[{}]", i), t);
                 g.bond(node, tf);
                 g.bond(tf, c);
@@ -614,13 +776,18 @@ pub fn add_plate(
         }
     }
     // shaker forces
-    for (k, (&f, s)) in forces.iter().zip(&model.forces).enumerate() {
+    for (k, (&f, (s, ds))) in forces
+        .iter()
+        .zip(model.forces.iter().zip(&model.derivative.forces))
+        .enumerate()
+    {
         let se = g.add_se(format!("{prefix}.F{}", k + 1), f);
         let node = g.add_zero(format!("{prefix}.F{}.point", k + 1));
         g.bond(se, node);
         for (i, &c) in coord.iter().enumerate() {
-            if s[i] != 0.0 {
-                let tf = g.add_tf(format!("{prefix}.F{}_tf[{}]", k + 1, i), s[i]);
+            let modulus = Dual::new(s[i], ds[i]);
+            if moves(modulus) {
+                let tf = g.add_tf(format!("{prefix}.F{}_tf[{}]", k + 1, i), modulus);
                 g.bond(node, tf);
                 g.bond(tf, c);
             }
@@ -638,7 +805,7 @@ pub fn add_plate(
                 Some(t) if j == 0 && model.hub => (t, -d.velocity[0]),
                 _ => (cj, d.velocity[j]),
             };
-            if modulus.v != 0.0 || modulus.d != 0.0 {
+            if moves(modulus) {
                 let tf = g.add_tf(format!("{prefix}.damping[{}]_tf[{j}]", i + 1), modulus);
                 g.bond(node, tf);
                 g.bond(tf, junction);
@@ -655,7 +822,7 @@ pub fn add_plate(
         );
         g.bond(node, r);
         for (i, &cj) in coord.iter().enumerate() {
-            if d.velocity[i] != 0.0 {
+            if moves(d.velocity[i]) {
                 let tf = g.add_tf(format!("{prefix}.drag[{}]_tf[{i}]", k + 1), d.velocity[i]);
                 g.bond(node, tf);
                 g.bond(tf, cj);
@@ -675,9 +842,9 @@ pub fn add_plate(
         .enumerate()
         .map(|(j, &c)| g.add_state_sensor(format!("{prefix}.eta[{}]", j + 1), c))
         .collect();
-    let acc_of = |g: &mut BondGraph, name: String, s: &DVector<f64>| {
+    let acc_of = |g: &mut BondGraph, name: String, s: &DVector<Dual>| {
         // a = s' q'' = (s_0 - sum_j c_j s_j) theta'' + sum_j s_j dp_j / D_jj
-        let mut w = DVector::zeros(n);
+        let mut w = DVector::from_element(n, ZERO);
         for j in 0..np {
             w[first + j] = s[first + j] / rates.masses[j];
         }
@@ -686,28 +853,31 @@ pub fn add_plate(
             w[0] = hub_share / i_r;
         }
         let terms = (0..n)
-            .filter(|&i| w[i] != 0.0)
+            .filter(|&i| moves(w[i]))
             .map(|i| (w[i], efforts[i]))
             .collect();
         combination(g, name, terms)
     };
-    let acc_tip = acc_of(g, format!("{prefix}.acc_tip"), &model.tip);
+    let dual = |v: &DVector<f64>, d: &DVector<f64>| v.zip_map(d, Dual::new);
+    let tip = dual(&model.tip, &model.derivative.tip);
+    let acc_tip = acc_of(g, format!("{prefix}.acc_tip"), &tip);
     let acc = model
         .accelerometers
         .iter()
+        .zip(&model.derivative.accelerometers)
         .enumerate()
-        .map(|(k, s)| acc_of(g, format!("{prefix}.acc[{}]", k + 1), s))
+        .map(|(k, (s, ds))| acc_of(g, format!("{prefix}.acc[{}]", k + 1), &dual(s, ds)))
         .collect();
-    let terms = (0..np)
-        .filter(|&j| model.tip[first + j] != 0.0)
-        .map(|j| (model.tip[first + j], qs[j]))
-        .collect();
-    let w_tip = combination(g, format!("{prefix}.w_tip"), terms);
-    let terms = (0..np)
-        .filter(|&j| model.stress[first + j] != 0.0)
-        .map(|j| (model.stress[first + j], qs[j]))
-        .collect();
-    let stress = combination(g, format!("{prefix}.stress"), terms);
+    let on_states = |g: &mut BondGraph, name: String, s: &DVector<Dual>| {
+        let terms = (0..np)
+            .filter(|&j| moves(s[first + j]))
+            .map(|j| (s[first + j], qs[j]))
+            .collect();
+        combination(g, name, terms)
+    };
+    let w_tip = on_states(g, format!("{prefix}.w_tip"), &tip);
+    let stress = dual(&model.stress, &model.derivative.stress);
+    let stress = on_states(g, format!("{prefix}.stress"), &stress);
     PlatePorts {
         junctions: coord[first..].to_vec(),
         w_tip,
@@ -761,6 +931,114 @@ mod tests {
                 let p = r.masses[j] * u[j];
                 assert!((p - p_field[first + j]).abs() <= 1e-12 * p_field.amax());
             }
+        }
+    }
+
+    /// The model built along a seeded parameter: its values are the `f64` model's bits, in
+    /// both formulations and root conditions, for every parameter.
+    fn seeded(p: &PlateParameters, seed: impl Fn(&mut PlateParameters<Dual>)) -> PlateModel {
+        let mut dual = p.map(Dual::from);
+        seed(&mut dual);
+        let model = PlateModel::for_parameters(&dual).unwrap();
+        let plain = PlateModel::new(p).unwrap();
+        assert_eq!(model.mass, plain.mass);
+        assert_eq!(model.stiffness, plain.stiffness);
+        assert_eq!(model.damping, plain.damping);
+        assert_eq!(model.forces, plain.forces);
+        assert_eq!(model.tip, plain.tip);
+        assert_eq!(model.stress, plain.stress);
+        assert_eq!(model.accelerometers, plain.accelerometers);
+        model
+    }
+
+    fn configurations() -> Vec<PlateParameters> {
+        let mut all = Vec::new();
+        for formulation in [Formulation::Paper, Formulation::Consistent] {
+            for root in [Root::Hub, Root::Locked] {
+                all.push(PlateParameters {
+                    formulation,
+                    root,
+                    ..PlateParameters::default()
+                });
+            }
+        }
+        all
+    }
+
+    /// `K` is `E` times a matrix of the others (`D = E h^3 / (12 (1 - nu^2))`, and the clamped
+    /// plate's modes, eigenvectors of `S K S`, do not move with `E`): `dK/dE = K / E`, `dM/dE =
+    /// 0`, and the stress `E h (...)` per unit coordinate `sigma / E`; the shapes' vectors stay
+    /// (to the eigen-solver's round-off in the consistent formulation's modes).
+    #[test]
+    fn along_e_the_stiffness_is_k_over_e() {
+        for p in configurations() {
+            let what = format!("{:?} {:?}", p.formulation, p.root);
+            let m = seeded(&p, |d| d.e.d = 1.0);
+            for (name, value, derivative) in [
+                ("K", &m.stiffness, &m.derivative.stiffness),
+                (
+                    "sigma",
+                    &DMatrix::from_column_slice(m.dim(), 1, m.stress.as_slice()),
+                    &{ DMatrix::from_column_slice(m.dim(), 1, m.derivative.stress.as_slice()) },
+                ),
+            ] {
+                let expect = value / p.e;
+                let miss = (derivative - &expect).amax();
+                assert!(
+                    miss <= 1e-9 * expect.amax(),
+                    "{what}: d{name}/dE off by {miss:e}"
+                );
+            }
+            // (The hub's coupling to the modes moves by the modes' round-off.)
+            let mass = m.derivative.mass.amax() * p.e / m.mass.amax();
+            assert!(mass <= 1e-9, "{what}: M moves with E by {mass:e}");
+            // The vectors of shapes: exactly still in the paper's closed forms, to the
+            // eigen-solver's round-off in the consistent one's modes.
+            let tip = m.derivative.tip.amax() * p.e / m.tip.amax();
+            assert!(tip <= 1e-9, "{what}: the tip moves with E by {tip:e}");
+        }
+    }
+
+    /// Along `h`: `D ∝ h^3` and `m ∝ h`. In the paper's formulation each mode's `k` and `m`
+    /// are those closed forms (`dk/dh = 3 k / h`; `dm/dh = m / h` without air), and the hub's
+    /// inertia `I_H + 2 I_P` gains `2 I_P / h`. Along `I_H` only `M_00` moves, by 1.
+    #[test]
+    fn along_h_and_i_h_the_closed_forms() {
+        let p = PlateParameters {
+            formulation: Formulation::Paper,
+            ca: 0.0,
+            ..PlateParameters::default()
+        };
+        let m = seeded(&p, |d| d.h.d = 1.0);
+        let k3 = &m.stiffness * (3.0 / p.h);
+        assert!((&m.derivative.stiffness - &k3).amax() <= 1e-12 * k3.amax());
+        for j in 1..m.dim() {
+            let expect = m.mass[(j, j)] / p.h;
+            assert!((m.derivative.mass[(j, j)] - expect).abs() <= 1e-14 * expect);
+        }
+        let expect = 2.0 * p.i_p() / p.h;
+        assert!((m.derivative.mass[(0, 0)] - expect).abs() <= 1e-14 * expect);
+        for p in configurations() {
+            let m = seeded(&p, |d| d.i_h.d = 1.0);
+            let mut expect = DMatrix::zeros(m.dim(), m.dim());
+            if m.hub {
+                expect[(0, 0)] = 1.0;
+            }
+            assert_eq!(m.derivative.mass, expect);
+            assert_eq!(m.derivative.stiffness.amax(), 0.0);
+        }
+    }
+
+    /// Along every other parameter the model keeps its values' bits (`seeded`).
+    #[test]
+    fn a_seeded_model_keeps_the_values() {
+        for p in configurations() {
+            seeded(&p, |d| d.rho.d = 1.0);
+            seeded(&p, |d| d.nu.d = 1.0);
+            seeded(&p, |d| d.a.d = 1.0);
+            seeded(&p, |d| d.b.d = 1.0);
+            seeded(&p, |d| d.ca.d = 1.0);
+            seeded(&p, |d| d.x1.d = 1.0);
         }
     }
 

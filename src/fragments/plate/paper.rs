@@ -31,11 +31,15 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::beam_functions::{moment_integral, product_integral, BeamFunction, BeamKind};
-use super::{added_mass, PlateModel, PlateParameters, Root};
+use super::{added_mass, beam_value, powi, DualModel, PlateParameters, Root, ZERO};
+use crate::math::dual::{Dual, Real};
 
 /// Builds the paper formulation, with the map from a point `(x, y)` to its displacement per
-/// unit coordinate (the hub's rotation `x theta` included).
-pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f64>) {
+/// unit coordinate (the hub's rotation `x theta` included), in dual numbers: every constant the
+/// closed forms above differentiated along the parameter seeded in `p`.
+pub(crate) fn build(
+    p: &PlateParameters<Dual>,
+) -> (DualModel, impl Fn(Dual, Dual) -> DVector<Dual>) {
     let xkind = match p.root {
         Root::Hub => BeamKind::PinnedFree,
         Root::Locked => BeamKind::ClampedFree,
@@ -46,96 +50,96 @@ pub fn build(p: &PlateParameters) -> (PlateModel, impl Fn(f64, f64) -> DVector<f
     let hub = p.root == Root::Hub;
     let first = usize::from(hub);
     let n = first + p.n * p.m;
-    let mut mass = DMatrix::zeros(n, n);
-    let mut stiffness = DMatrix::zeros(n, n);
-    let mut torque = DVector::zeros(n);
-    let mut forces = [DVector::zeros(n), DVector::zeros(n)];
-    let mut tip = DVector::zeros(n);
+    let mut mass = DMatrix::from_element(n, n, ZERO);
+    let mut stiffness = DMatrix::from_element(n, n, ZERO);
+    let mut torque = DVector::from_element(n, ZERO);
+    let mut forces = [
+        DVector::from_element(n, ZERO),
+        DVector::from_element(n, ZERO),
+    ];
+    let mut tip = DVector::from_element(n, ZERO);
     let points = p.accelerometer_points();
-    let mut accelerometers = vec![DVector::zeros(n); points.len()];
+    let mut accelerometers = vec![DVector::from_element(n, ZERO); points.len()];
     let mut labels = Vec::new();
     let mut damping = Vec::new();
     // Pinned-free shapes do not bend at the root: the stress is taken where the first one bends
     // most (x = 0.30 a); clamped-free shapes bend most at the root.
     let stress_point = match p.root {
         Root::Hub => (super::most_bent_section(&phis[0]) * a, 0.5 * b),
-        Root::Locked => (0.0, 0.5 * b),
+        Root::Locked => (ZERO, 0.5 * b),
     };
     let stress_row = super::stress_row(p, &phis, &psis, stress_point);
-    let mut stress = DVector::zeros(n);
+    let mut stress = DVector::from_element(n, ZERO);
     stress.rows_mut(first, p.n * p.m).copy_from(&stress_row);
     let air = added_mass::strip(p, &phis, &psis, 1.0);
     if hub {
-        mass[(0, 0)] = p.hub_total_inertia() + air.as_ref().map_or(0.0, |air| 2.0 * air.hub);
-        torque[0] = 1.0;
+        mass[(0, 0)] = p.hub_total_inertia() + air.as_ref().map_or(ZERO, |air| 2.0 * air.hub);
+        torque[0] = Dual::from(1.0);
         for (s, &(x, _)) in accelerometers.iter_mut().zip(&points) {
             s[0] = x;
         }
     }
     for (mi, psi) in psis.iter().enumerate() {
         let y20 = product_integral(psi, 2, psi, 0) / b;
-        let y40 = product_integral(psi, 4, psi, 0) / b.powi(3);
+        let y40 = product_integral(psi, 4, psi, 0) / powi(b, 3);
         let psi_int = moment_integral(psi, 0) * b;
         for (ni, phi) in phis.iter().enumerate() {
             let j = first + p.n * mi + ni;
             let x20 = product_integral(phi, 2, phi, 0) / a;
-            let x40 = product_integral(phi, 4, phi, 0) / a.powi(3);
+            let x40 = product_integral(phi, 4, phi, 0) / powi(a, 3);
             // eq. 21
             let k = d * (b * x40 + 2.0 * x20 * y20 + a * y40);
-            let m = mu * a * b + air.as_ref().map_or(0.0, |air| air.modes[p.n * mi + ni]);
+            let m = mu * a * b + air.as_ref().map_or(ZERO, |air| air.modes[p.n * mi + ni]);
             mass[(j, j)] = m;
             stiffness[(j, j)] = k;
-            damping.push(2.0 * p.zeta * (k * m).sqrt());
+            damping.push(2.0 * p.zeta * Real::sqrt(k * m));
             labels.push((ni + 1, mi + 1));
             if hub {
                 // eq. 18 / eq. 20 (erratum: the slope phi'(0))
                 let t = phi.derivative(1, 0.0) / a * psi_int;
-                torque[j] = if t.abs() > 1e-12 * phi.derivative(1, 0.0).abs() / a * b {
+                torque[j] = if t.v.abs() > (1e-12 * phi.derivative(1, 0.0).abs() / a * b).v {
                     t
                 } else {
-                    0.0
+                    ZERO
                 };
             }
             for (f, (x, y)) in forces.iter_mut().zip([(p.x1, p.y1), (p.x2, p.y2)]) {
-                f[j] = phi.value(x / a) * psi.value(y / b);
+                f[j] = beam_value(phi, 0, x / a) * beam_value(psi, 0, y / b);
             }
-            tip[j] = phi.value(1.0) * psi.value(0.5);
+            tip[j] = Dual::from(phi.value(1.0) * psi.value(0.5));
             for (s, &(x, y)) in accelerometers.iter_mut().zip(&points) {
-                s[j] = phi.value(x / a) * psi.value(y / b);
+                s[j] = beam_value(phi, 0, x / a) * beam_value(psi, 0, y / b);
             }
         }
     }
     let point = {
         let (phis, psis, (a, b)) = (phis.clone(), psis.clone(), (p.a, p.b));
-        move |x: f64, y: f64| {
-            let mut s = DVector::zeros(n);
+        move |x: Dual, y: Dual| {
+            let mut s = DVector::from_element(n, ZERO);
             if hub {
                 s[0] = x;
             }
             for (mi, psi) in psis.iter().enumerate() {
                 for (ni, phi) in phis.iter().enumerate() {
-                    s[first + phis.len() * mi + ni] = phi.value(x / a) * psi.value(y / b);
+                    s[first + phis.len() * mi + ni] =
+                        beam_value(phi, 0, x / a) * beam_value(psi, 0, y / b);
                 }
             }
             s
         }
     };
-    let model = PlateModel {
+    let model = DualModel {
         hub,
         labels,
         mass,
         stiffness,
-        damping_derivative: vec![0.0; damping.len()],
         damping,
         torque,
         forces,
         tip,
         stress,
-        stress_point,
+        stress_point: (stress_point.0.v, stress_point.1.v),
         accelerometers,
-        drag: Vec::new(),
-        dashpots: Vec::new(),
-        nominal: super::PlateNominal::of(p),
     };
     (model, point)
 }
