@@ -497,39 +497,55 @@ mod tests {
         assert!(e.contains("controller.k_pl"), "{e}");
     }
 
-    /// The configurations the plate's and hub's constants are checked in: the default
-    /// (consistent plate on its hub, in air, damped on the structure's modes, motor coupled),
-    /// the motor uncoupled (a free structure), the paper's formulation on the LOES and the
-    /// consistent plate with its hub locked.
-    fn plate_configurations() -> [(&'static str, Values); 4] {
-        [
+    /// Each parameter of `seeds` in the configurations the plate's and hub's constants are
+    /// checked in, against central differences (with the clamped plate's modes' round-off,
+    /// [`modes_round_off`]): the default (consistent plate on its hub, in air, damped on the
+    /// structure's modes, motor coupled), the motor uncoupled (a free structure), the paper's
+    /// formulation on the LOES and the consistent plate with its hub locked. `what_moves`
+    /// asserts what the derivative `d` moves (the configuration, its values, the parameter).
+    /// A parameter at 0 (a relative step from it is none) is checked for its derivative's
+    /// existence only.
+    fn plate_parameters_agree(
+        seeds: &[usize],
+        what_moves: impl Fn(&str, &Values, usize, &LinearizationDerivative),
+    ) {
+        for (label, values) in [
             ("default", default_values()),
             ("servo-valve-motor", preset("servo-valve-motor")),
             ("paper-fig9b", preset("paper-fig9b")),
             ("complete-hub-locked", preset("complete-hub-locked")),
-        ]
+        ] {
+            for &seed in seeds {
+                let name = VARIABLES[seed].name;
+                if values.real(seed) == 0.0 {
+                    let (_, d) = linearization_at_rest_with_derivatives(&values, &[seed]).unwrap();
+                    assert!(d[0].is_ok(), "{label}: {name}");
+                    continue;
+                }
+                let (d, worst) = agrees_within(&values, seed, modes_round_off(&values));
+                eprintln!("{name}, {label}: worst {worst:.3e} of the tolerance");
+                what_moves(label, &values, seed, &d);
+            }
+        }
     }
 
     #[test]
     fn the_plates_material_and_the_hubs_inertia_are_exact() {
         // E, rho, h and nu reach the Ritz matrices, the clamped plate's modes (through the
         // air's added mass, the mass-normalised scaling) and the structure's modal dashpots;
-        // I_H the hub's inertia, the structure's dashpots or the bar's.
-        for (label, values) in plate_configurations() {
-            for seed in [
-                idx::PLATE_E,
-                idx::PLATE_RHO,
-                idx::PLATE_H,
-                idx::PLATE_NU,
-                idx::HUB_I_H,
-            ] {
-                let name = VARIABLES[seed].name;
-                let (d, worst) = agrees_within(&values, seed, modes_round_off(&values));
-                eprintln!("{name}, {label}: worst {worst:.3e} of the tolerance");
-                // (With the hub locked, I_H still sizes the bar's dashpot, `2 zeta sqrt(k I)`.)
-                assert!(d.a.amax() > 0.0, "{label}: {name} leaves A");
-            }
-        }
+        // I_H the hub's inertia, the structure's dashpots or the bar's (with the hub locked,
+        // I_H still sizes the bar's dashpot, `2 zeta sqrt(k I)`).
+        let seeds = [
+            idx::PLATE_E,
+            idx::PLATE_RHO,
+            idx::PLATE_H,
+            idx::PLATE_NU,
+            idx::HUB_I_H,
+        ];
+        plate_parameters_agree(&seeds, |label, _, seed, d| {
+            let name = VARIABLES[seed].name;
+            assert!(d.a.amax() > 0.0, "{label}: {name} leaves A");
+        });
     }
 
     #[test]
@@ -538,40 +554,31 @@ mod tests {
         // and Ca the added mass (none in the presets in vacuum, where Ca = 0: its derivative at
         // 0 is still there, the air's density's is zero); Cd the drag, whose law has no slope at
         // rest; the shaker's points the input matrix.
-        for (label, values) in plate_configurations() {
-            for seed in [
-                idx::PLATE_A,
-                idx::PLATE_B,
-                idx::PLATE_RHO_AIR,
-                idx::PLATE_CA,
-                idx::PLATE_CD,
-                idx::PLATE_X1,
-                idx::PLATE_Y1,
-                idx::PLATE_X2,
-                idx::PLATE_Y2,
-            ] {
-                let name = VARIABLES[seed].name;
-                if values.real(seed) == 0.0 {
-                    // A relative step from 0 is none: only the derivative's existence.
-                    let (_, d) = linearization_at_rest_with_derivatives(&values, &[seed]).unwrap();
-                    assert!(d[0].is_ok(), "{label}: {name}");
-                    continue;
+        let seeds = [
+            idx::PLATE_A,
+            idx::PLATE_B,
+            idx::PLATE_RHO_AIR,
+            idx::PLATE_CA,
+            idx::PLATE_CD,
+            idx::PLATE_X1,
+            idx::PLATE_Y1,
+            idx::PLATE_X2,
+            idx::PLATE_Y2,
+        ];
+        plate_parameters_agree(&seeds, |label, values, seed, d| {
+            let name = VARIABLES[seed].name;
+            let in_vacuum = values.real(idx::PLATE_CA) == 0.0;
+            match seed {
+                idx::PLATE_CD => assert!(!moves(d), "{label}: the drag moves the rest"),
+                idx::PLATE_RHO_AIR if in_vacuum => {
+                    assert!(!moves(d), "{label}: the air moves the plate in vacuum")
                 }
-                let (d, worst) = agrees_within(&values, seed, modes_round_off(&values));
-                eprintln!("{name}, {label}: worst {worst:.3e} of the tolerance");
-                let in_vacuum = values.real(idx::PLATE_CA) == 0.0;
-                match seed {
-                    idx::PLATE_CD => assert!(!moves(&d), "{label}: the drag moves the rest"),
-                    idx::PLATE_RHO_AIR if in_vacuum => {
-                        assert!(!moves(&d), "{label}: the air moves the plate in vacuum")
-                    }
-                    idx::PLATE_X1 | idx::PLATE_Y1 | idx::PLATE_X2 | idx::PLATE_Y2 => {
-                        assert!(d.b.amax() > 0.0, "{label}: {name} leaves B")
-                    }
-                    _ => assert!(d.a.amax() > 0.0, "{label}: {name} leaves A"),
+                idx::PLATE_X1 | idx::PLATE_Y1 | idx::PLATE_X2 | idx::PLATE_Y2 => {
+                    assert!(d.b.amax() > 0.0, "{label}: {name} leaves B")
                 }
+                _ => assert!(d.a.amax() > 0.0, "{label}: {name} leaves A"),
             }
-        }
+        });
     }
 
     #[test]
