@@ -156,8 +156,8 @@ pub fn output_derivative_of(
 /// ```
 ///
 /// five solves with one LU, at the stationary point itself (Newton's steps on `g_ω` from `f_hz`
-/// first). An error where the response is unbounded, or where `g_ωω` is not negative (not a
-/// maximum: no peak to follow).
+/// first, until a step is below 1e-9 of the peak's half-width). An error where the response is
+/// unbounded, or where `g_ωω` is not negative (not a maximum: no peak to follow).
 pub fn peak_derivative(
     lin: &Linearization,
     d: &LinearizationDerivative,
@@ -204,7 +204,12 @@ pub fn peak_derivative(
                 "no peak to follow near {f_hz} Hz: Newton's step left it"
             ));
         }
-        if step.abs() > 4.0 * f64::EPSILON * f {
+        // Settled: a step below 1e-9 of the peak's half-width `sqrt(g / |g_ωω|)` (g falls to
+        // half there), which moves the derivative by about as much relative (it varies on that
+        // scale). The round-off of g_ω stops the steps short of the last bits where the
+        // resolvent's solves are ill-conditioned (a stiff model: a few ulps of f, oscillating).
+        let half_width = (h.norm_sqr() / -g_ww).sqrt() / two_pi;
+        if step.abs() > 1e-9 * half_width {
             f += step;
             continue;
         }
