@@ -121,6 +121,21 @@ fn identify(frfs: &[String], fit: &[&str], extra: &[&str]) -> (Json, String) {
     (serde_json::from_slice(&out.stdout).unwrap(), stderr)
 }
 
+/// `hsp identify --json ARGS`, which must succeed: its JSON.
+fn identify_json(args: &[&str]) -> Json {
+    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
+        .args(["identify", "--json"])
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 /// The 95 % interval of `name`, or `None` when the command gives none.
 fn ci95(json: &Json, name: &str) -> Option<(f64, f64)> {
     let ci = &json["parameters"][name]["ci95"];
@@ -641,20 +656,22 @@ fn the_table_1_peaks_file_is_the_papers_table_1() {
 #[test]
 fn the_table_1_calibration_has_exact_sensitivities() {
     let peaks = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/table1_fig9b_peaks.csv");
-    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
-        .args(["identify", "--json", "--peaks"])
-        .arg(format!("r:acc_tip:{}", peaks.display()))
-        .args(["--preset", "complete", "--set", "hub.I_H=0.01", "--set"])
-        .args(["torsion_bar.k=100", "--fit", "hub.I_H:1e-3:10", "--fit"])
-        .args(["torsion_bar.k:1:1e5", "--fit", "plate.E"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: Json = serde_json::from_slice(&out.stdout).unwrap();
+    let json = identify_json(&[
+        "--peaks",
+        &format!("r:acc_tip:{}", peaks.display()),
+        "--preset",
+        "complete",
+        "--set",
+        "hub.I_H=0.01",
+        "--set",
+        "torsion_bar.k=100",
+        "--fit",
+        "hub.I_H:1e-3:10",
+        "--fit",
+        "torsion_bar.k:1:1e5",
+        "--fit",
+        "plate.E",
+    ]);
     for name in ["hub.I_H", "torsion_bar.k", "plate.E"] {
         assert_eq!(json["parameters"][name]["sensitivity"], "exact", "{json:#}");
     }
@@ -684,24 +701,14 @@ fn peaks_of_a_known_model_give_back_its_parameter() {
     }
     let file = dir.join("peaks.csv");
     std::fs::write(&file, csv).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_hsp"))
-        .args([
-            "identify",
-            "--json",
-            "--preset",
-            "paper-fig9b",
-            "--fit",
-            "plate.E",
-        ])
-        .args(["--peaks", &format!("r:acc_tip:{}", file.display())])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: Json = serde_json::from_slice(&out.stdout).unwrap();
+    let json = identify_json(&[
+        "--preset",
+        "paper-fig9b",
+        "--fit",
+        "plate.E",
+        "--peaks",
+        &format!("r:acc_tip:{}", file.display()),
+    ]);
     assert!(warnings(&json).is_empty(), "{json:#}");
     let v = json["parameters"]["plate.E"]["value"].as_f64().unwrap();
     assert!(
@@ -820,22 +827,18 @@ fn a_time_series_gives_the_parameters_of_the_frf_fit() {
 fn forward_sensitivities_and_central_differences_give_the_same_series_fit() {
     let dir = folder("series_forward");
     let file = series_of_the_fmu_over(&dir, 3, 200);
-    let run = |extra: &[&str]| -> Json {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_hsp"));
-        cmd.args(["identify", "--json", "--series", file.to_str().unwrap()]);
-        cmd.args(["--fit", "servo_valve.beta", "--fit", "torsion_bar.k"]);
-        cmd.args(["--set", "plate.zeta=0.03"]);
-        cmd.args(extra);
-        let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
-    };
-    let forward = run(&["--series-sensitivities", "forward"]);
-    let central = run(&[]);
+    let args = [
+        "--series",
+        file.to_str().unwrap(),
+        "--fit",
+        "servo_valve.beta",
+        "--fit",
+        "torsion_bar.k",
+        "--set",
+        "plate.zeta=0.03",
+    ];
+    let central = identify_json(&args);
+    let forward = identify_json(&[&args[..], &["--series-sensitivities", "forward"]].concat());
     assert!(forward["derivatives"].as_u64().unwrap() > 0, "{forward:#}");
     assert_eq!(central["derivatives"].as_u64(), Some(0), "{central:#}");
     for (name, truth) in [TRUTH[0], TRUTH[2]] {
