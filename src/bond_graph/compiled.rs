@@ -5,7 +5,8 @@
 //! outputs and bond variables, and the structure read off the plan (`structure.rs`: the
 //! derivative plan, the Jacobian's pattern and colouring). Evaluating is one loop over the
 //! operations ([`CompiledModel::derivatives`] and the others), generic over the scalar so that the
-//! same loop gives values (`f64`) and exact derivatives (dual numbers, `dual.rs`). The slots live
+//! same loop gives values (`f64`), exact derivatives (dual numbers, `dual.rs`) and the
+//! linearisation's derivative along a parameter (hyper-dual numbers, `sensitivity.rs`). The slots live
 //! in a per-thread scratch buffer, so running the plan allocates nothing once the buffer has
 //! grown, and one model serves several threads at once. The energy and power balance are in `energy.rs`, the linearisation in
 //! `linearization.rs`.
@@ -14,7 +15,7 @@ use std::cell::RefCell;
 
 use nalgebra::DMatrix;
 
-use super::dual::{Dual, Scalar};
+use super::dual::{Constants, Dual, Scalar, Values};
 use super::element::NonlinearLaw;
 use super::energy::{PowerTerm, Storage};
 use super::plan::{Op, NONE};
@@ -163,16 +164,24 @@ impl CompiledModel {
         &self.effort_to_head
     }
 
+    /// Runs `ops` on the slots `s` (states and inputs set), the constants lifted by
+    /// `constants`: the one loop of every pass, in values, dual and hyper-dual numbers.
     #[inline]
-    fn run<T: Scalar>(&self, ops: &[Op], s: &mut [T]) {
+    pub(super) fn run<T: Scalar>(
+        &self,
+        ops: &[Op],
+        constants: &impl Constants<T>,
+        s: &mut [T],
+    ) -> Result<(), T::Refusal> {
         for op in ops {
             match *op {
-                Op::Const { dst, c } => s[dst as usize] = T::cst(c),
+                Op::Const { dst, c } => s[dst as usize] = constants.constant(dst, c),
                 Op::Copy { dst, src } => s[dst as usize] = s[src as usize],
                 Op::Lin { dst, start, end } => {
+                    let (start, end) = (start as usize, end as usize);
                     let mut acc = T::cst(0.0);
-                    for &(k, src) in &self.terms[start as usize..end as usize] {
-                        acc = acc + s[src as usize].scale(k);
+                    for (i, &(k, src)) in self.terms[start..end].iter().enumerate() {
+                        acc = acc + constants.term(start + i, k, s[src as usize]);
                     }
                     s[dst as usize] = acc;
                 }
@@ -189,7 +198,7 @@ impl CompiledModel {
                     } else {
                         s[m as usize]
                     };
-                    let y = T::law(&self.laws[law as usize], s[arg as usize].scale(ki), mv);
+                    let y = T::law(&self.laws[law as usize], s[arg as usize].scale(ki), mv)?;
                     s[dst as usize] = y.scale(ko);
                 }
                 Op::Mul { dst, a, b, k } => {
@@ -200,6 +209,7 @@ impl CompiledModel {
                 }
             }
         }
+        Ok(())
     }
 
     fn check_dims(&self, x: &[f64], u: &[f64]) {
@@ -239,7 +249,7 @@ impl CompiledModel {
                 None => s[..n].fill(0.0),
             }
             s[n..n + u.len()].copy_from_slice(u);
-            self.run(ops, s);
+            let Ok(()) = self.run(ops, &Values, s);
             f(s)
         })
     }
@@ -288,7 +298,7 @@ impl CompiledModel {
                 s[i] = Dual { v: *v, d: 0.0 };
             }
             seed(s);
-            self.run(ops, s);
+            let Ok(()) = self.run(ops, &Values, s);
             f(s)
         })
     }

@@ -1,12 +1,15 @@
-//! The scalar types the evaluation plan runs in: `f64` for values, and forward-mode dual numbers
-//! for exact derivatives (one directional derivative per pass).
+//! The scalar types the evaluation plan runs in: `f64` for values, forward-mode dual numbers
+//! for exact derivatives (one directional derivative per pass), and hyper-dual numbers for the
+//! linearisation's derivative along a parameter (`sensitivity.rs`); and how a pass lifts the
+//! plan's constants into them ([`Constants`]).
 
+use std::convert::Infallible;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::element::NonlinearLaw;
 
-/// Scalar type the plan is evaluated in: `f64`, or a forward-mode dual number for the exact
-/// Jacobian.
+/// Scalar type the plan is evaluated in: `f64`, a forward-mode dual number for the exact
+/// Jacobian, or a hyper-dual number for the linearisation's parameter derivative.
 pub(crate) trait Scalar:
     Copy
     + Add<Output = Self>
@@ -15,12 +18,41 @@ pub(crate) trait Scalar:
     + Div<Output = Self>
     + Neg<Output = Self>
 {
+    /// Why a law cannot be evaluated in this scalar: never for `f64` and [`Dual`]
+    /// ([`Infallible`]); a law whose second derivatives a hyper-dual pass lacks.
+    type Refusal;
     fn cst(c: f64) -> Self;
     fn scale(self, k: f64) -> Self;
-    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self;
+    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Result<Self, Self::Refusal>;
+}
+
+/// How a pass lifts the plan's constants into its scalar, each named by where it stands so
+/// that a pass can give it a derivative of its own: [`Values`] for the value and Jacobian
+/// passes, the constants with their derivatives along a parameter in `sensitivity.rs`.
+pub(crate) trait Constants<T> {
+    /// The constant `c` that an [`super::plan::Op::Const`] writes into the slot `dst`.
+    fn constant(&self, dst: u32, c: f64) -> T;
+    /// `x` times the coefficient `k` of the term `t` (its index in the model's terms) of an
+    /// [`super::plan::Op::Lin`].
+    fn term(&self, t: usize, k: f64, x: T) -> T;
+}
+
+/// The plan's constants as their values, without derivatives of their own.
+pub(crate) struct Values;
+
+impl<T: Scalar> Constants<T> for Values {
+    #[inline(always)]
+    fn constant(&self, _dst: u32, c: f64) -> T {
+        T::cst(c)
+    }
+    #[inline(always)]
+    fn term(&self, _t: usize, k: f64, x: T) -> T {
+        x.scale(k)
+    }
 }
 
 impl Scalar for f64 {
+    type Refusal = Infallible;
     #[inline]
     fn cst(c: f64) -> Self {
         c
@@ -30,8 +62,8 @@ impl Scalar for f64 {
         self * k
     }
     #[inline]
-    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self {
-        (law.value)(x, m)
+    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Result<Self, Infallible> {
+        Ok((law.value)(x, m))
     }
 }
 
@@ -39,6 +71,7 @@ impl Scalar for f64 {
 pub(crate) use crate::math::dual::Dual;
 
 impl Scalar for Dual {
+    type Refusal = Infallible;
     #[inline]
     fn cst(c: f64) -> Self {
         Dual { v: c, d: 0.0 }
@@ -51,12 +84,12 @@ impl Scalar for Dual {
         }
     }
     #[inline]
-    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Self {
+    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Result<Self, Infallible> {
         let (y, dx, dm) = (law.f)(x.v, m.v);
-        Dual {
+        Ok(Dual {
             v: y,
             d: dx * x.d + dm * m.d,
-        }
+        })
     }
 }
 
@@ -75,7 +108,7 @@ mod tests {
         assert!((f.v - v).abs() < 1e-15 && (f.d - d).abs() < 1e-15);
         let law = NonlinearLaw::modulated("xm", |x, m| (x * m, m, x));
         let m = Dual { v: 4.0, d: 0.5 };
-        let y = Dual::law(&law, x, m);
+        let Ok(y) = Dual::law(&law, x, m);
         assert_eq!(
             y,
             Dual {
@@ -83,6 +116,6 @@ mod tests {
                 d: 4.0 + 1.5
             }
         );
-        assert_eq!(f64::law(&law, 3.0, 4.0), 12.0);
+        assert_eq!(f64::law(&law, 3.0, 4.0), Ok(12.0));
     }
 }

@@ -70,20 +70,7 @@ impl CompiledModel {
         let mut d = DMatrix::zeros(p, m);
         for j in 0..n + m {
             self.with_dual(&self.ops, x, u, &[j as u32], |s| {
-                for (i, &k) in self.deriv_slots.iter().enumerate() {
-                    if j < n {
-                        a[(i, j)] = s[k as usize].d;
-                    } else {
-                        b[(i, j - n)] = s[k as usize].d;
-                    }
-                }
-                for (i, &k) in self.output_slots.iter().enumerate() {
-                    if j < n {
-                        c[(i, j)] = s[k as usize].d;
-                    } else {
-                        d[(i, j - n)] = s[k as usize].d;
-                    }
-                }
+                self.copy_column(j, s, |v| v.d, [&mut a, &mut b, &mut c, &mut d])
             });
         }
         Linearization {
@@ -96,6 +83,27 @@ impl CompiledModel {
             output_names: self.output_names.clone(),
             x0: x.to_vec(),
             u0: u.to_vec(),
+        }
+    }
+
+    /// Copies the column `j` of a linearisation (state `j` for `j < n`, input `j - n` after)
+    /// out of the slots `s` of its pass: `part` of each derivative's slot into `a` (or `b`), of
+    /// each output's into `c` (or `d`). [`CompiledModel::linearize`]'s dual passes and the
+    /// hyper-dual ones of [`CompiledModel::linearize_with_sensitivity`].
+    pub(super) fn copy_column<T: Copy>(
+        &self,
+        j: usize,
+        s: &[T],
+        part: impl Fn(T) -> f64,
+        [a, b, c, d]: [&mut DMatrix<f64>; 4],
+    ) {
+        let n = self.n_states();
+        let (rows, outputs, column) = if j < n { (a, c, j) } else { (b, d, j - n) };
+        for (i, &k) in self.deriv_slots.iter().enumerate() {
+            rows[(i, column)] = part(s[k as usize]);
+        }
+        for (i, &k) in self.output_slots.iter().enumerate() {
+            outputs[(i, column)] = part(s[k as usize]);
         }
     }
 }

@@ -30,8 +30,8 @@
 use nalgebra::DMatrix;
 
 use super::compiled::CompiledModel;
+use super::dual::{Constants, Scalar};
 use super::element::NonlinearLaw;
-use super::plan::{Op, NONE};
 use crate::math::dual::HyperDual;
 
 /// The derivatives of `A, B, C, D` along the parameter the model was built for, at an operating
@@ -53,34 +53,61 @@ pub struct LinearizationDerivative {
     pub y: Vec<f64>,
 }
 
-/// `x` times a constant `k` that moves with the parameter as `dk`.
-#[inline]
-fn times(x: HyperDual, k: f64, dk: f64) -> HyperDual {
-    x * HyperDual::from_parts(k, 0.0, dk, 0.0)
+/// The plan's constants with their derivatives along the parameter in their `b` parts: those
+/// of the constants each slot's [`super::plan::Op::Const`] writes (0 for every other slot), and
+/// those of the terms' coefficients (none for a model not built for a parameter).
+struct AlongParameter<'a> {
+    slots: &'a [f64],
+    terms: &'a [f64],
 }
 
-/// A law in hyper-dual numbers: its own form, or its first derivatives where they suffice
-/// (module docs); an error naming it elsewhere.
-fn law_hyper(law: &NonlinearLaw, x: HyperDual, m: HyperDual) -> Result<HyperDual, String> {
-    if let Some(h) = &law.hyper {
-        return Ok(h(x, m));
+impl Constants<HyperDual> for AlongParameter<'_> {
+    #[inline]
+    fn constant(&self, dst: u32, c: f64) -> HyperDual {
+        HyperDual::from_parts(c, 0.0, self.slots[dst as usize], 0.0)
     }
-    let still_in_p = x.b == 0.0 && m.b == 0.0;
-    let still_in_x = x.a == 0.0 && m.a == 0.0;
-    if !(still_in_p || still_in_x) {
-        return Err(format!(
-            "the law '{}' has no hyper-dual form (NonlinearLaw::with_hyper): its second \
-             derivatives, which the parameter's sensitivity needs there, are not available",
-            law.label
-        ));
+    #[inline]
+    fn term(&self, t: usize, k: f64, x: HyperDual) -> HyperDual {
+        let dk = self.terms.get(t).copied().unwrap_or(0.0);
+        x * HyperDual::from_parts(k, 0.0, dk, 0.0)
     }
-    let (y, dx, dm) = (law.f)(x.v, m.v);
-    Ok(HyperDual::from_parts(
-        y,
-        dx * x.a + dm * m.a,
-        dx * x.b + dm * m.b,
-        dx * x.ab + dm * m.ab,
-    ))
+}
+
+impl Scalar for HyperDual {
+    /// The error naming a law without a hyper-dual form where its second derivatives are
+    /// needed.
+    type Refusal = String;
+    #[inline]
+    fn cst(c: f64) -> Self {
+        HyperDual::from(c)
+    }
+    #[inline]
+    fn scale(self, k: f64) -> Self {
+        self * k
+    }
+    /// A law in hyper-dual numbers: its own form, or its first derivatives where they suffice
+    /// (module docs); an error naming it elsewhere.
+    fn law(law: &NonlinearLaw, x: Self, m: Self) -> Result<Self, String> {
+        if let Some(h) = &law.hyper {
+            return Ok(h(x, m));
+        }
+        let still_in_p = x.b == 0.0 && m.b == 0.0;
+        let still_in_x = x.a == 0.0 && m.a == 0.0;
+        if !(still_in_p || still_in_x) {
+            return Err(format!(
+                "the law '{}' has no hyper-dual form (NonlinearLaw::with_hyper): its second \
+                 derivatives, which the parameter's sensitivity needs there, are not available",
+                law.label
+            ));
+        }
+        let (y, dx, dm) = (law.f)(x.v, m.v);
+        Ok(HyperDual::from_parts(
+            y,
+            dx * x.a + dm * m.a,
+            dx * x.b + dm * m.b,
+            dx * x.ab + dm * m.ab,
+        ))
+    }
 }
 
 impl CompiledModel {
@@ -102,49 +129,15 @@ impl CompiledModel {
     }
 
     /// Runs the full plan in hyper-dual numbers on `s` (states and inputs set), the constants
-    /// carrying their derivatives along the parameter in their `b` parts.
+    /// carrying their derivatives along the parameter in their `b` parts (`dc` those of the
+    /// slots, [`CompiledModel::constant_slot_derivatives`]).
     fn run_hyper(&self, dc: &[f64], s: &mut [HyperDual]) -> Result<(), String> {
-        let term_d = self
+        let terms = self
             .constant_derivatives
             .as_ref()
             .map(|c| c.terms.as_slice())
             .unwrap_or(&[]);
-        for op in &self.ops {
-            match *op {
-                Op::Const { dst, c } => {
-                    s[dst as usize] = HyperDual::from_parts(c, 0.0, dc[dst as usize], 0.0)
-                }
-                Op::Copy { dst, src } => s[dst as usize] = s[src as usize],
-                Op::Lin { dst, start, end } => {
-                    let mut acc = HyperDual::from(0.0);
-                    for t in start as usize..end as usize {
-                        let (k, src) = self.terms[t];
-                        let dk = term_d.get(t).copied().unwrap_or(0.0);
-                        acc = acc + times(s[src as usize], k, dk);
-                    }
-                    s[dst as usize] = acc;
-                }
-                Op::Law {
-                    dst,
-                    law,
-                    arg,
-                    ki,
-                    ko,
-                    m,
-                } => {
-                    let mv = if m == NONE {
-                        HyperDual::from(0.0)
-                    } else {
-                        s[m as usize]
-                    };
-                    let y = law_hyper(&self.laws[law as usize], s[arg as usize] * ki, mv)?;
-                    s[dst as usize] = y * ko;
-                }
-                Op::Mul { dst, a, b, k } => s[dst as usize] = s[a as usize] * s[b as usize] * k,
-                Op::Div { dst, a, b, k } => s[dst as usize] = s[a as usize] / s[b as usize] * k,
-            }
-        }
-        Ok(())
+        self.run(&self.ops, &AlongParameter { slots: dc, terms }, s)
     }
 
     /// The derivatives of `A, B, C, D` along the parameter the model was built for, at the
@@ -182,25 +175,10 @@ impl CompiledModel {
             }
             s[j].a = 1.0;
             self.run_hyper(&dc, &mut s)?;
-            for (i, &k) in self.deriv_slots.iter().enumerate() {
-                let v = s[k as usize];
-                if j < n {
-                    out.a[(i, j)] = v.ab;
-                } else {
-                    out.b[(i, j - n)] = v.ab;
-                }
-                out.f[i] = v.b;
-            }
-            for (i, &k) in self.output_slots.iter().enumerate() {
-                let v = s[k as usize];
-                if j < n {
-                    out.c[(i, j)] = v.ab;
-                } else {
-                    out.d[(i, j - n)] = v.ab;
-                }
-                out.y[i] = v.b;
-            }
+            let LinearizationDerivative { a, b, c, d, .. } = &mut out;
+            self.copy_column(j, &s, |v| v.ab, [a, b, c, d]);
         }
+        (out.f, out.y) = self.parameter_parts(&s);
         let finite = |v: &f64| v.is_finite();
         if !(out.a.iter().all(finite)
             && out.b.iter().all(finite)
@@ -240,9 +218,14 @@ impl CompiledModel {
             s[n + k] = HyperDual::from(v);
         }
         self.run_hyper(&dc, &mut s)?;
-        let f = self.deriv_slots.iter().map(|&k| s[k as usize].b).collect();
-        let y = self.output_slots.iter().map(|&k| s[k as usize].b).collect();
-        Ok((f, y))
+        Ok(self.parameter_parts(&s))
+    }
+
+    /// `(df/dp, dy/dp)`: the `b` parts of the derivatives' and the outputs' slots of a
+    /// hyper-dual pass (the same in every pass, whatever state or input it seeds).
+    fn parameter_parts(&self, s: &[HyperDual]) -> (Vec<f64>, Vec<f64>) {
+        let part = |slots: &[u32]| slots.iter().map(|&k| s[k as usize].b).collect();
+        (part(&self.deriv_slots), part(&self.output_slots))
     }
 }
 
@@ -261,7 +244,7 @@ mod tests {
         let se = g.add_se("force", f);
         let j = g.add_one("v");
         let mass = g.add_i("mass", m);
-        let spring = g.add_c("spring", Dual::cst(1.0) / k);
+        let spring = g.add_c("spring", <Dual as Real>::cst(1.0) / k);
         let damper = g.add_r("damper", c);
         g.bond(se, j);
         let bm = g.bond(j, mass);

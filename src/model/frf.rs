@@ -155,9 +155,10 @@ pub fn output_derivative_of(
 /// H_ωp = -j (dC Y + C dY),   g_ωp = 2 Re(conj(H_p) H_ω + conj(H) H_ωp),
 /// ```
 ///
-/// five solves with one LU, at the stationary point itself (Newton's steps on `g_ω` from `f_hz`
-/// first, until a step is below 1e-9 of the peak's half-width). An error where the response is
-/// unbounded, or where `g_ωω` is not negative (not a maximum: no peak to follow).
+/// five solves with one LU (`X` and `dX` those of [`StateResponseLu`]), at the stationary point
+/// itself (Newton's steps on `g_ω` from `f_hz` first, until a step is below 1e-9 of the peak's
+/// half-width). An error where the response is unbounded, or where `g_ωω` is not negative (not
+/// a maximum: no peak to follow).
 pub fn peak_derivative(
     lin: &Linearization,
     d: &LinearizationDerivative,
@@ -166,7 +167,6 @@ pub fn peak_derivative(
     f_hz: f64,
 ) -> Result<f64, String> {
     let n = lin.a.nrows();
-    let column = |m: &DMatrix<f64>| DVector::from_fn(n, |i, _| Complex::new(m[(i, input)], 0.0));
     let times = |m: &DMatrix<f64>, v: &StateResponse| -> StateResponse {
         DVector::from_fn(n, |i, _| {
             (0..n).fold(Complex::new(0.0, 0.0), |s, j| s + v[j] * m[(i, j)])
@@ -179,15 +179,15 @@ pub fn peak_derivative(
     let two_pi = 2.0 * std::f64::consts::PI;
     // |H| is flat at its maximum, so a search on |H| places it to about sqrt(eps) only; the
     // derivative wants the stationary point itself: Newton's steps on g_ω = 2 Re(conj(H) H_ω)
-    // first, from `f_hz` (quadratic convergence: two or three steps to the last bits).
+    // first, from `f_hz` (quadratic convergence: two or three steps to the settling rule below).
     let mut f = f_hz;
     for _ in 0..4 {
-        let lu = resolvent(lin, f).lu();
-        let solve = |v: &StateResponse| lu.solve(v).ok_or_else(|| unbounded_at(f));
-        let x = solve(&column(&lin.b))?;
-        let y = solve(&x)?;
+        let r = StateResponseLu::new(lin, input, f)?;
+        let solve = |v: &StateResponse| r.lu.solve(v).ok_or_else(|| unbounded_at(f));
+        let x = &r.x;
+        let y = solve(x)?;
         let z = solve(&y)?;
-        let h = row(&lin.c, &x) + lin.d[(output, input)];
+        let h = output_of(lin, x, input, output);
         let h_w = -j * row(&lin.c, &y);
         let h_ww = row(&lin.c, &z) * -2.0;
         let g_w = 2.0 * (h.conj() * h_w).re;
@@ -213,9 +213,9 @@ pub fn peak_derivative(
             f += step;
             continue;
         }
-        let dx = solve(&(times(&d.a, &x) + column(&d.b)))?;
+        let dx = r.derivative(d)?;
         let dy = solve(&(times(&d.a, &y) + &dx))?;
-        let h_p = row(&d.c, &x) + row(&lin.c, &dx) + d.d[(output, input)];
+        let h_p = output_derivative_of(lin, d, x, &dx, input, output);
         let h_wp = -j * (row(&d.c, &y) + row(&lin.c, &dy));
         let g_wp = 2.0 * (h_p.conj() * h_w + h.conj() * h_wp).re;
         // f = ω / 2π, and ω* moves as -g_ωp / g_ωω.
