@@ -173,6 +173,14 @@ pub fn simulate_with_sensitivities(
     let mut derivatives: Vec<Result<Vec<Vec<f64>>, String>> = Vec::new();
     let mut start = x0.clone();
     for d in directions {
+        if !(d.scale.is_finite() && d.scale != 0.0) {
+            let name = VARIABLES.get(d.seed).map_or("?", |v| v.name);
+            derivatives.push(Err(format!(
+                "{name}: the direction's scale {} is not a finite nonzero number",
+                d.scale
+            )));
+            continue;
+        }
         let built = Seeded::build(values, &experiment, d.seed, false).and_then(|s| {
             s.check_states(&state_names)?;
             Ok((s.rest_derivative(&x0, &u0)?, s))
@@ -463,5 +471,22 @@ mod tests {
         let e = simulate_with_sensitivities(&values, drive, &[]).unwrap_err();
         assert!(e.contains("strictly increasing"), "{e}");
         assert!(simulate(&values, drive).is_err());
+    }
+
+    #[test]
+    fn a_direction_without_a_scale_is_refused_by_name() {
+        let values = Values::from_start(&VARIABLES);
+        let drive = Drive {
+            time: &[0.0, 0.01],
+            inputs: &[],
+            outputs: &[idx::Y_POT],
+        };
+        let zero = Direction {
+            seed: idx::TORSION_BAR_K,
+            scale: 0.0,
+        };
+        let run = simulate_with_sensitivities(&values, drive, &[zero]).unwrap();
+        let e = run.derivatives[0].as_ref().unwrap_err();
+        assert!(e.contains("torsion_bar.k") && e.contains("scale 0"), "{e}");
     }
 }
