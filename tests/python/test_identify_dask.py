@@ -49,8 +49,10 @@ def test_the_starts_on_dask_give_the_threads_result_to_the_bit(tmp_path):
     assert out.returncode == 0, out.stderr
     a, b = json.loads(threads), json.loads(out.stdout)
     assert len(b["starts"]) == 4 and b["minima"]
-    # The model evaluations counted here are this process's: the starts ran elsewhere.
+    # The model evaluations and exact derivatives counted here are this process's: the starts
+    # ran elsewhere.
     assert b.pop("evaluations") < a.pop("evaluations")
+    assert b.pop("derivatives") < a.pop("derivatives")
     # and the data file is named where it now is.
     a["responses"][0]["file"] = str(moved)
     assert a == b, "the Dask starts differ from the threads'"
