@@ -64,10 +64,15 @@ impl Drive<'_> {
     /// The configuration `values` with the inputs of time `k`.
     fn values_at(&self, values: &Values, k: usize) -> Values {
         let mut v = values.clone();
-        for &(i, u) in self.inputs {
-            v.set(i, Value::Real(u[k]));
-        }
+        self.set_inputs(&mut v, k);
         v
+    }
+
+    /// Sets the inputs of time `k` in `values`.
+    fn set_inputs(&self, values: &mut Values, k: usize) {
+        for &(i, u) in self.inputs {
+            values.set(i, Value::Real(u[k]));
+        }
     }
 
     /// The FMU's experiment over the times.
@@ -108,9 +113,7 @@ pub fn simulate(values: &Values, drive: Drive) -> Result<Vec<Vec<f64>>, String> 
             model
                 .do_step(&mut values, time[k - 1], time[k], &mut log)
                 .map_err(|e| e.message)?;
-            for &(i, u) in drive.inputs {
-                values.set(i, Value::Real(u[k]));
-            }
+            drive.set_inputs(&mut values, k);
         }
         model.refresh(&mut values, None);
         for (o, &i) in drive.outputs.iter().enumerate() {
@@ -194,8 +197,8 @@ pub fn simulate_with_sensitivities(
             Err(e) => derivatives.push(Err(e)),
         }
     }
-    let at = |k: usize| drive.values_at(values, k);
-    system.set_inputs(&at(0));
+    let mut held = drive.values_at(values, 0);
+    system.set_inputs(&held);
     let n = system.dim();
     let mut options = p.solver_options(&system);
     options.method = Method::Radau5;
@@ -211,7 +214,8 @@ pub fn simulate_with_sensitivities(
     let mut y = vec![0.0; augmented.system.compiled().n_outputs()];
     for (k, &t) in time.iter().enumerate() {
         if k > 0 {
-            if augmented.system.set_inputs(&at(k - 1)) {
+            drive.set_inputs(&mut held, k - 1);
+            if augmented.system.set_inputs(&held) {
                 integrator.notify_discontinuity();
             }
             integrator
@@ -229,11 +233,7 @@ pub fn simulate_with_sensitivities(
         let mut carried = augmented.carried.iter().enumerate();
         for d in derivatives.iter_mut().filter_map(|d| d.as_mut().ok()) {
             let (c, (model, scale)) = carried.next().expect("one model per direction carried");
-            let s: Vec<f64> = z[n * (1 + c)..n * (2 + c)]
-                .iter()
-                .map(|v| v / scale)
-                .collect();
-            let (_, dy) = model.parameter_derivative(&z[..n], &s, &u)?;
+            let (_, dy) = model.parameter_derivative(&z[..n], &along(z, n, c, *scale), &u)?;
             for (o, &j) in outputs.iter().enumerate() {
                 d[o].push(scale * dy[j]);
             }
@@ -244,6 +244,15 @@ pub fn simulate_with_sensitivities(
         derivatives,
         steps: integrator.stats().accepted,
     })
+}
+
+/// The states' move along the carried direction `c` per unit of its parameter, `S_c / scale`,
+/// from the joint state `z` (`n` states, then each direction's `n` sensitivities).
+fn along(z: &[f64], n: usize, c: usize, scale: f64) -> Vec<f64> {
+    z[n * (1 + c)..n * (2 + c)]
+        .iter()
+        .map(|v| v / scale)
+        .collect()
 }
 
 /// States and sensitivities as one system (module doc).
@@ -291,8 +300,7 @@ impl OdeSystem for Augmented {
         let u = self.system.inputs();
         for (c, (model, scale)) in self.carried.iter().enumerate() {
             let range = n * (1 + c)..n * (2 + c);
-            let s: Vec<f64> = z[range.clone()].iter().map(|v| v / scale).collect();
-            match model.parameter_derivative(x, &s, u) {
+            match model.parameter_derivative(x, &along(z, n, c, *scale), u) {
                 Ok((ds, _)) => {
                     for (o, v) in dzdt[range].iter_mut().zip(ds) {
                         *o = scale * v;
